@@ -1,0 +1,341 @@
+//! Reading the files of a recorded data set: WAVs in natural order, pose and DoA tables
+//! (CSV or `.xlsx`), and ground-truth source positions.
+//!
+//! The published layout (`audio/`, `pose/`, `azimuth/`, `map/`, `src_gt*.txt`) is what
+//! [`Dataset::open`] understands.
+
+use std::cmp::Ordering;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail, ensure};
+
+/// Compares file names the way a person counts: `sub2` before `sub10`.
+pub fn natural_cmp(a: &str, b: &str) -> Ordering {
+    let (mut a, mut b) = (a.as_bytes(), b.as_bytes());
+    loop {
+        match (a.first(), b.first()) {
+            (None, None) => return Ordering::Equal,
+            (None, _) => return Ordering::Less,
+            (_, None) => return Ordering::Greater,
+            (Some(x), Some(y)) if x.is_ascii_digit() && y.is_ascii_digit() => {
+                let da = a.iter().take_while(|c| c.is_ascii_digit()).count();
+                let db = b.iter().take_while(|c| c.is_ascii_digit()).count();
+                let (na, nb) = (trim_zeros(&a[..da]), trim_zeros(&b[..db]));
+                let ord = na.len().cmp(&nb.len()).then_with(|| na.cmp(nb));
+                if ord != Ordering::Equal {
+                    return ord;
+                }
+                (a, b) = (&a[da..], &b[db..]);
+            }
+            (Some(x), Some(y)) => {
+                let ord = x.to_ascii_lowercase().cmp(&y.to_ascii_lowercase());
+                if ord != Ordering::Equal {
+                    return ord;
+                }
+                (a, b) = (&a[1..], &b[1..]);
+            }
+        }
+    }
+}
+
+fn trim_zeros(d: &[u8]) -> &[u8] {
+    let k = d.iter().take_while(|&&c| c == b'0').count();
+    &d[k.min(d.len().saturating_sub(1))..]
+}
+
+/// The files in `dir` with extension `ext` (case-insensitive), in natural name order.
+///
+/// # Errors
+/// If `dir` cannot be read.
+pub fn list_files(dir: &Path, ext: &str) -> Result<Vec<PathBuf>> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+        .with_context(|| format!("reading folder {}", dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.is_file()
+                && p.extension()
+                    .is_some_and(|e| e.eq_ignore_ascii_case(ext))
+        })
+        .collect();
+    files.sort_by(|a, b| {
+        natural_cmp(
+            &a.file_name().unwrap_or_default().to_string_lossy(),
+            &b.file_name().unwrap_or_default().to_string_lossy(),
+        )
+    });
+    Ok(files)
+}
+
+/// A table of numbers: rows of cells, `None` where a cell is empty, `NaN` or missing.
+pub type Table = Vec<Vec<Option<f64>>>;
+
+/// Reads a numeric table from a CSV file (comma, semicolon, tab or space separated) or an
+/// `.xlsx`/`.xls`/`.ods` workbook (its first sheet). A first row with a non-numeric cell
+/// is taken as a header and skipped; a non-numeric cell anywhere else is an error.
+///
+/// # Errors
+/// If the file cannot be read or holds a non-numeric cell below the header.
+pub fn read_table(path: &Path) -> Result<Table> {
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    let raw: Vec<Vec<String>> = if matches!(ext.as_str(), "xlsx" | "xls" | "xlsm" | "ods") {
+        read_workbook(path)?
+    } else {
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("reading table {}", path.display()))?;
+        text.lines()
+            .filter(|l| !l.trim().is_empty() && !l.trim_start().starts_with('#'))
+            .map(|l| {
+                let sep: &[char] = if l.contains(',') {
+                    &[',']
+                } else if l.contains(';') {
+                    &[';']
+                } else if l.contains('\t') {
+                    &['\t']
+                } else {
+                    &[' ']
+                };
+                l.split(sep)
+                    .filter(|c| sep != [' '] || !c.is_empty())
+                    .map(|c| c.trim().to_owned())
+                    .collect()
+            })
+            .collect()
+    };
+    let mut rows = Vec::with_capacity(raw.len());
+    for (r, line) in raw.iter().enumerate() {
+        let parsed: Vec<Result<Option<f64>, &String>> = line.iter().map(parse_cell).collect();
+        if r == 0 && parsed.iter().any(Result::is_err) {
+            continue; // a header
+        }
+        let mut row = Vec::with_capacity(parsed.len());
+        for (c, cell) in parsed.into_iter().enumerate() {
+            match cell {
+                Ok(v) => row.push(v),
+                Err(s) => bail!(
+                    "{}: row {}, column {}: {s:?} is not a number",
+                    path.display(),
+                    r + 1,
+                    c + 1
+                ),
+            }
+        }
+        rows.push(row);
+    }
+    Ok(rows)
+}
+
+fn parse_cell(s: &String) -> Result<Option<f64>, &String> {
+    let t = s.trim();
+    if t.is_empty() || t.eq_ignore_ascii_case("nan") {
+        return Ok(None);
+    }
+    t.parse::<f64>().map(|v| v.is_finite().then_some(v)).map_err(|_| s)
+}
+
+fn read_workbook(path: &Path) -> Result<Vec<Vec<String>>> {
+    use calamine::{Data, Reader, open_workbook_auto};
+    let mut wb =
+        open_workbook_auto(path).with_context(|| format!("reading workbook {}", path.display()))?;
+    let range = wb
+        .worksheet_range_at(0)
+        .with_context(|| format!("{}: the workbook has no sheet", path.display()))?
+        .with_context(|| format!("reading the first sheet of {}", path.display()))?;
+    Ok(range
+        .rows()
+        .map(|row| {
+            row.iter()
+                .map(|c| match c {
+                    Data::Empty => String::new(),
+                    Data::Float(v) => v.to_string(),
+                    Data::Int(v) => v.to_string(),
+                    other => other.to_string(),
+                })
+                .collect()
+        })
+        .collect())
+}
+
+/// A robot pose: position (m) and heading (degrees), world frame.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Pose {
+    /// x (m).
+    pub x: f64,
+    /// y (m).
+    pub y: f64,
+    /// Heading (degrees, counter-clockwise from the world x axis).
+    pub theta_deg: f64,
+}
+
+/// Reads a pose table: x, y, theta per row; theta in degrees unless `theta_in_radians`.
+///
+/// # Errors
+/// If the table cannot be read or a row lacks a finite x, y or theta.
+pub fn read_poses(path: &Path, theta_in_radians: bool) -> Result<Vec<Pose>> {
+    let rows = read_table(path)?;
+    ensure!(!rows.is_empty(), "{}: the pose table is empty", path.display());
+    rows.iter()
+        .enumerate()
+        .map(|(r, row)| {
+            let get = |c: usize, what: &str| {
+                row.get(c).copied().flatten().with_context(|| {
+                    format!(
+                        "{}: row {}: {what} is missing or not a finite number",
+                        path.display(),
+                        r + 1
+                    )
+                })
+            };
+            let theta = get(2, "theta")?;
+            Ok(Pose {
+                x: get(0, "x")?,
+                y: get(1, "y")?,
+                theta_deg: if theta_in_radians {
+                    theta.to_degrees()
+                } else {
+                    theta
+                },
+            })
+        })
+        .collect()
+}
+
+/// Reads ground-truth source positions (m): a CSV of x, y[, z] rows, or the published text
+/// format with one `name [x, y, z]` per line.
+///
+/// # Errors
+/// If the file cannot be read or holds no position.
+pub fn read_sources(path: &Path) -> Result<Vec<[f64; 2]>> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("reading ground truth {}", path.display()))?;
+    let mut out = Vec::new();
+    for line in text.lines() {
+        let inner = match (line.find('['), line.find(']')) {
+            (Some(a), Some(b)) if a < b => &line[a + 1..b],
+            _ => line,
+        };
+        let nums: Vec<f64> = inner
+            .split([',', ' ', '\t', ';'])
+            .filter(|s| !s.is_empty())
+            .map_while(|s| s.parse::<f64>().ok())
+            .collect();
+        if nums.len() >= 2 && nums.len() == inner.split([',', ' ', '\t', ';']).filter(|s| !s.is_empty()).count() {
+            out.push([nums[0], nums[1]]);
+        }
+    }
+    ensure!(!out.is_empty(), "{}: no source position found", path.display());
+    Ok(out)
+}
+
+/// A data set folder in the published layout.
+#[derive(Clone, Debug)]
+pub struct Dataset {
+    /// The folder.
+    pub root: PathBuf,
+    /// `audio/*.wav`, natural order.
+    pub audio: Vec<PathBuf>,
+    /// The pose table, if one is present in `pose/`.
+    pub poses: Option<PathBuf>,
+    /// The ground-truth file (`src_gt*.txt` or `.csv`), if present.
+    pub sources: Option<PathBuf>,
+    /// Published DoA tables in `azimuth/` (e.g. `azEst_MVDR.xlsx`), if any.
+    pub doa_tables: Vec<PathBuf>,
+}
+
+impl Dataset {
+    /// Finds the parts of a data set under `root`.
+    ///
+    /// # Errors
+    /// If `root/audio` holds no WAV file.
+    pub fn open(root: &Path) -> Result<Self> {
+        ensure!(root.is_dir(), "data set folder {} does not exist", root.display());
+        let audio_dir = root.join("audio");
+        let audio = if audio_dir.is_dir() {
+            list_files(&audio_dir, "wav")?
+        } else {
+            Vec::new()
+        };
+        ensure!(
+            !audio.is_empty(),
+            "{}: no WAV file in {}",
+            root.display(),
+            audio_dir.display()
+        );
+        let first = |dir: &Path, pred: &dyn Fn(&str) -> bool| -> Option<PathBuf> {
+            let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
+                .ok()?
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| p.is_file() && pred(&p.file_name().unwrap_or_default().to_string_lossy()))
+                .collect();
+            v.sort();
+            v.into_iter().next()
+        };
+        let is_table = |n: &str| {
+            let n = n.to_ascii_lowercase();
+            n.ends_with(".csv") || n.ends_with(".xlsx") || n.ends_with(".txt")
+        };
+        let poses = first(&root.join("pose"), &is_table);
+        let sources = first(root, &|n: &str| {
+            n.to_ascii_lowercase().starts_with("src_gt") && is_table(n)
+        });
+        let az_dir = root.join("azimuth");
+        let mut doa_tables: Vec<PathBuf> = std::fs::read_dir(&az_dir)
+            .map(|rd| {
+                rd.filter_map(|e| e.ok().map(|e| e.path()))
+                    .filter(|p| p.is_file() && is_table(&p.file_name().unwrap_or_default().to_string_lossy()))
+                    .collect()
+            })
+            .unwrap_or_default();
+        doa_tables.sort();
+        Ok(Self {
+            root: root.to_owned(),
+            audio,
+            poses,
+            sources,
+            doa_tables,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn natural_order_counts_numbers() {
+        let mut v = vec!["sub10.wav", "sub2.wav", "sub01.wav", "Sub3.wav", "sub1a.wav"];
+        v.sort_by(|a, b| natural_cmp(a, b));
+        assert_eq!(v, vec!["sub01.wav", "sub1a.wav", "sub2.wav", "Sub3.wav", "sub10.wav"]);
+    }
+
+    #[test]
+    fn csv_tables_skip_a_header_and_keep_gaps() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("t.csv");
+        std::fs::write(&p, "a,b,c\n1,2,3\n4,,NaN\n").unwrap();
+        let t = read_table(&p).unwrap();
+        assert_eq!(t, vec![vec![Some(1.0), Some(2.0), Some(3.0)], vec![Some(4.0), None, None]]);
+        std::fs::write(&p, "1,2,3\n4,x,6\n").unwrap();
+        let e = read_table(&p).unwrap_err().to_string();
+        assert!(e.contains("row 2, column 2") && e.contains("t.csv"), "{e}");
+    }
+
+    #[test]
+    fn published_ground_truth_parses() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("src_gt.txt");
+        std::fs::write(&p, "Position ground truth, unit: meter\n\ns1 [1.25,   0.6,  0]\n\ns2 [1.25,  -0.6, 0]\n").unwrap();
+        assert_eq!(read_sources(&p).unwrap(), vec![[1.25, 0.6], [1.25, -0.6]]);
+    }
+
+    #[test]
+    fn a_pose_row_without_theta_is_an_error() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("poses.csv");
+        std::fs::write(&p, "0,0,0\n1,2\n").unwrap();
+        let e = read_poses(&p, false).unwrap_err().to_string();
+        assert!(e.contains("row 2") && e.contains("theta"), "{e}");
+    }
+}

@@ -1,0 +1,45 @@
+//! The `iasm` application: the commands behind the binary, callable from tests.
+//!
+//! - [`ssl_cmd`]: `iasm ssl`, DoAs from WAV files or a data set, and their score.
+//! - [`dataset`]: the published data-set layout, tables and natural file order.
+//! - [`score`]: the DoA score against known sources.
+
+pub mod args;
+pub mod dataset;
+pub mod score;
+pub mod ssl_cmd;
+
+/// How a command ended when it did not fail outright.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Outcome {
+    /// Everything ran and every threshold held: exit 0.
+    Success,
+    /// Everything ran but a threshold was not met: exit 1.
+    ThresholdFailed,
+}
+
+/// Runs a parsed command line.
+///
+/// # Errors
+/// Any failure, with the file and the problem in its context chain (exit 2).
+pub fn run(cli: &args::Cli) -> anyhow::Result<Outcome> {
+    match &cli.command {
+        args::Command::Ssl(a) => ssl_cmd::run(a),
+    }
+}
+
+/// A progress bar on stderr, drawn only when stderr is a terminal.
+pub fn progress(len: u64, what: &str) -> indicatif::ProgressBar {
+    use std::io::IsTerminal;
+    if !std::io::stderr().is_terminal() {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new(len);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} {elapsed}")
+            .expect("a valid template")
+            .progress_chars("=> "),
+    );
+    bar.set_message(what.to_owned());
+    bar
+}

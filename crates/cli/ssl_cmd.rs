@@ -1,0 +1,295 @@
+//! `iasm ssl`: ranked DoAs per recording, a DoA table for a data set, and its score.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use rayon::prelude::*;
+use serde::Serialize;
+use ssl::{Doa, Localizer, MicArray, SslConfig};
+
+use crate::Outcome;
+use crate::args::SslArgs;
+use crate::dataset::{Dataset, Table, read_poses, read_sources, read_table};
+use crate::score::{DoaScore, score_doas};
+
+/// Version of the JSON this command prints.
+pub const SCHEMA_VERSION: u32 = 1;
+
+/// Builds the SSL settings from an optional TOML file and the command-line overrides.
+///
+/// # Errors
+/// If the file cannot be read or parsed, or a value is refused.
+pub fn ssl_config(args: &SslArgs) -> Result<SslConfig> {
+    let mut c = match &args.config {
+        Some(p) => {
+            let text = std::fs::read_to_string(p)
+                .with_context(|| format!("reading SSL settings {}", p.display()))?;
+            toml::from_str::<SslConfig>(&text)
+                .map_err(|e| anyhow::anyhow!("{}: {}", p.display(), e.message()))?
+        }
+        None => SslConfig::default(),
+    };
+    if let Some(m) = &args.method {
+        c.method = m.parse()?;
+    }
+    if let Some(n) = args.num {
+        c.num_peaks = n;
+    }
+    if let Some(v) = args.fmin {
+        c.fmin_hz = v;
+    }
+    if let Some(v) = args.fmax {
+        c.fmax_hz = v;
+    }
+    if let Some(v) = args.block_frames {
+        c.block_frames = v;
+    }
+    if let Some(v) = &args.pooling {
+        c.pooling = v.parse()?;
+    }
+    c.validate()?;
+    Ok(c)
+}
+
+/// The DoAs of one recording.
+#[derive(Clone, Debug, Serialize)]
+pub struct FileDoas {
+    /// The WAV file.
+    pub file: PathBuf,
+    /// Strongest first.
+    pub doas: Vec<Doa>,
+}
+
+/// Localises every file with one localizer per sample rate, in parallel, keeping order.
+///
+/// # Errors
+/// The first file that cannot be read or localised, named.
+pub fn localise_files(files: &[PathBuf], array: &MicArray, config: &SslConfig) -> Result<Vec<FileDoas>> {
+    let bar = crate::progress(files.len() as u64, "localising");
+    let cache: std::sync::Mutex<Vec<std::sync::Arc<Localizer>>> = Default::default();
+    let out = files
+        .par_iter()
+        .map(|f| {
+            let audio = ssl::read_wav(f)?;
+            let loc = {
+                let mut c = cache.lock().expect("no panics while locked");
+                match c.iter().find(|l| l.sample_rate() == audio.sample_rate()) {
+                    Some(l) => l.clone(),
+                    None => {
+                        let l = std::sync::Arc::new(Localizer::new(array, audio.sample_rate(), config)?);
+                        c.push(l.clone());
+                        l
+                    }
+                }
+            };
+            let doas = loc
+                .locate(&audio)
+                .with_context(|| format!("localising {}", f.display()))?;
+            bar.inc(1);
+            Ok(FileDoas {
+                file: f.clone(),
+                doas,
+            })
+        })
+        .collect::<Result<Vec<_>>>();
+    bar.finish_and_clear();
+    out
+}
+
+/// A DoA table from per-file DoAs: azimuths (degrees), `n` columns.
+pub fn doa_table(rows: &[FileDoas], n: usize) -> Table {
+    rows.iter()
+        .map(|r| {
+            (0..n)
+                .map(|i| r.doas.get(i).map(|d| d.azimuth_deg))
+                .collect()
+        })
+        .collect()
+}
+
+/// Writes a DoA table as CSV, empty cells where a DoA is missing.
+///
+/// # Errors
+/// If the file cannot be written.
+pub fn write_doa_csv(path: &Path, table: &Table, header: bool) -> Result<()> {
+    let mut s = String::new();
+    let n = table.iter().map(Vec::len).max().unwrap_or(0);
+    if header {
+        let cols: Vec<String> = (1..=n).map(|i| format!("az{i}_deg")).collect();
+        s.push_str(&cols.join(","));
+        s.push('\n');
+    }
+    for row in table {
+        let cells: Vec<String> = row
+            .iter()
+            .map(|c| c.map(|v| format!("{v:.3}")).unwrap_or_default())
+            .collect();
+        s.push_str(&cells.join(","));
+        s.push('\n');
+    }
+    std::fs::write(path, s).with_context(|| format!("writing {}", path.display()))
+}
+
+/// Runs `iasm ssl`.
+///
+/// # Errors
+/// Bad settings, unreadable or mismatched files.
+pub fn run(args: &SslArgs) -> Result<Outcome> {
+    let config = ssl_config(args)?;
+    let array = MicArray::from_spec(&args.array)?;
+    if let Some(t) = args.threads {
+        // Only the first call in a process can size the global pool; later ones keep it.
+        let _ = rayon::ThreadPoolBuilder::new().num_threads(t).build_global();
+    }
+    let Some(dir) = &args.dataset else {
+        let rows = localise_files(&args.files, &array, &config)?;
+        print_rows(&rows, &config, &array, args.json)?;
+        return Ok(Outcome::Success);
+    };
+    let ds = Dataset::open(dir)?;
+    let t0 = Instant::now();
+    let rows = localise_files(&ds.audio, &array, &config)?;
+    let elapsed = t0.elapsed().as_secs_f64();
+    eprintln!(
+        "{}: {} recordings localised with {} in {:.2} s ({:.1} ms per recording)",
+        dir.display(),
+        rows.len(),
+        config.method,
+        elapsed,
+        1e3 * elapsed / rows.len() as f64
+    );
+    let table = doa_table(&rows, config.num_peaks);
+    if let Some(out) = &args.out {
+        write_doa_csv(out, &table, args.header)?;
+        eprintln!("wrote {}", out.display());
+    } else if !args.score {
+        print_rows(&rows, &config, &array, args.json)?;
+    }
+    if !args.score {
+        return Ok(Outcome::Success);
+    }
+    let poses_path = ds
+        .poses
+        .as_ref()
+        .with_context(|| format!("--score: {} has no pose table in pose/", dir.display()))?;
+    let sources_path = ds
+        .sources
+        .as_ref()
+        .with_context(|| format!("--score: {} has no src_gt* ground truth", dir.display()))?;
+    let poses = read_poses(poses_path, false)?;
+    let sources = read_sources(sources_path)?;
+    let n = config.num_peaks;
+    let ours = score_doas(&table, &poses, &sources, n, args.tol_deg)
+        .with_context(|| format!("scoring against {}", poses_path.display()))?;
+    let mut published: Vec<(String, DoaScore)> = Vec::new();
+    for t in &ds.doa_tables {
+        let name = t.file_name().unwrap_or_default().to_string_lossy().into_owned();
+        match read_table(t).and_then(|tab| score_doas(&tab, &poses, &sources, n, args.tol_deg)) {
+            Ok(s) => published.push((name, s)),
+            Err(e) => eprintln!("warning: cannot score {}: {e:#}", t.display()),
+        }
+    }
+    let report = ScoreReport {
+        schema_version: SCHEMA_VERSION,
+        method: config.method.name(),
+        num: n,
+        tol_deg: args.tol_deg,
+        recordings: rows.len(),
+        ms_per_recording: 1e3 * elapsed / rows.len() as f64,
+        ours: ours.clone(),
+        published: published
+            .iter()
+            .map(|(n, s)| PublishedScore { table: n.clone(), score: s.clone() })
+            .collect(),
+    };
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        println!("DoA score (first {n} DoAs, hit within {} deg of a true bearing)", args.tol_deg);
+        println!("{:<28} {:>6} {:>6} {:>7} {:>10}", "table", "hits", "total", "score", "mean err");
+        let line = |name: &str, s: &DoaScore| {
+            println!(
+                "{:<28} {:>6} {:>6} {:>7.3} {:>9.2}°",
+                name, s.hits, s.total, s.score, s.mean_hit_error_deg
+            )
+        };
+        line(&format!("iasm {}", config.method), &ours);
+        for (name, s) in &published {
+            line(name, s);
+        }
+    }
+    let mut failed = false;
+    if let Some(min) = args.min_score {
+        if ours.score < min {
+            eprintln!("FAIL: score {:.3} is below --min-score {min}", ours.score);
+            failed = true;
+        }
+    }
+    if args.beat_published {
+        let key = config.method.name().replace('-', "").to_ascii_lowercase();
+        let same = published
+            .iter()
+            .find(|(n, _)| n.replace('-', "").to_ascii_lowercase().contains(&key));
+        match same {
+            Some((name, s)) if ours.score < s.score => {
+                eprintln!("FAIL: score {:.3} is below the published {name} ({:.3})", ours.score, s.score);
+                failed = true;
+            }
+            Some(_) => {}
+            None => bail!("--beat-published: no published table for {} in {}", config.method, dir.join("azimuth").display()),
+        }
+    }
+    Ok(if failed { Outcome::ThresholdFailed } else { Outcome::Success })
+}
+
+#[derive(Serialize)]
+struct PublishedScore {
+    table: String,
+    #[serde(flatten)]
+    score: DoaScore,
+}
+
+#[derive(Serialize)]
+struct ScoreReport {
+    schema_version: u32,
+    method: &'static str,
+    num: usize,
+    tol_deg: f64,
+    recordings: usize,
+    ms_per_recording: f64,
+    ours: DoaScore,
+    published: Vec<PublishedScore>,
+}
+
+#[derive(Serialize)]
+struct SslReport<'a> {
+    schema_version: u32,
+    method: &'static str,
+    array: &'a str,
+    files: &'a [FileDoas],
+}
+
+fn print_rows(rows: &[FileDoas], config: &SslConfig, array: &MicArray, json: bool) -> Result<()> {
+    let mut out = std::io::stdout().lock();
+    if json {
+        let r = SslReport {
+            schema_version: SCHEMA_VERSION,
+            method: config.method.name(),
+            array: array.name(),
+            files: rows,
+        };
+        writeln!(out, "{}", serde_json::to_string_pretty(&r)?)?;
+        return Ok(());
+    }
+    for r in rows {
+        let cells: Vec<String> = r
+            .doas
+            .iter()
+            .map(|d| format!("{:7.1}° ({:.3})", d.azimuth_deg, d.strength))
+            .collect();
+        writeln!(out, "{}\t{}", r.file.display(), cells.join("  "))?;
+    }
+    Ok(())
+}

@@ -1,0 +1,283 @@
+//! Microphone arrays: positions in metres in the array frame, channel `i` = microphone `i`.
+//!
+//! The array frame is right-handed: `x` is the robot's heading, `z` points up, azimuth is
+//! counter-clockwise from `x`. Built-in presets cover the paper's array and a few arrays
+//! that robots commonly carry; any other array loads from a small TOML or JSON file:
+//!
+//! ```toml
+//! name = "my-array"            # optional
+//! positions = [[0.05, 0.0, 0.0], [-0.05, 0.0, 0.0], [0.0, 0.05, 0.0]]
+//! ```
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::ArrayError;
+
+/// Names of the built-in arrays, in the order [`MicArray::preset`] documents them.
+pub const PRESETS: [&str; 4] = ["iasm6", "respeaker4", "respeaker6", "uma8"];
+
+/// Two microphones closer than this (m) are taken to be the same one: a copy-paste slip in
+/// an array file, which would make a pair with no delay information.
+const DUPLICATE_TOL_M: f64 = 1e-4;
+
+/// A microphone array: its name and the microphone positions (m) in the array frame.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MicArray {
+    name: String,
+    positions: Vec<[f64; 3]>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ArrayFile {
+    name: Option<String>,
+    positions: Vec<[f64; 3]>,
+}
+
+impl MicArray {
+    /// Builds an array from positions (m).
+    ///
+    /// # Errors
+    /// [`ArrayError`] if there are fewer than two microphones, a coordinate is not finite, or
+    /// two microphones are within 0.1 mm of each other.
+    pub fn new(name: impl Into<String>, positions: Vec<[f64; 3]>) -> Result<Self, ArrayError> {
+        if positions.len() < 2 {
+            return Err(ArrayError::TooFewMics(positions.len()));
+        }
+        if let Some(index) = positions
+            .iter()
+            .position(|p| p.iter().any(|c| !c.is_finite()))
+        {
+            return Err(ArrayError::NonFinite { index });
+        }
+        for a in 0..positions.len() {
+            for b in a + 1..positions.len() {
+                if dist(positions[a], positions[b]) < DUPLICATE_TOL_M {
+                    return Err(ArrayError::Duplicate { a, b });
+                }
+            }
+        }
+        Ok(Self {
+            name: name.into(),
+            positions,
+        })
+    }
+
+    /// A built-in array by name:
+    ///
+    /// - `iasm6`: the I-ASM paper's 6-microphone array (0.235 m across; two staggered
+    ///   triangles at 0.104 m and 0.208 m height), from the authors' published data.
+    /// - `respeaker4`: Seeed ReSpeaker USB Mic Array v2.0, 4 microphones on a circle of
+    ///   radius 32 mm (ODAS configuration), channel order as its 4-channel raw firmware.
+    /// - `respeaker6`: Seeed ReSpeaker 6-Mic Circular Array for Raspberry Pi, radius 46.3 mm,
+    ///   microphones every 60 degrees starting on the x axis.
+    /// - `uma8`: miniDSP UMA-8, 6 microphones on a circle of radius 43 mm plus one at the
+    ///   centre (channel 0).
+    ///
+    /// Check the channel order of circular arrays against your driver: it varies with firmware.
+    ///
+    /// # Errors
+    /// [`ArrayError::UnknownPreset`] for any other name.
+    pub fn preset(name: &str) -> Result<Self, ArrayError> {
+        let positions = match name {
+            "iasm6" => vec![
+                [0.1200, 0.0, 0.1040],
+                [-0.0600, 0.1039, 0.1040],
+                [-0.0600, -0.1039, 0.1040],
+                [-0.0606, -0.0350, 0.2080],
+                [0.0606, -0.0350, 0.2080],
+                [0.0000, 0.0700, 0.2080],
+            ],
+            "respeaker4" => vec![
+                [-0.032, 0.0, 0.0],
+                [0.0, -0.032, 0.0],
+                [0.032, 0.0, 0.0],
+                [0.0, 0.032, 0.0],
+            ],
+            "respeaker6" => circle(0.0463, 6),
+            "uma8" => {
+                let mut p = vec![[0.0, 0.0, 0.0]];
+                p.extend(circle(0.043, 6));
+                p
+            }
+            _ => return Err(ArrayError::UnknownPreset(name.to_owned())),
+        };
+        Self::new(name, positions)
+    }
+
+    /// Reads an array from a TOML (`.toml`) or JSON (any other extension) file with a
+    /// `positions` list of `[x, y, z]` (m) and an optional `name` (default: the file stem).
+    ///
+    /// # Errors
+    /// [`ArrayError::Io`] if the file cannot be read, [`ArrayError::Parse`] if it is not
+    /// valid, [`ArrayError::Invalid`] if the geometry is refused by [`MicArray::new`].
+    pub fn from_file(path: &Path) -> Result<Self, ArrayError> {
+        let text = std::fs::read_to_string(path).map_err(|source| ArrayError::Io {
+            path: path.to_owned(),
+            source,
+        })?;
+        let is_toml = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
+        let parsed: ArrayFile = if is_toml {
+            toml::from_str(&text).map_err(|e| e.message().to_owned())
+        } else {
+            serde_json::from_str(&text).map_err(|e| e.to_string())
+        }
+        .map_err(|message| ArrayError::Parse {
+            path: path.to_owned(),
+            message,
+        })?;
+        let name = parsed.name.unwrap_or_else(|| {
+            path.file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default()
+        });
+        Self::new(name, parsed.positions).map_err(|e| ArrayError::Invalid {
+            path: path.to_owned(),
+            source: Box::new(e),
+        })
+    }
+
+    /// A preset name, or else a path to an array file.
+    ///
+    /// # Errors
+    /// As [`MicArray::preset`] when `spec` names no existing file, else as
+    /// [`MicArray::from_file`].
+    pub fn from_spec(spec: &str) -> Result<Self, ArrayError> {
+        let path = Path::new(spec);
+        if PRESETS.contains(&spec) || !path.exists() {
+            Self::preset(spec)
+        } else {
+            Self::from_file(path)
+        }
+    }
+
+    /// The array's name.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// Microphone positions (m), channel order.
+    pub fn positions(&self) -> &[[f64; 3]] {
+        &self.positions
+    }
+
+    /// Number of microphones.
+    pub fn len(&self) -> usize {
+        self.positions.len()
+    }
+
+    /// Always false: an array has at least two microphones.
+    pub fn is_empty(&self) -> bool {
+        false
+    }
+
+    /// All microphone pairs `(i, j)` with `i < j`.
+    pub fn pairs(&self) -> Vec<(usize, usize)> {
+        let n = self.len();
+        (0..n)
+            .flat_map(|i| (i + 1..n).map(move |j| (i, j)))
+            .collect()
+    }
+
+    /// The largest distance between two microphones (m), the array's aperture.
+    pub fn aperture(&self) -> f64 {
+        self.pairs()
+            .into_iter()
+            .map(|(i, j)| dist(self.positions[i], self.positions[j]))
+            .fold(0.0, f64::max)
+    }
+}
+
+impl Default for MicArray {
+    /// The paper's array, `iasm6`.
+    fn default() -> Self {
+        Self::preset("iasm6").expect("the iasm6 preset is valid")
+    }
+}
+
+pub(crate) fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}
+
+fn circle(radius: f64, n: usize) -> Vec<[f64; 3]> {
+    (0..n)
+        .map(|i| {
+            let a = std::f64::consts::TAU * i as f64 / n as f64;
+            [radius * a.cos(), radius * a.sin(), 0.0]
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_preset_is_valid() {
+        for name in PRESETS {
+            let a = MicArray::preset(name).unwrap();
+            assert_eq!(a.name(), name);
+        }
+    }
+
+    #[test]
+    fn iasm6_is_0235_m_across() {
+        // The paper: "6-channel spherical microphone array (0.235 m diameter)".
+        let a = MicArray::default();
+        assert_eq!(a.len(), 6);
+        assert_eq!(a.pairs().len(), 15);
+        assert!((a.aperture() - 0.235).abs() < 0.01, "{}", a.aperture());
+    }
+
+    #[test]
+    fn one_microphone_is_refused() {
+        assert!(matches!(
+            MicArray::new("x", vec![[0.0; 3]]),
+            Err(ArrayError::TooFewMics(1))
+        ));
+    }
+
+    #[test]
+    fn duplicate_positions_are_refused() {
+        let e = MicArray::new("x", vec![[0.0; 3], [0.1, 0.0, 0.0], [0.1, 0.0, 0.0]]).unwrap_err();
+        assert!(matches!(e, ArrayError::Duplicate { a: 1, b: 2 }), "{e}");
+    }
+
+    #[test]
+    fn non_finite_positions_are_refused() {
+        let e = MicArray::new("x", vec![[0.0; 3], [f64::NAN, 0.0, 0.0]]).unwrap_err();
+        assert!(matches!(e, ArrayError::NonFinite { index: 1 }));
+    }
+
+    #[test]
+    fn unknown_preset_lists_the_presets() {
+        let e = MicArray::preset("nope").unwrap_err().to_string();
+        assert!(e.contains("iasm6") && e.contains("nope"), "{e}");
+    }
+
+    #[test]
+    fn toml_and_json_files_load() {
+        let dir = tempfile::tempdir().unwrap();
+        let t = dir.path().join("tri.toml");
+        std::fs::write(&t, "positions = [[0.0,0.0,0.0],[0.1,0.0,0.0],[0.0,0.1,0.0]]\n").unwrap();
+        let a = MicArray::from_file(&t).unwrap();
+        assert_eq!((a.name(), a.len()), ("tri", 3));
+        let j = dir.path().join("pair.json");
+        std::fs::write(&j, r#"{"name":"p","positions":[[0,0,0],[0.2,0,0]]}"#).unwrap();
+        let a = MicArray::from_file(&j).unwrap();
+        assert_eq!((a.name(), a.len()), ("p", 2));
+    }
+
+    #[test]
+    fn a_file_with_one_microphone_names_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let t = dir.path().join("one.toml");
+        std::fs::write(&t, "positions = [[0.0,0.0,0.0]]\n").unwrap();
+        let e = MicArray::from_file(&t).unwrap_err().to_string();
+        assert!(e.contains("one.toml") && e.contains("at least two"), "{e}");
+    }
+}

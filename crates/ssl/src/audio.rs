@@ -1,0 +1,227 @@
+//! Multichannel audio in memory, and reading it from WAV files.
+//!
+//! Samples are stored channel-major (`channels[mic][sample]`) as `f32` in `[-1, 1)` for
+//! integer formats; float WAVs are taken as they are.
+
+use std::path::Path;
+
+use crate::error::{Error, Result};
+
+/// Multichannel audio: a sample rate and one equally long sample vector per channel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Audio {
+    sample_rate: u32,
+    channels: Vec<Vec<f32>>,
+}
+
+impl Audio {
+    /// Wraps channel-major samples.
+    ///
+    /// # Errors
+    /// [`Error::RaggedAudio`] if there is no channel, a channel is empty, or the channels
+    /// differ in length; [`Error::Config`] if `sample_rate` is zero.
+    pub fn new(sample_rate: u32, channels: Vec<Vec<f32>>) -> Result<Self> {
+        if sample_rate == 0 {
+            return Err(crate::ConfigError::SampleRate.into());
+        }
+        let n = channels.first().map_or(0, Vec::len);
+        if n == 0 || channels.iter().any(|c| c.len() != n) {
+            return Err(Error::RaggedAudio);
+        }
+        Ok(Self {
+            sample_rate,
+            channels,
+        })
+    }
+
+    /// Sample rate (Hz).
+    pub fn sample_rate(&self) -> u32 {
+        self.sample_rate
+    }
+
+    /// Channel-major samples.
+    pub fn channels(&self) -> &[Vec<f32>] {
+        &self.channels
+    }
+
+    /// Number of channels.
+    pub fn num_channels(&self) -> usize {
+        self.channels.len()
+    }
+
+    /// Samples per channel.
+    pub fn num_samples(&self) -> usize {
+        self.channels[0].len()
+    }
+
+    /// Duration (s).
+    pub fn duration(&self) -> f64 {
+        self.num_samples() as f64 / f64::from(self.sample_rate)
+    }
+}
+
+/// Reads a WAV file: 8/16/24/32-bit integer PCM or 32-bit float, any sample rate, any
+/// number of channels.
+///
+/// # Errors
+/// [`Error::Wav`] if the file cannot be opened or is not a WAV, [`Error::EmptyWav`] if it
+/// holds no samples, [`Error::Truncated`] if it ends before the samples its header declares.
+pub fn read_wav(path: &Path) -> Result<Audio> {
+    let wav_err = |message: String| Error::Wav {
+        path: path.to_owned(),
+        message,
+    };
+    let reader = hound::WavReader::open(path).map_err(|e| match e {
+        hound::Error::IoError(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
+            wav_err("not a WAV file (too short for a RIFF/WAVE header)".into())
+        }
+        hound::Error::IoError(io) => wav_err(io.to_string()),
+        hound::Error::FormatError(m) => wav_err(format!("not a valid WAV file: {m}")),
+        other => wav_err(format!("not a supported WAV file: {other}")),
+    })?;
+    let spec = reader.spec();
+    let n_ch = usize::from(spec.channels);
+    if n_ch == 0 {
+        return Err(wav_err("the header declares zero channels".into()));
+    }
+    let declared = u64::from(reader.len());
+    if declared == 0 {
+        return Err(Error::EmptyWav {
+            path: path.to_owned(),
+        });
+    }
+    let frames = declared as usize / n_ch;
+    let mut channels = vec![Vec::with_capacity(frames); n_ch];
+    let mut read = 0u64;
+    let mut push = |i: u64, v: f32| {
+        channels[(i % n_ch as u64) as usize].push(v);
+    };
+    let truncated = |read| Error::Truncated {
+        path: path.to_owned(),
+        declared,
+        read,
+    };
+    match spec.sample_format {
+        hound::SampleFormat::Float => {
+            if spec.bits_per_sample != 32 {
+                return Err(wav_err(format!(
+                    "{}-bit float samples are not supported (32-bit only)",
+                    spec.bits_per_sample
+                )));
+            }
+            for s in reader.into_samples::<f32>() {
+                push(read, s.map_err(|_| truncated(read))?);
+                read += 1;
+            }
+        }
+        hound::SampleFormat::Int => {
+            let scale = 1.0 / (1u64 << (spec.bits_per_sample - 1)) as f32;
+            if spec.bits_per_sample <= 16 {
+                for s in reader.into_samples::<i16>() {
+                    push(read, f32::from(s.map_err(|_| truncated(read))?) * scale);
+                    read += 1;
+                }
+            } else {
+                for s in reader.into_samples::<i32>() {
+                    push(read, s.map_err(|_| truncated(read))? as f32 * scale);
+                    read += 1;
+                }
+            }
+        }
+    }
+    if read < declared || declared % n_ch as u64 != 0 {
+        return Err(truncated(read));
+    }
+    Audio::new(spec.sample_rate, channels).map_err(|_| Error::EmptyWav {
+        path: path.to_owned(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn write(path: &Path, spec: hound::WavSpec, samples: &[i32]) {
+        let mut w = hound::WavWriter::create(path, spec).unwrap();
+        for &s in samples {
+            if spec.sample_format == hound::SampleFormat::Float {
+                w.write_sample(s as f32 / 1000.0).unwrap();
+            } else {
+                w.write_sample(s).unwrap();
+            }
+        }
+        w.finalize().unwrap();
+    }
+
+    fn spec(bits: u16, format: hound::SampleFormat) -> hound::WavSpec {
+        hound::WavSpec {
+            channels: 2,
+            sample_rate: 16000,
+            bits_per_sample: bits,
+            sample_format: format,
+        }
+    }
+
+    #[test]
+    fn integer_and_float_formats_scale_to_unit_range() {
+        let dir = tempfile::tempdir().unwrap();
+        for (bits, fmt, full) in [
+            (16, hound::SampleFormat::Int, 1 << 14),
+            (24, hound::SampleFormat::Int, 1 << 22),
+            (32, hound::SampleFormat::Int, 1 << 30),
+            (32, hound::SampleFormat::Float, 500),
+        ] {
+            let p = dir.path().join(format!("{bits}{fmt:?}.wav"));
+            write(&p, spec(bits, fmt), &[full, -full, 0, full]);
+            let a = read_wav(&p).unwrap();
+            assert_eq!((a.num_channels(), a.num_samples()), (2, 2));
+            assert_eq!(a.sample_rate(), 16000);
+            // Interleaved L R L R: channel 0 = [full, 0], channel 1 = [-full, full].
+            assert!((a.channels()[0][0] - 0.5).abs() < 1e-6, "{bits} {fmt:?}");
+            assert!((a.channels()[1][0] + 0.5).abs() < 1e-6);
+            assert_eq!(a.channels()[0][1], 0.0);
+        }
+    }
+
+    #[test]
+    fn a_text_file_is_not_a_wav() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("notes.wav");
+        std::fs::write(&p, "these are not samples, just some text that is long enough").unwrap();
+        let e = read_wav(&p).unwrap_err().to_string();
+        assert!(e.contains("notes.wav") && e.contains("not a"), "{e}");
+    }
+
+    #[test]
+    fn an_empty_file_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("empty.wav");
+        std::fs::write(&p, "").unwrap();
+        let e = read_wav(&p).unwrap_err().to_string();
+        assert!(e.contains("empty.wav"), "{e}");
+        let p = dir.path().join("nosamples.wav");
+        write(&p, spec(16, hound::SampleFormat::Int), &[]);
+        assert!(matches!(read_wav(&p), Err(Error::EmptyWav { .. })));
+    }
+
+    #[test]
+    fn a_truncated_file_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("cut.wav");
+        write(&p, spec(16, hound::SampleFormat::Int), &[1; 1000]);
+        let bytes = std::fs::read(&p).unwrap();
+        std::fs::write(&p, &bytes[..bytes.len() - 501]).unwrap();
+        let e = read_wav(&p).unwrap_err();
+        assert!(matches!(e, Error::Truncated { declared: 1000, .. }), "{e}");
+        assert!(e.to_string().contains("cut.wav"));
+    }
+
+    #[test]
+    fn ragged_channels_are_refused() {
+        assert!(matches!(
+            Audio::new(8000, vec![vec![0.0; 3], vec![0.0; 2]]),
+            Err(Error::RaggedAudio)
+        ));
+        assert!(matches!(Audio::new(8000, vec![]), Err(Error::RaggedAudio)));
+    }
+}

@@ -1,0 +1,249 @@
+//! Settings of the whole SSL front end, as plain data: one TOML table configures it.
+
+use std::fmt;
+use std::str::FromStr;
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::ConfigError;
+
+/// The angular-spectrum method, chosen at run time by name.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Method {
+    /// Generalised cross-correlation with phase transform (Knapp & Carter 1976).
+    GccPhat,
+    /// Minimum-variance distortionless response, per microphone pair (Capon 1969).
+    #[default]
+    Mvdr,
+}
+
+impl Method {
+    /// Every method, in report order.
+    pub const ALL: [Method; 2] = [Method::GccPhat, Method::Mvdr];
+
+    /// The stable short name used on the command line and in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::GccPhat => "gcc-phat",
+            Method::Mvdr => "mvdr",
+        }
+    }
+}
+
+impl fmt::Display for Method {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for Method {
+    type Err = ConfigError;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s.to_ascii_lowercase().as_str() {
+            "gcc-phat" | "gccphat" | "gcc_phat" => Ok(Method::GccPhat),
+            "mvdr" => Ok(Method::Mvdr),
+            _ => Err(ConfigError::UnknownMethod(s.to_owned())),
+        }
+    }
+}
+
+/// How the spectra of successive blocks of frames are pooled into one.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Pooling {
+    /// The largest value any block reached. Speech sources take turns: a talker who
+    /// dominates only a few blocks keeps the peak of those blocks instead of having it
+    /// averaged away by the blocks where another talker dominates.
+    #[default]
+    Max,
+    /// The mean over blocks: a stationary source's peak sharpens, an intermittent one fades.
+    Mean,
+}
+
+impl FromStr for Pooling {
+    type Err = ConfigError;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s.to_ascii_lowercase().as_str() {
+            "max" => Ok(Pooling::Max),
+            "mean" | "sum" => Ok(Pooling::Mean),
+            _ => Err(ConfigError::UnknownPooling(s.to_owned())),
+        }
+    }
+}
+
+/// The elevation range searched, in degrees.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ElevationRange {
+    /// Lowest elevation (degrees, `>= -90`). Default: 0.
+    pub min_deg: f64,
+    /// Highest elevation (degrees, `<= 90`). Default: 0.
+    pub max_deg: f64,
+    /// Step (degrees, `> 0`). Default: 5.
+    pub step_deg: f64,
+}
+
+impl Default for ElevationRange {
+    fn default() -> Self {
+        Self {
+            min_deg: 0.0,
+            max_deg: 0.0,
+            step_deg: 5.0,
+        }
+    }
+}
+
+/// Every setting of the SSL front end.
+///
+/// The defaults come from physics and the signals robots hear, not from one data set:
+/// speech carries its energy between about 200 Hz and 8 kHz, and below 200 Hz a
+/// 20-cm array resolves nothing while room modes dominate; a 64 ms frame resolves
+/// speech harmonics and is what MBSS Locate uses; a block of about a third of a second is
+/// a syllable or two, the time over which one talker tends to dominate.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SslConfig {
+    /// Angular-spectrum method. Default: [`Method::Mvdr`].
+    pub method: Method,
+    /// STFT frame length (samples). Default: `None`, the power of two at or above 64 ms at
+    /// the recording's sample rate (4096 at 48 kHz), as MBSS Locate chooses it.
+    pub frame_len: Option<usize>,
+    /// STFT hop (samples, `1..=frame_len`). Default: `None`, half the frame.
+    pub hop: Option<usize>,
+    /// Lower edge of the analysis band (Hz, `>= 0`). Default: 200.
+    pub fmin_hz: f64,
+    /// Upper edge of the analysis band (Hz); capped at the Nyquist frequency. Default: 8000.
+    pub fmax_hz: f64,
+    /// Azimuth grid step (degrees, in `(0, 90]`). Default: 1.
+    pub az_step_deg: f64,
+    /// Elevations searched. Default: the horizontal plane only (0 degrees).
+    pub elevation: ElevationRange,
+    /// Frames per block: statistics are averaged within a block, then blocks are pooled
+    /// (`>= 1`). Default: 8 (0.38 s at the default frame and hop at 48 kHz).
+    pub block_frames: usize,
+    /// How block spectra are pooled. Default: [`Pooling::Max`].
+    pub pooling: Pooling,
+    /// Number of DoAs reported, strongest first (`>= 1`). Default: 4.
+    pub num_peaks: usize,
+    /// Minimum azimuth separation between reported peaks (degrees, `[0, 180]`). Default: 10.
+    pub min_sep_deg: f64,
+    /// Speed of sound (m/s). Default: 343.
+    pub speed_of_sound: f64,
+    /// MVDR diagonal loading, relative to the (unit) diagonal of the pair's coherence
+    /// matrix (`> 0`). It bounds how sharp one coherent bin's peak can be. Default: 0.1.
+    pub mvdr_loading: f64,
+    /// MVDR: the pair covariance is also averaged over this many bins on each side
+    /// (Default: 2), so that a block of a few frames still gives a well-conditioned matrix.
+    pub mvdr_freq_smoothing: usize,
+}
+
+impl Default for SslConfig {
+    fn default() -> Self {
+        Self {
+            method: Method::default(),
+            frame_len: None,
+            hop: None,
+            fmin_hz: 200.0,
+            fmax_hz: 8000.0,
+            az_step_deg: 1.0,
+            elevation: ElevationRange::default(),
+            block_frames: 8,
+            pooling: Pooling::default(),
+            num_peaks: 4,
+            min_sep_deg: 10.0,
+            speed_of_sound: 343.0,
+            mvdr_loading: 0.1,
+            mvdr_freq_smoothing: 2,
+        }
+    }
+}
+
+impl SslConfig {
+    /// The frame length used at `sample_rate`.
+    pub fn frame_len_at(&self, sample_rate: u32) -> usize {
+        self.frame_len
+            .unwrap_or_else(|| ((0.064 * f64::from(sample_rate)).ceil() as usize).next_power_of_two())
+    }
+
+    /// Checks every setting that does not depend on the sample rate.
+    ///
+    /// # Errors
+    /// The first [`ConfigError`] found.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        if !(self.az_step_deg > 0.0 && self.az_step_deg <= 90.0) {
+            return Err(ConfigError::AzimuthStep(self.az_step_deg));
+        }
+        let e = self.elevation;
+        if !(e.min_deg >= -90.0 && e.min_deg <= e.max_deg && e.max_deg <= 90.0 && e.step_deg > 0.0)
+        {
+            return Err(ConfigError::Elevation {
+                min: e.min_deg,
+                max: e.max_deg,
+                step: e.step_deg,
+            });
+        }
+        if self.block_frames == 0 {
+            return Err(ConfigError::BlockFrames(0));
+        }
+        if self.num_peaks == 0 {
+            return Err(ConfigError::MaxPeaks(0));
+        }
+        if !(0.0..=180.0).contains(&self.min_sep_deg) {
+            return Err(ConfigError::MinSeparation(self.min_sep_deg));
+        }
+        if !(self.speed_of_sound.is_finite() && self.speed_of_sound > 0.0) {
+            return Err(ConfigError::SpeedOfSound(self.speed_of_sound));
+        }
+        if !(self.mvdr_loading.is_finite() && self.mvdr_loading > 0.0) {
+            return Err(ConfigError::Loading(self.mvdr_loading));
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn default_frame_is_4096_at_48k_and_1024_at_16k() {
+        let c = SslConfig::default();
+        assert_eq!(c.frame_len_at(48_000), 4096);
+        assert_eq!(c.frame_len_at(16_000), 1024);
+    }
+
+    #[test]
+    fn methods_round_trip_through_their_names() {
+        for m in Method::ALL {
+            assert_eq!(m.name().parse::<Method>().unwrap(), m);
+        }
+        assert!("music".parse::<Method>().is_err());
+    }
+
+    #[test]
+    fn the_default_is_valid_and_bad_values_are_named() {
+        SslConfig::default().validate().unwrap();
+        let c = SslConfig {
+            az_step_deg: 0.0,
+            ..SslConfig::default()
+        };
+        assert_eq!(c.validate(), Err(ConfigError::AzimuthStep(0.0)));
+        let c = SslConfig {
+            num_peaks: 0,
+            ..SslConfig::default()
+        };
+        assert_eq!(c.validate(), Err(ConfigError::MaxPeaks(0)));
+        let c = SslConfig {
+            speed_of_sound: -1.0,
+            ..SslConfig::default()
+        };
+        assert_eq!(c.validate(), Err(ConfigError::SpeedOfSound(-1.0)));
+    }
+
+    #[test]
+    fn unknown_keys_are_refused() {
+        let e = toml::from_str::<SslConfig>("metod = \"mvdr\"").unwrap_err();
+        assert!(e.to_string().contains("metod"), "{e}");
+    }
+}

@@ -1,0 +1,198 @@
+//! Error types: [`ConfigError`] for settings rejected at construction, [`ArrayError`] for
+//! array descriptions, and [`Error`] for everything that can go wrong at run time.
+
+use std::path::PathBuf;
+
+/// A setting that [`crate::Localizer::new`] (or one of the config constructors) refused.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ConfigError {
+    /// The STFT frame is too short to hold a useful spectrum.
+    #[error("frame length {0} samples is too short (at least 16)")]
+    FrameLen(usize),
+    /// The hop is zero or longer than the frame.
+    #[error("hop {hop} must be in 1..={frame_len} samples")]
+    Hop {
+        /// The hop that was asked for.
+        hop: usize,
+        /// The frame length it must not exceed.
+        frame_len: usize,
+    },
+    /// The frequency band is empty or outside `[0, fs / 2]`.
+    #[error("frequency band [{fmin}, {fmax}] Hz is empty or outside [0, {nyquist}] Hz")]
+    Band {
+        /// Lower edge (Hz).
+        fmin: f64,
+        /// Upper edge (Hz).
+        fmax: f64,
+        /// Half the sample rate (Hz).
+        nyquist: f64,
+    },
+    /// The band holds no STFT bin at this frame length and sample rate.
+    #[error("frequency band [{fmin}, {fmax}] Hz holds no STFT bin (bin spacing {spacing} Hz)")]
+    BandHasNoBin {
+        /// Lower edge (Hz).
+        fmin: f64,
+        /// Upper edge (Hz).
+        fmax: f64,
+        /// Width of one bin (Hz).
+        spacing: f64,
+    },
+    /// The azimuth step does not divide the circle into at least 4 cells.
+    #[error("azimuth step {0} degrees must be in (0, 90]")]
+    AzimuthStep(f64),
+    /// The elevation search range is malformed.
+    #[error(
+        "elevation search [{min}, {max}] step {step} degrees is invalid (need -90 <= min <= max <= 90, step > 0)"
+    )]
+    Elevation {
+        /// Lowest elevation (degrees).
+        min: f64,
+        /// Highest elevation (degrees).
+        max: f64,
+        /// Step (degrees).
+        step: f64,
+    },
+    /// A block must hold at least one frame.
+    #[error("block of {0} frames: must be at least 1")]
+    BlockFrames(usize),
+    /// Peak separation outside `[0, 180]` degrees.
+    #[error("minimum peak separation {0} degrees must be in [0, 180]")]
+    MinSeparation(f64),
+    /// Asked for no peaks at all.
+    #[error("number of peaks must be at least 1, got {0}")]
+    MaxPeaks(usize),
+    /// Speed of sound not positive and finite.
+    #[error("speed of sound {0} m/s must be positive and finite")]
+    SpeedOfSound(f64),
+    /// MVDR diagonal loading not positive and finite.
+    #[error("diagonal loading {0} must be positive and finite")]
+    Loading(f64),
+    /// A sample rate of zero.
+    #[error("sample rate must be positive")]
+    SampleRate,
+    /// A method name that is not known.
+    #[error("unknown method {0:?}; expected one of: gcc-phat, mvdr")]
+    UnknownMethod(String),
+    /// A pooling name that is not known.
+    #[error("unknown pooling {0:?}; expected one of: max, mean")]
+    UnknownPooling(String),
+}
+
+/// A microphone array description that cannot be used.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ArrayError {
+    /// Fewer than two microphones: no pair, no delay, no direction.
+    #[error("an array needs at least two microphones, got {0}")]
+    TooFewMics(usize),
+    /// A coordinate is NaN or infinite.
+    #[error("microphone {index} has a non-finite coordinate")]
+    NonFinite {
+        /// Zero-based microphone index.
+        index: usize,
+    },
+    /// Two microphones share one position (within 0.1 mm).
+    #[error("microphones {a} and {b} are at the same position")]
+    Duplicate {
+        /// Zero-based index of the first.
+        a: usize,
+        /// Zero-based index of the second.
+        b: usize,
+    },
+    /// A preset name that is not built in.
+    #[error("unknown array {0:?}: not a preset ({presets}) nor an existing file", presets = crate::array::PRESETS.join(", "))]
+    UnknownPreset(String),
+    /// The array file could not be read.
+    #[error("failed to read array file {path}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// What the operating system said.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The array file is not valid TOML/JSON or lacks `positions`.
+    #[error("array file {path}: {message}")]
+    Parse {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+    /// The file was read but describes a bad array.
+    #[error("array file {path}: {source}")]
+    Invalid {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong with the geometry.
+        #[source]
+        source: Box<ArrayError>,
+    },
+}
+
+/// Everything that can fail while reading audio or localising.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// A setting was refused.
+    #[error(transparent)]
+    Config(#[from] ConfigError),
+    /// The array description was refused.
+    #[error(transparent)]
+    Array(#[from] ArrayError),
+    /// The file could not be opened or is not a WAV file hound understands.
+    #[error("{path}: {message}")]
+    Wav {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+    /// The file holds fewer samples than its header declares.
+    #[error("{path}: truncated: the header declares {declared} samples but the file holds {read}")]
+    Truncated {
+        /// The file.
+        path: PathBuf,
+        /// Samples the header announces (all channels).
+        declared: u64,
+        /// Samples actually present.
+        read: u64,
+    },
+    /// A WAV with no samples.
+    #[error("{path}: the file holds no audio samples")]
+    EmptyWav {
+        /// The file.
+        path: PathBuf,
+    },
+    /// In-memory audio whose channels are empty or of different lengths.
+    #[error("audio channels must be non-empty and of equal length")]
+    RaggedAudio,
+    /// The audio's channel count differs from the array's microphone count.
+    #[error("audio has {got} channels but the array has {expected} microphones")]
+    ChannelMismatch {
+        /// Microphones in the array.
+        expected: usize,
+        /// Channels in the audio.
+        got: usize,
+    },
+    /// The audio is shorter than one STFT frame.
+    #[error("audio of {samples} samples per channel is shorter than one {frame_len}-sample frame")]
+    TooShort {
+        /// Samples per channel.
+        samples: usize,
+        /// Frame length.
+        frame_len: usize,
+    },
+    /// The audio's sample rate is not the one the localizer was built for.
+    #[error("audio sample rate {got} Hz differs from the localizer's {expected} Hz")]
+    SampleRateMismatch {
+        /// The localizer's rate.
+        expected: u32,
+        /// The audio's rate.
+        got: u32,
+    },
+}
+
+/// Result with this crate's [`Error`].
+pub type Result<T, E = Error> = std::result::Result<T, E>;

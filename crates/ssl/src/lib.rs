@@ -1,0 +1,58 @@
+//! Sound source localisation for microphone arrays: angular spectra and ranked directions
+//! of arrival (DoAs) from multichannel audio.
+//!
+//! # Overview
+//!
+//! A [`Localizer`] is built once per array, sample rate and [`SslConfig`]: it plans the STFT
+//! ([`stft`]), the direction grid and every microphone pair's delay tables ([`grid`]).
+//! [`Localizer::locate`] then transforms the audio, computes one angular spectrum per block
+//! of frames with the chosen [`Method`] ([`gcc_phat`] or [`mvdr`]), pools the blocks, and
+//! returns the strongest peaks of the pooled spectrum as [`Doa`]s.
+//!
+//! # Example
+//!
+//! ```
+//! use ssl::{Audio, Localizer, MicArray, Method, SslConfig};
+//! // A click arriving from azimuth 90 degrees reaches mic 1 (at +y) before mic 0.
+//! let array = MicArray::new("pair+", vec![[0.0, 0.0, 0.0], [0.0, 0.2, 0.0], [0.2, 0.0, 0.0]])?;
+//! let fs = 16_000;
+//! let noise: Vec<f32> = (0..16_000u32).map(|i| ((i.wrapping_mul(2654435761) >> 16) % 2001) as f32 / 1000.0 - 1.0).collect();
+//! let lag = (0.2 / 343.0 * fs as f64).round() as usize; // 9 samples
+//! let mic0 = noise[..16_000 - lag].to_vec();
+//! let mic1 = noise[lag..].to_vec();
+//! let mic2 = mic0.clone(); // broadside to a source at 90 degrees
+//! let audio = Audio::new(fs, vec![mic0, mic1, mic2])?;
+//! let config = SslConfig { method: Method::GccPhat, num_peaks: 1, ..SslConfig::default() };
+//! let doas = Localizer::new(&array, fs, &config)?.locate(&audio)?;
+//! assert!((doas[0].azimuth_deg - 90.0).abs() < 5.0);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
+//! # Conventions
+//!
+//! - SI units: seconds, metres, hertz; angles are degrees at this crate's edges.
+//! - The array frame is right-handed, `x` the robot's heading, `z` up; azimuth is
+//!   counter-clockwise from `x`, wrapped to `[-180, 180)`; elevation is above the xy plane.
+//! - Audio is channel-major (`channels[mic][sample]`), channel `i` is microphone `i`.
+//! - The forward FFT is unnormalised; every statistic is normalised per bin, so the
+//!   scale of the audio does not matter.
+
+pub mod array;
+pub mod audio;
+pub mod config;
+pub mod error;
+pub mod gcc_phat;
+pub mod grid;
+mod localizer;
+pub mod mvdr;
+pub mod spectrum;
+pub mod stft;
+
+pub use array::MicArray;
+pub use audio::{Audio, read_wav};
+pub use config::{ElevationRange, Method, Pooling, SslConfig};
+pub use error::{ArrayError, ConfigError, Error, Result};
+pub use grid::DirectionGrid;
+pub use localizer::{Localizer, SpectrumEstimator};
+pub use spectrum::{AngularSpectrum, Doa, wrap_deg};
+pub use stft::{Spectrogram, Stft};

@@ -1,0 +1,147 @@
+//! MVDR: minimum-variance distortionless response (Capon, 1969), per microphone pair.
+//!
+//! Like the "MVDR" of MBSS Locate (the toolbox behind the paper's DoAs), this is a pairwise
+//! beamformer, not a full-array one: for each pair and bin it forms the 2 x 2 spatial
+//! covariance, averaged over the block's frames and `±F` neighbouring bins, normalises it
+//! to a coherence matrix `[[1, g], [g*, 1]]` (so that every bin weighs alike whatever its
+//! energy, as PHAT does for GCC), loads its diagonal by `eps`, and evaluates the Capon power
+//! `1 / (a^H R^-1 a)` for the steering vector `a = [1, e^{i w tau}]` at each lag `tau`:
+//!
+//! `P_b(tau) = ((1 + eps)^2 - |g_b|^2) / (2 (1 + eps - Re(g_b e^{i w_b tau})))`.
+//!
+//! A bin whose two channels are fully coherent (`|g| -> 1`, one dominant source) gives a
+//! peak far sharper than GCC-PHAT's cosine; an incoherent bin gives a flat `~1/2`. The
+//! loading `eps` keeps the denominator at least `eps`: without it a block of a single frame
+//! (where `|g| = 1` exactly) would divide by zero, and one bin could outvote all others.
+//! A full 6-channel Capon beamformer would need a 6 x 6 inverse per bin and a quadratic form
+//! per direction and bin, about 25 times the work, for the same delay information.
+//!
+//! ## Algorithm
+//! 1. Per channel and pair, sum powers and cross-spectra over the block's frames.
+//! 2. Smooth them over `±F` bins; form the coherence `g_b = R_ij / sqrt(R_ii R_jj)`.
+//! 3. Evaluate `sum_b P_b(tau)` on the pair's lag grid; read it off at each direction's
+//!    delay and average over pairs.
+
+use std::ops::Range;
+use std::sync::Arc;
+
+use realfft::num_complex::Complex32;
+
+use crate::SpectrumEstimator;
+use crate::grid::{PairLags, lag_sums};
+use crate::stft::Spectrogram;
+
+/// The pairwise MVDR estimator for one array, grid, band and sample rate.
+#[derive(Clone, Debug)]
+pub struct Mvdr {
+    lags: Arc<PairLags>,
+    loading: f32,
+    smoothing: usize,
+}
+
+impl Mvdr {
+    pub(crate) fn new(lags: Arc<PairLags>, loading: f64, smoothing: usize) -> Self {
+        Self {
+            lags,
+            loading: loading as f32,
+            smoothing,
+        }
+    }
+}
+
+/// Box-sums `v` over `±w` neighbours (clipped at the edges) into `out`.
+fn box_smooth<T: Copy + Default + std::ops::AddAssign + std::ops::Sub<Output = T>>(
+    v: &[T],
+    w: usize,
+    out: &mut [T],
+) {
+    // Prefix sums: out[b] = S[min(b + w + 1, n)] - S[b.saturating_sub(w)].
+    let n = v.len();
+    let mut prefix = Vec::with_capacity(n + 1);
+    let mut acc = T::default();
+    prefix.push(acc);
+    for &x in v {
+        acc += x;
+        prefix.push(acc);
+    }
+    for (b, o) in out.iter_mut().enumerate() {
+        *o = prefix[(b + w + 1).min(n)] - prefix[b.saturating_sub(w)];
+    }
+}
+
+impl SpectrumEstimator for Mvdr {
+    fn name(&self) -> &'static str {
+        "mvdr"
+    }
+
+    fn estimate_into(&self, stft: &Spectrogram, frames: Range<usize>, out: &mut [f32]) {
+        let l = &*self.lags;
+        let nb = l.n_bins;
+        assert_eq!(stft.bins().len(), nb, "spectrogram band differs from the plan");
+        out.fill(0.0);
+        let n_ch = stft.num_channels();
+        // Channel powers, summed over frames then smoothed over bins.
+        let mut power = vec![vec![0.0f32; nb]; n_ch];
+        let mut tmp = vec![0.0f32; nb];
+        for (c, pw) in power.iter_mut().enumerate() {
+            for f in frames.clone() {
+                for (acc, x) in tmp.iter_mut().zip(stft.frame(f, c)) {
+                    *acc += x.norm_sqr();
+                }
+            }
+            box_smooth(&tmp, self.smoothing, pw);
+            tmp.fill(0.0);
+        }
+        let eps = self.loading;
+        let a = 1.0 + eps;
+        let mut cross = vec![Complex32::default(); nb];
+        let mut smooth = vec![Complex32::default(); nb];
+        let (mut gr, mut gi, mut num) = (vec![0.0f32; nb], vec![0.0f32; nb], vec![0.0f32; nb]);
+        let mut lagfn = Vec::new();
+        let norm = 1.0 / (nb * l.pairs.len()) as f32;
+        for (p, &(i, j)) in l.pairs.iter().enumerate() {
+            cross.fill(Complex32::default());
+            for f in frames.clone() {
+                let (xi, xj) = (stft.frame(f, i), stft.frame(f, j));
+                for b in 0..nb {
+                    cross[b] += xi[b] * xj[b].conj();
+                }
+            }
+            box_smooth(&cross, self.smoothing, &mut smooth);
+            for b in 0..nb {
+                let d = (power[i][b] * power[j][b]).sqrt();
+                let g = if d > f32::MIN_POSITIVE {
+                    smooth[b] / d
+                } else {
+                    Complex32::default()
+                };
+                gr[b] = g.re;
+                gi[b] = g.im;
+                num[b] = 0.5 * (a * a - g.norm_sqr());
+            }
+            let (cos, sin) = l.rows(p);
+            lagfn.resize(2 * l.half[p] + 1, 0.0);
+            lag_sums(nb, cos, sin, &mut lagfn, |b, c, s| {
+                num[b] / (a - (gr[b] * c - gi[b] * s))
+            });
+            lagfn.iter_mut().for_each(|v| *v *= norm);
+            l.accumulate(p, &lagfn, out);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn box_smoothing_matches_a_direct_sum() {
+        let v: Vec<f32> = (0..10).map(|i| (i * i % 7) as f32).collect();
+        let mut out = vec![0.0; 10];
+        box_smooth(&v, 2, &mut out);
+        for b in 0..10 {
+            let want: f32 = v[b.saturating_sub(2)..(b + 3).min(10)].iter().sum();
+            assert_eq!(out[b], want, "bin {b}");
+        }
+    }
+}

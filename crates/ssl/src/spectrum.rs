@@ -1,0 +1,162 @@
+//! Angular spectra and their peaks: the ranked directions of arrival.
+
+use serde::{Deserialize, Serialize};
+
+use crate::grid::DirectionGrid;
+
+/// One direction of arrival: azimuth and elevation (degrees, array frame) and the
+/// spectrum's value there.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Doa {
+    /// Azimuth (degrees, counter-clockwise from the array's x axis, in `[-180, 180)`).
+    pub azimuth_deg: f64,
+    /// Elevation (degrees above the array's xy plane) at which the peak is strongest.
+    pub elevation_deg: f64,
+    /// The pooled spectrum's value at the peak (method-specific scale; larger is stronger).
+    pub strength: f64,
+}
+
+/// An angular spectrum over a [`DirectionGrid`]: `values[e * num_azimuths + a]`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AngularSpectrum {
+    grid: DirectionGrid,
+    values: Vec<f32>,
+}
+
+/// Wraps an angle in degrees to `[-180, 180)`.
+pub fn wrap_deg(a: f64) -> f64 {
+    let w = (a + 180.0).rem_euclid(360.0) - 180.0;
+    // rem_euclid can round up to exactly 360 for tiny negative inputs.
+    if w >= 180.0 { w - 360.0 } else { w }
+}
+
+impl AngularSpectrum {
+    /// Wraps values laid out as the grid documents.
+    ///
+    /// # Panics
+    /// If `values.len() != grid.len()`.
+    pub fn new(grid: DirectionGrid, values: Vec<f32>) -> Self {
+        assert_eq!(values.len(), grid.len(), "one value per direction");
+        Self { grid, values }
+    }
+
+    /// The grid.
+    pub fn grid(&self) -> &DirectionGrid {
+        &self.grid
+    }
+
+    /// Values, elevation-major.
+    pub fn values(&self) -> &[f32] {
+        &self.values
+    }
+
+    /// For each azimuth, the largest value over elevations, and the elevation index of it.
+    pub fn azimuth_profile(&self) -> (Vec<f32>, Vec<usize>) {
+        let n = self.grid.num_azimuths();
+        let mut best = self.values[..n].to_vec();
+        let mut at = vec![0usize; n];
+        for (e, row) in self.values.chunks_exact(n).enumerate().skip(1) {
+            for a in 0..n {
+                if row[a] > best[a] {
+                    best[a] = row[a];
+                    at[a] = e;
+                }
+            }
+        }
+        (best, at)
+    }
+
+    /// The strongest local maxima of the azimuth profile, at least `min_sep_deg` apart
+    /// (circularly), strongest first, at most `max_peaks`.
+    ///
+    /// Each peak's azimuth is refined between grid cells by fitting a parabola through the
+    /// peak cell and its two neighbours, so the estimate is not quantised to the grid.
+    pub fn peaks(&self, max_peaks: usize, min_sep_deg: f64) -> Vec<Doa> {
+        let (v, el_at) = self.azimuth_profile();
+        let n = v.len();
+        let step = self.grid.az_step_deg();
+        let mut cands: Vec<(usize, f64, f64)> = Vec::new(); // (cell, refined az, value)
+        for i in 0..n {
+            let (l, c, r) = (v[(i + n - 1) % n], v[i], v[(i + 1) % n]);
+            // >= on one side only: a two-cell plateau yields one peak, not two.
+            if c >= l && c > r {
+                let (l, c, r) = (f64::from(l), f64::from(c), f64::from(r));
+                let den = l - 2.0 * c + r;
+                let delta = if den < 0.0 {
+                    (0.5 * (l - r) / den).clamp(-0.5, 0.5)
+                } else {
+                    0.0
+                };
+                let az = wrap_deg(self.grid.azimuths()[i] + delta * step);
+                cands.push((i, az, c - 0.25 * (l - r) * delta));
+            }
+        }
+        cands.sort_by(|a, b| b.2.total_cmp(&a.2));
+        let mut out: Vec<Doa> = Vec::with_capacity(max_peaks);
+        for (i, az, val) in cands {
+            if out.len() == max_peaks {
+                break;
+            }
+            if out
+                .iter()
+                .all(|d| wrap_deg(d.azimuth_deg - az).abs() >= min_sep_deg)
+            {
+                out.push(Doa {
+                    azimuth_deg: az,
+                    elevation_deg: self.grid.elevations()[el_at[i]],
+                    strength: val,
+                });
+            }
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::ElevationRange;
+
+    fn spectrum_with_bumps(bumps: &[(f64, f32)]) -> AngularSpectrum {
+        let g = DirectionGrid::new(1.0, ElevationRange::default()).unwrap();
+        let values = g
+            .azimuths()
+            .iter()
+            .map(|&a| {
+                bumps
+                    .iter()
+                    .map(|&(c, h)| h * (-(wrap_deg(a - c) / 4.0).powi(2) as f32).exp())
+                    .sum()
+            })
+            .collect();
+        AngularSpectrum::new(g, values)
+    }
+
+    #[test]
+    fn wrap_keeps_angles_in_range() {
+        for (a, w) in [(180.0, -180.0), (-180.0, -180.0), (190.0, -170.0), (-190.0, 170.0)] {
+            assert_eq!(wrap_deg(a), w);
+        }
+        assert!(wrap_deg(-1e-15) < 180.0);
+    }
+
+    #[test]
+    fn peaks_come_strongest_first_with_subcell_azimuth() {
+        let s = spectrum_with_bumps(&[(30.3, 1.0), (-120.6, 2.0), (179.8, 0.5)]);
+        let p = s.peaks(4, 10.0);
+        assert_eq!(p.len(), 3);
+        let az: Vec<f64> = p.iter().map(|d| d.azimuth_deg).collect();
+        assert!((az[0] + 120.6).abs() < 0.1, "{az:?}");
+        assert!((az[1] - 30.3).abs() < 0.1, "{az:?}");
+        assert!(wrap_deg(az[2] - 179.8).abs() < 0.1, "{az:?}");
+    }
+
+    #[test]
+    fn peaks_closer_than_min_sep_keep_the_stronger() {
+        let s = spectrum_with_bumps(&[(0.0, 1.0), (14.0, 0.8), (60.0, 0.5)]);
+        let p = s.peaks(4, 20.0);
+        let az: Vec<i64> = p.iter().map(|d| d.azimuth_deg.round() as i64).collect();
+        assert_eq!(az, vec![0, 60]);
+        assert_eq!(s.peaks(1, 20.0).len(), 1);
+    }
+}
