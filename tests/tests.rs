@@ -1,1 +1,4 @@
+//! The application's integration tests: one binary (ripgrep's layout).
 
+mod cli;
+mod util;

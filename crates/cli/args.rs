@@ -17,6 +17,12 @@ pub struct Cli {
 /// The subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
+    /// Render a built-in scene, localise it with every method, and compare with the truth.
+    Demo {
+        /// Seed of the scene's signals and noise.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
     /// Directions of arrival from multichannel WAV files (or a whole data set).
     Ssl(SslArgs),
 }

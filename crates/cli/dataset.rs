@@ -51,11 +51,7 @@ pub fn list_files(dir: &Path, ext: &str) -> Result<Vec<PathBuf>> {
     let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
         .with_context(|| format!("reading folder {}", dir.display()))?
         .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| {
-            p.is_file()
-                && p.extension()
-                    .is_some_and(|e| e.eq_ignore_ascii_case(ext))
-        })
+        .filter(|p| p.is_file() && p.extension().is_some_and(|e| e.eq_ignore_ascii_case(ext)))
         .collect();
     files.sort_by(|a, b| {
         natural_cmp(
@@ -132,7 +128,9 @@ fn parse_cell(s: &String) -> Result<Option<f64>, &String> {
     if t.is_empty() || t.eq_ignore_ascii_case("nan") {
         return Ok(None);
     }
-    t.parse::<f64>().map(|v| v.is_finite().then_some(v)).map_err(|_| s)
+    t.parse::<f64>()
+        .map(|v| v.is_finite().then_some(v))
+        .map_err(|_| s)
 }
 
 fn read_workbook(path: &Path) -> Result<Vec<Vec<String>>> {
@@ -175,7 +173,11 @@ pub struct Pose {
 /// If the table cannot be read or a row lacks a finite x, y or theta.
 pub fn read_poses(path: &Path, theta_in_radians: bool) -> Result<Vec<Pose>> {
     let rows = read_table(path)?;
-    ensure!(!rows.is_empty(), "{}: the pose table is empty", path.display());
+    ensure!(
+        !rows.is_empty(),
+        "{}: the pose table is empty",
+        path.display()
+    );
     rows.iter()
         .enumerate()
         .map(|(r, row)| {
@@ -221,11 +223,21 @@ pub fn read_sources(path: &Path) -> Result<Vec<[f64; 2]>> {
             .filter(|s| !s.is_empty())
             .map_while(|s| s.parse::<f64>().ok())
             .collect();
-        if nums.len() >= 2 && nums.len() == inner.split([',', ' ', '\t', ';']).filter(|s| !s.is_empty()).count() {
+        if nums.len() >= 2
+            && nums.len()
+                == inner
+                    .split([',', ' ', '\t', ';'])
+                    .filter(|s| !s.is_empty())
+                    .count()
+        {
             out.push([nums[0], nums[1]]);
         }
     }
-    ensure!(!out.is_empty(), "{}: no source position found", path.display());
+    ensure!(
+        !out.is_empty(),
+        "{}: no source position found",
+        path.display()
+    );
     Ok(out)
 }
 
@@ -250,7 +262,11 @@ impl Dataset {
     /// # Errors
     /// If `root/audio` holds no WAV file.
     pub fn open(root: &Path) -> Result<Self> {
-        ensure!(root.is_dir(), "data set folder {} does not exist", root.display());
+        ensure!(
+            root.is_dir(),
+            "data set folder {} does not exist",
+            root.display()
+        );
         let audio_dir = root.join("audio");
         let audio = if audio_dir.is_dir() {
             list_files(&audio_dir, "wav")?
@@ -267,7 +283,9 @@ impl Dataset {
             let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
                 .ok()?
                 .filter_map(|e| e.ok().map(|e| e.path()))
-                .filter(|p| p.is_file() && pred(&p.file_name().unwrap_or_default().to_string_lossy()))
+                .filter(|p| {
+                    p.is_file() && pred(&p.file_name().unwrap_or_default().to_string_lossy())
+                })
                 .collect();
             v.sort();
             v.into_iter().next()
@@ -284,7 +302,10 @@ impl Dataset {
         let mut doa_tables: Vec<PathBuf> = std::fs::read_dir(&az_dir)
             .map(|rd| {
                 rd.filter_map(|e| e.ok().map(|e| e.path()))
-                    .filter(|p| p.is_file() && is_table(&p.file_name().unwrap_or_default().to_string_lossy()))
+                    .filter(|p| {
+                        p.is_file()
+                            && is_table(&p.file_name().unwrap_or_default().to_string_lossy())
+                    })
                     .collect()
             })
             .unwrap_or_default();
@@ -305,9 +326,24 @@ mod tests {
 
     #[test]
     fn natural_order_counts_numbers() {
-        let mut v = vec!["sub10.wav", "sub2.wav", "sub01.wav", "Sub3.wav", "sub1a.wav"];
+        let mut v = vec![
+            "sub10.wav",
+            "sub2.wav",
+            "sub01.wav",
+            "Sub3.wav",
+            "sub1a.wav",
+        ];
         v.sort_by(|a, b| natural_cmp(a, b));
-        assert_eq!(v, vec!["sub01.wav", "sub1a.wav", "sub2.wav", "Sub3.wav", "sub10.wav"]);
+        assert_eq!(
+            v,
+            vec![
+                "sub01.wav",
+                "sub1a.wav",
+                "sub2.wav",
+                "Sub3.wav",
+                "sub10.wav"
+            ]
+        );
     }
 
     #[test]
@@ -316,7 +352,13 @@ mod tests {
         let p = dir.path().join("t.csv");
         std::fs::write(&p, "a,b,c\n1,2,3\n4,,NaN\n").unwrap();
         let t = read_table(&p).unwrap();
-        assert_eq!(t, vec![vec![Some(1.0), Some(2.0), Some(3.0)], vec![Some(4.0), None, None]]);
+        assert_eq!(
+            t,
+            vec![
+                vec![Some(1.0), Some(2.0), Some(3.0)],
+                vec![Some(4.0), None, None]
+            ]
+        );
         std::fs::write(&p, "1,2,3\n4,x,6\n").unwrap();
         let e = read_table(&p).unwrap_err().to_string();
         assert!(e.contains("row 2, column 2") && e.contains("t.csv"), "{e}");
@@ -326,7 +368,11 @@ mod tests {
     fn published_ground_truth_parses() {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("src_gt.txt");
-        std::fs::write(&p, "Position ground truth, unit: meter\n\ns1 [1.25,   0.6,  0]\n\ns2 [1.25,  -0.6, 0]\n").unwrap();
+        std::fs::write(
+            &p,
+            "Position ground truth, unit: meter\n\ns1 [1.25,   0.6,  0]\n\ns2 [1.25,  -0.6, 0]\n",
+        )
+        .unwrap();
         assert_eq!(read_sources(&p).unwrap(), vec![[1.25, 0.6], [1.25, -0.6]]);
     }
 

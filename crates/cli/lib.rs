@@ -1,11 +1,13 @@
 //! The `iasm` application: the commands behind the binary, callable from tests.
 //!
+//! - [`demo`]: `iasm demo`, a built-in scene localised against its truth.
 //! - [`ssl_cmd`]: `iasm ssl`, DoAs from WAV files or a data set, and their score.
 //! - [`dataset`]: the published data-set layout, tables and natural file order.
 //! - [`score`]: the DoA score against known sources.
 
 pub mod args;
 pub mod dataset;
+pub mod demo;
 pub mod score;
 pub mod ssl_cmd;
 
@@ -25,6 +27,7 @@ pub enum Outcome {
 pub fn run(cli: &args::Cli) -> anyhow::Result<Outcome> {
     match &cli.command {
         args::Command::Ssl(a) => ssl_cmd::run(a),
+        args::Command::Demo { seed } => demo::run(*seed),
     }
 }
 

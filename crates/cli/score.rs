@@ -43,7 +43,10 @@ pub fn score_doas(
         doas.len(),
         poses.len()
     );
-    ensure!(n > 0 && !poses.is_empty() && !sources.is_empty(), "nothing to score");
+    ensure!(
+        n > 0 && !poses.is_empty() && !sources.is_empty(),
+        "nothing to score"
+    );
     let (mut hits, mut err_sum) = (0usize, 0.0);
     for (row, pose) in doas.iter().zip(poses) {
         for az in row.iter().take(n).flatten() {
@@ -66,7 +69,11 @@ pub fn score_doas(
         hits,
         total,
         score: hits as f64 / total as f64,
-        mean_hit_error_deg: if hits > 0 { err_sum / hits as f64 } else { f64::NAN },
+        mean_hit_error_deg: if hits > 0 {
+            err_sum / hits as f64
+        } else {
+            f64::NAN
+        },
     })
 }
 
@@ -78,7 +85,11 @@ mod tests {
     fn hand_worked_score() {
         // Robot at the origin facing +y (theta 90). A source at (0, 5) is dead ahead:
         // azimuth 0 in the array frame. One at (-5, 0) is at azimuth +90.
-        let poses = [Pose { x: 0.0, y: 0.0, theta_deg: 90.0 }];
+        let poses = [Pose {
+            x: 0.0,
+            y: 0.0,
+            theta_deg: 90.0,
+        }];
         let sources = [[0.0, 5.0], [-5.0, 0.0]];
         let doas = vec![vec![Some(3.0), Some(84.0), None, Some(-170.0)]];
         let s = score_doas(&doas, &poses, &sources, 4, 5.0).unwrap();
@@ -94,7 +105,11 @@ mod tests {
     #[test]
     fn bearings_wrap_across_180() {
         // Facing -x (theta 180); a source behind-left at (-5, -0.1): world bearing ~ -178.9.
-        let poses = [Pose { x: 0.0, y: 0.0, theta_deg: 180.0 }];
+        let poses = [Pose {
+            x: 0.0,
+            y: 0.0,
+            theta_deg: 180.0,
+        }];
         let doas = vec![vec![Some(2.0)]]; // world bearing 182 = -178
         let s = score_doas(&doas, &poses, &[[-5.0, -0.1]], 1, 5.0).unwrap();
         assert_eq!(s.hits, 1);
@@ -102,7 +117,11 @@ mod tests {
 
     #[test]
     fn lengths_must_match() {
-        let poses = [Pose { x: 0.0, y: 0.0, theta_deg: 0.0 }];
+        let poses = [Pose {
+            x: 0.0,
+            y: 0.0,
+            theta_deg: 0.0,
+        }];
         assert!(score_doas(&vec![], &poses, &[[1.0, 0.0]], 4, 5.0).is_err());
     }
 }

@@ -66,7 +66,11 @@ pub struct FileDoas {
 ///
 /// # Errors
 /// The first file that cannot be read or localised, named.
-pub fn localise_files(files: &[PathBuf], array: &MicArray, config: &SslConfig) -> Result<Vec<FileDoas>> {
+pub fn localise_files(
+    files: &[PathBuf],
+    array: &MicArray,
+    config: &SslConfig,
+) -> Result<Vec<FileDoas>> {
     let bar = crate::progress(files.len() as u64, "localising");
     let cache: std::sync::Mutex<Vec<std::sync::Arc<Localizer>>> = Default::default();
     let out = files
@@ -78,7 +82,11 @@ pub fn localise_files(files: &[PathBuf], array: &MicArray, config: &SslConfig) -
                 match c.iter().find(|l| l.sample_rate() == audio.sample_rate()) {
                     Some(l) => l.clone(),
                     None => {
-                        let l = std::sync::Arc::new(Localizer::new(array, audio.sample_rate(), config)?);
+                        let l = std::sync::Arc::new(Localizer::new(
+                            array,
+                            audio.sample_rate(),
+                            config,
+                        )?);
                         c.push(l.clone());
                         l
                     }
@@ -141,7 +149,9 @@ pub fn run(args: &SslArgs) -> Result<Outcome> {
     let array = MicArray::from_spec(&args.array)?;
     if let Some(t) = args.threads {
         // Only the first call in a process can size the global pool; later ones keep it.
-        let _ = rayon::ThreadPoolBuilder::new().num_threads(t).build_global();
+        let _ = rayon::ThreadPoolBuilder::new()
+            .num_threads(t)
+            .build_global();
     }
     let Some(dir) = &args.dataset else {
         let rows = localise_files(&args.files, &array, &config)?;
@@ -185,7 +195,11 @@ pub fn run(args: &SslArgs) -> Result<Outcome> {
         .with_context(|| format!("scoring against {}", poses_path.display()))?;
     let mut published: Vec<(String, DoaScore)> = Vec::new();
     for t in &ds.doa_tables {
-        let name = t.file_name().unwrap_or_default().to_string_lossy().into_owned();
+        let name = t
+            .file_name()
+            .unwrap_or_default()
+            .to_string_lossy()
+            .into_owned();
         match read_table(t).and_then(|tab| score_doas(&tab, &poses, &sources, n, args.tol_deg)) {
             Ok(s) => published.push((name, s)),
             Err(e) => eprintln!("warning: cannot score {}: {e:#}", t.display()),
@@ -201,14 +215,23 @@ pub fn run(args: &SslArgs) -> Result<Outcome> {
         ours: ours.clone(),
         published: published
             .iter()
-            .map(|(n, s)| PublishedScore { table: n.clone(), score: s.clone() })
+            .map(|(n, s)| PublishedScore {
+                table: n.clone(),
+                score: s.clone(),
+            })
             .collect(),
     };
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
-        println!("DoA score (first {n} DoAs, hit within {} deg of a true bearing)", args.tol_deg);
-        println!("{:<28} {:>6} {:>6} {:>7} {:>10}", "table", "hits", "total", "score", "mean err");
+        println!(
+            "DoA score (first {n} DoAs, hit within {} deg of a true bearing)",
+            args.tol_deg
+        );
+        println!(
+            "{:<28} {:>6} {:>6} {:>7} {:>10}",
+            "table", "hits", "total", "score", "mean err"
+        );
         let line = |name: &str, s: &DoaScore| {
             println!(
                 "{:<28} {:>6} {:>6} {:>7.3} {:>9.2}°",
@@ -221,11 +244,11 @@ pub fn run(args: &SslArgs) -> Result<Outcome> {
         }
     }
     let mut failed = false;
-    if let Some(min) = args.min_score {
-        if ours.score < min {
-            eprintln!("FAIL: score {:.3} is below --min-score {min}", ours.score);
-            failed = true;
-        }
+    if let Some(min) = args.min_score
+        && ours.score < min
+    {
+        eprintln!("FAIL: score {:.3} is below --min-score {min}", ours.score);
+        failed = true;
     }
     if args.beat_published {
         let key = config.method.name().replace('-', "").to_ascii_lowercase();
@@ -234,14 +257,25 @@ pub fn run(args: &SslArgs) -> Result<Outcome> {
             .find(|(n, _)| n.replace('-', "").to_ascii_lowercase().contains(&key));
         match same {
             Some((name, s)) if ours.score < s.score => {
-                eprintln!("FAIL: score {:.3} is below the published {name} ({:.3})", ours.score, s.score);
+                eprintln!(
+                    "FAIL: score {:.3} is below the published {name} ({:.3})",
+                    ours.score, s.score
+                );
                 failed = true;
             }
             Some(_) => {}
-            None => bail!("--beat-published: no published table for {} in {}", config.method, dir.join("azimuth").display()),
+            None => bail!(
+                "--beat-published: no published table for {} in {}",
+                config.method,
+                dir.join("azimuth").display()
+            ),
         }
     }
-    Ok(if failed { Outcome::ThresholdFailed } else { Outcome::Success })
+    Ok(if failed {
+        Outcome::ThresholdFailed
+    } else {
+        Outcome::Success
+    })
 }
 
 #[derive(Serialize)]

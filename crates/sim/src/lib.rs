@@ -1,4 +1,29 @@
-//! Image-source room acoustics (Allen & Berkley, 1979) that renders what a robot's
-//! microphone array hears at each stop of a trajectory through a room with many sources.
+//! Synthetic multichannel audio with known truth, for tests and benchmarks.
 //!
-//! This crate is laid down by the workspace skeleton; issue 4 fills it.
+//! # Overview
+//!
+//! - [`signal`]: source signals (white noise, a voiced harmonic series), seeded.
+//! - [`farfield`]: plane waves from known directions, delayed exactly (fractional delays
+//!   applied as a phase ramp) to each microphone: the analytic reference for DoA tests.
+//!
+//! The image-source room simulator (Allen & Berkley, 1979) that renders a robot moving
+//! through a reverberant room is the next layer of this crate (issue 4).
+//!
+//! # Example
+//!
+//! ```
+//! use sim::{farfield::{PlaneWave, render}, signal::Signal};
+//! let mics = [[0.0, 0.0, 0.0], [0.1, 0.0, 0.0]];
+//! let waves = [PlaneWave { azimuth_deg: 0.0, elevation_deg: 0.0, signal: Signal::Noise }];
+//! let audio = render(&mics, &waves, 16_000, 1600, 343.0, None, 1);
+//! assert_eq!((audio.len(), audio[0].len()), (2, 1600));
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
+//! # Conventions
+//!
+//! SI units; azimuth counter-clockwise from `x`, elevation above the `xy` plane, degrees at
+//! the API; audio channel-major (`audio[mic][sample]`).
+
+pub mod farfield;
+pub mod signal;

@@ -1,2 +1,154 @@
-//! Placeholder, replaced below.
-fn main() {}
+//! Benchmarks of the SSL front end: one whole recording (file read included) per method,
+//! the STFT across frame lengths, and one block's spectrum across grids.
+//!
+//! `cargo bench -p ssl`; figures go to `BENCHMARKS.md`.
+
+// criterion_group!/criterion_main! generate undocumented items (criterion.rs #774/#775).
+#![allow(missing_docs)]
+
+use std::hint::black_box;
+
+use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use sim::farfield::{PlaneWave, render};
+use sim::signal::Signal;
+use ssl::{Audio, Localizer, Method, MicArray, SslConfig, Stft};
+
+const SEED: u64 = 11;
+const FS: u32 = 48_000;
+
+/// A paper-like recording: 3 s, 6 channels, 48 kHz, four sources (two voiced).
+fn recording(seconds: f64) -> Vec<Vec<f64>> {
+    let waves: Vec<PlaneWave> = [
+        (-120.0, Signal::Noise),
+        (-20.0, Signal::Harmonic(130.0)),
+        (45.0, Signal::Noise),
+        (150.0, Signal::Harmonic(210.0)),
+    ]
+    .iter()
+    .map(|&(azimuth_deg, signal)| PlaneWave {
+        azimuth_deg,
+        elevation_deg: 0.0,
+        signal,
+    })
+    .collect();
+    let array = MicArray::default();
+    render(
+        array.positions(),
+        &waves,
+        FS,
+        (seconds * f64::from(FS)) as usize,
+        343.0,
+        Some(20.0),
+        SEED,
+    )
+}
+
+fn write_wav(path: &std::path::Path, channels: &[Vec<f64>]) {
+    let spec = hound::WavSpec {
+        channels: channels.len() as u16,
+        sample_rate: FS,
+        bits_per_sample: 16,
+        sample_format: hound::SampleFormat::Int,
+    };
+    let mut w = hound::WavWriter::create(path, spec).unwrap();
+    for t in 0..channels[0].len() {
+        for ch in channels {
+            w.write_sample((ch[t] * 3000.0) as i16).unwrap();
+        }
+    }
+    w.finalize().unwrap();
+}
+
+fn whole_recording(c: &mut Criterion) {
+    let dir = tempfile::tempdir().unwrap();
+    let wav = dir.path().join("rec.wav");
+    write_wav(&wav, &recording(3.0));
+    let array = MicArray::default();
+    let mut g = c.benchmark_group("ssl/recording-3s-6ch-48k");
+    g.sample_size(30);
+    g.bench_function("read-wav", |b| {
+        b.iter(|| ssl::read_wav(black_box(&wav)).unwrap())
+    });
+    for method in Method::ALL {
+        let loc = Localizer::new(
+            &array,
+            FS,
+            &SslConfig {
+                method,
+                ..SslConfig::default()
+            },
+        )
+        .unwrap();
+        g.bench_function(BenchmarkId::new("read+locate", method), |b| {
+            b.iter(|| {
+                loc.locate(&ssl::read_wav(black_box(&wav)).unwrap())
+                    .unwrap()
+            })
+        });
+    }
+    g.finish();
+}
+
+fn stft(c: &mut Criterion) {
+    let rec = recording(3.0);
+    let audio = Audio::new(
+        FS,
+        rec.iter()
+            .map(|ch| ch.iter().map(|&v| v as f32).collect())
+            .collect(),
+    )
+    .unwrap();
+    let mut g = c.benchmark_group("ssl/stft-3s-6ch");
+    for frame in [512usize, 1024, 4096] {
+        let s = Stft::new(frame, frame / 2).unwrap();
+        g.bench_with_input(BenchmarkId::from_parameter(frame), &frame, |b, &f| {
+            b.iter(|| s.analyze(black_box(&audio), 1..f / 2).unwrap())
+        });
+    }
+    g.finish();
+}
+
+fn block_spectrum(c: &mut Criterion) {
+    let rec = recording(0.2);
+    let audio = Audio::new(
+        FS,
+        rec.iter()
+            .map(|ch| ch.iter().map(|&v| v as f32).collect())
+            .collect(),
+    )
+    .unwrap();
+    let array = MicArray::default();
+    let mut g = c.benchmark_group("ssl/block-spectrum");
+    for method in Method::ALL {
+        for az_step in [5.0, 1.0] {
+            let config = SslConfig {
+                method,
+                az_step_deg: az_step,
+                ..SslConfig::default()
+            };
+            let loc = Localizer::new(&array, FS, &config).unwrap();
+            let frame = config.frame_len_at(FS);
+            let spacing = f64::from(FS) / frame as f64;
+            let bins =
+                (config.fmin_hz / spacing).ceil() as usize..(config.fmax_hz / spacing) as usize + 1;
+            let spec = loc.stft().analyze(&audio, bins).unwrap();
+            let mut out = vec![0.0f32; loc.grid().len()];
+            g.bench_function(
+                BenchmarkId::new(method.name(), format!("{}cells", loc.grid().len())),
+                |b| {
+                    b.iter(|| {
+                        loc.estimator().estimate_into(
+                            black_box(&spec),
+                            0..config.block_frames,
+                            &mut out,
+                        )
+                    })
+                },
+            );
+        }
+    }
+    g.finish();
+}
+
+criterion_group!(benches, whole_recording, stft, block_spectrum);
+criterion_main!(benches);

@@ -121,13 +121,12 @@ pub enum ArrayError {
         message: String,
     },
     /// The file was read but describes a bad array.
-    #[error("array file {path}: {source}")]
+    #[error("array file {path}: {reason}")]
     Invalid {
         /// The file.
         path: PathBuf,
-        /// What is wrong with the geometry.
-        #[source]
-        source: Box<ArrayError>,
+        /// What is wrong with the geometry (part of this message, so not a `source()`).
+        reason: Box<ArrayError>,
     },
 }
 

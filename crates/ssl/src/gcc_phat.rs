@@ -10,15 +10,19 @@
 //! correlation at that direction's delay (the SRP-PHAT functional).
 //!
 //! ## Algorithm
-//! 1. For each pair, average the PHAT-weighted cross-spectrum over the block's frames.
+//! 1. Normalise every channel's bins to unit magnitude; for each pair, average the
+//!    product of the two channels' unit phasors (the PHAT-weighted cross-spectrum) over
+//!    the block's frames.
 //! 2. Evaluate its correlation at the pair's lag grid, normalised by bins.
 //! 3. Add each pair's correlation, interpolated at each direction's delay; divide by pairs.
 
 use std::ops::Range;
 use std::sync::Arc;
 
+use realfft::num_complex::Complex32;
+
 use crate::SpectrumEstimator;
-use crate::grid::{PairLags, lag_sums};
+use crate::grid::{PairLags, lag_sums, padded};
 use crate::stft::Spectrogram;
 
 /// The GCC-PHAT estimator for one array, grid, band and sample rate.
@@ -40,31 +44,51 @@ impl SpectrumEstimator for GccPhat {
 
     fn estimate_into(&self, stft: &Spectrogram, frames: Range<usize>, out: &mut [f32]) {
         let l = &*self.lags;
-        let nb = l.n_bins;
-        assert_eq!(stft.bins().len(), nb, "spectrogram band differs from the plan");
+        let nb = stft.bins().len();
+        assert_eq!(
+            padded(nb),
+            l.n_bins,
+            "spectrogram band differs from the plan"
+        );
         out.fill(0.0);
-        let mut gr = vec![0.0f32; nb];
-        let mut gi = vec![0.0f32; nb];
+        // Padded bins stay 0 and so add nothing.
+        let mut gr = vec![0.0f32; l.n_bins];
+        let mut gi = vec![0.0f32; l.n_bins];
         let mut lagfn = Vec::new();
         let norm = 1.0 / (frames.len() * nb * l.pairs.len()) as f32;
+        // PHAT factorises: X_i X_j^* / |X_i X_j^*| = (X_i / |X_i|) (X_j / |X_j|)^*, so each
+        // channel's bins are normalised once per frame instead of once per pair.
+        let n_ch = stft.num_channels();
+        let mut unit = vec![Complex32::default(); frames.len() * n_ch * nb];
+        for (k, f) in frames.clone().enumerate() {
+            for c in 0..n_ch {
+                let dst = &mut unit[(k * n_ch + c) * nb..(k * n_ch + c + 1) * nb];
+                for (u, x) in dst.iter_mut().zip(stft.frame(f, c)) {
+                    let m = x.norm();
+                    // A bin with no energy carries no phase: it stays 0 and votes for nothing.
+                    if m > f32::MIN_POSITIVE {
+                        *u = x / m;
+                    }
+                }
+            }
+        }
         for (p, &(i, j)) in l.pairs.iter().enumerate() {
             gr.fill(0.0);
             gi.fill(0.0);
-            for f in frames.clone() {
-                let (xi, xj) = (stft.frame(f, i), stft.frame(f, j));
-                for b in 0..nb {
-                    let c = xi[b] * xj[b].conj();
-                    let m = c.norm();
-                    // A bin with no energy in either channel carries no phase: skip it.
-                    if m > f32::MIN_POSITIVE {
-                        gr[b] += c.re / m;
-                        gi[b] += c.im / m;
-                    }
+            for k in 0..frames.len() {
+                let ui = &unit[(k * n_ch + i) * nb..(k * n_ch + i + 1) * nb];
+                let uj = &unit[(k * n_ch + j) * nb..(k * n_ch + j + 1) * nb];
+                for (b, (a, c)) in ui.iter().zip(uj).enumerate() {
+                    let x = a * c.conj();
+                    gr[b] += x.re;
+                    gi[b] += x.im;
                 }
             }
             let (cos, sin) = l.rows(p);
             lagfn.resize(2 * l.half[p] + 1, 0.0);
-            lag_sums(nb, cos, sin, &mut lagfn, |b, c, s| gr[b] * c - gi[b] * s);
+            lag_sums(&gr, &gi, &gr, cos, sin, &mut lagfn, |gr, gi, _, c, s| {
+                gr * c - gi * s
+            });
             lagfn.iter_mut().for_each(|v| *v *= norm);
             l.accumulate(p, &lagfn, out);
         }

@@ -2,7 +2,7 @@
 
 use std::ops::Range;
 
-use crate::array::{MicArray, dist};
+use crate::array::MicArray;
 use crate::config::ElevationRange;
 use crate::error::ConfigError;
 
@@ -100,6 +100,7 @@ pub(crate) struct PairLags {
     /// Pair `p` is sampled at lags `(k - half[p]) * step` samples, `k in 0..=2 half[p]`.
     pub half: Vec<usize>,
     hmax: usize,
+    /// Bins in the band, padded to whole [`LANES`] (table columns past the band are 0).
     pub n_bins: usize,
     /// `cos(w_b tau_j)` and `sin(w_b tau_j)`, row `hmax + j` for lag index `j`.
     cos: Vec<f32>,
@@ -125,12 +126,28 @@ impl PairLags {
         // Half an azimuth cell of the longest pair's delay change, at most one sample: the
         // lag grid then resolves finer than the direction grid for every pair.
         let step = (0.5 * grid.az_step_deg().to_radians() * fs * array.aperture() / c).min(1.0);
-        let half: Vec<usize> = pairs
+        // Each pair needs only the lags its directions reach: with an elevation-limited grid
+        // a pair with a vertical baseline spans far fewer lags than its length allows.
+        let n_dirs = grid.len();
+        let units: Vec<[f64; 3]> = (0..n_dirs).map(|d| grid.unit(d)).collect();
+        let delays: Vec<Vec<f64>> = pairs
             .iter()
-            .map(|&(i, j)| (dist(pos[i], pos[j]) / c * fs / step).ceil() as usize + 1)
+            .map(|&(i, j)| {
+                // tau_ij = t_i - t_j = (r_j - r_i) . u / c: the lag at which the
+                // cross-correlation of channel i with channel j peaks for a plane wave
+                // arriving from u (samples).
+                units
+                    .iter()
+                    .map(|u| (0..3).map(|a| (pos[j][a] - pos[i][a]) * u[a]).sum::<f64>() / c * fs)
+                    .collect()
+            })
+            .collect();
+        let half: Vec<usize> = delays
+            .iter()
+            .map(|t| (t.iter().fold(0.0f64, |m, v| m.max(v.abs())) / step).ceil() as usize + 1)
             .collect();
         let hmax = half.iter().copied().max().unwrap_or(1);
-        let n_bins = bins.len();
+        let n_bins = padded(bins.len());
         let rows = 2 * hmax + 1;
         let mut cos = vec![0.0f32; rows * n_bins];
         let mut sin = vec![0.0f32; rows * n_bins];
@@ -142,17 +159,11 @@ impl PairLags {
                 sin[r * n_bins + b] = ph.sin() as f32;
             }
         }
-        let n_dirs = grid.len();
         let mut lookup = Vec::with_capacity(pairs.len() * n_dirs);
-        for (p, &(i, j)) in pairs.iter().enumerate() {
+        for (p, taus) in delays.iter().enumerate() {
             let h = half[p];
-            for d in 0..n_dirs {
-                let u = grid.unit(d);
-                // tau_ij = t_i - t_j = (r_j - r_i) . u / c: the lag at which the
-                // cross-correlation of channel i with channel j peaks for a plane wave
-                // arriving from u.
-                let proj: f64 = (0..3).map(|a| (pos[j][a] - pos[i][a]) * u[a]).sum();
-                let x = proj / c * fs / step + h as f64;
+            for &tau in taus {
+                let x = tau / step + h as f64;
                 let k0 = (x.floor().max(0.0) as usize).min(2 * h - 1);
                 lookup.push((k0 as u32, (x - k0 as f64) as f32));
             }
@@ -186,31 +197,96 @@ impl PairLags {
     }
 }
 
-/// Evaluates `sum_b kernel(bin b, lag row)` for every lag row of one pair, with eight
-/// independent accumulators so that the compiler vectorises the sum.
-pub(crate) fn lag_sums(
-    n_bins: usize,
+/// Bins are padded to a multiple of this, so the lag sums run on whole SIMD lanes.
+pub(crate) const LANES: usize = 8;
+
+/// Rounds `n` up to whole [`LANES`].
+pub(crate) fn padded(n: usize) -> usize {
+    n.div_ceil(LANES) * LANES
+}
+
+/// Evaluates `out[r] = sum_b kernel(x[b], y[b], z[b], cos[r][b], sin[r][b])` for every lag
+/// row `r` of one pair. `x`, `y`, `z` are per-bin coefficients padded to whole lanes with
+/// values for which the kernel gives 0.
+///
+/// Eight independent accumulators over fixed-size chunks let the compiler vectorise the
+/// sum (float addition is not associative, so it will not reorder one accumulator); on
+/// x86-64 processors with AVX2 and FMA the same code is compiled a second time for them
+/// and chosen at run time.
+pub(crate) fn lag_sums<K>(
+    x: &[f32],
+    y: &[f32],
+    z: &[f32],
     cos: &[f32],
     sin: &[f32],
     out: &mut [f32],
-    kernel: impl Fn(usize, f32, f32) -> f32,
-) {
-    for (r, o) in out.iter_mut().enumerate() {
-        let c = &cos[r * n_bins..(r + 1) * n_bins];
-        let s = &sin[r * n_bins..(r + 1) * n_bins];
-        let mut acc = [0.0f32; 8];
-        let chunks = n_bins / 8;
-        for ch in 0..chunks {
-            for l in 0..8 {
-                let b = ch * 8 + l;
-                acc[l] += kernel(b, c[b], s[b]);
+    kernel: K,
+) where
+    K: Fn(f32, f32, f32, f32, f32) -> f32 + Copy,
+{
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+        // SAFETY: the CPU supports the features the function is compiled for.
+        unsafe { lag_sums_avx2(x, y, z, cos, sin, out, kernel) };
+        return;
+    }
+    lag_sums_portable(x, y, z, cos, sin, out, kernel);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn lag_sums_avx2<K>(
+    x: &[f32],
+    y: &[f32],
+    z: &[f32],
+    cos: &[f32],
+    sin: &[f32],
+    out: &mut [f32],
+    kernel: K,
+) where
+    K: Fn(f32, f32, f32, f32, f32) -> f32 + Copy,
+{
+    lag_sums_portable(x, y, z, cos, sin, out, kernel);
+}
+
+#[inline(always)]
+fn lag_sums_portable<K>(
+    x: &[f32],
+    y: &[f32],
+    z: &[f32],
+    cos: &[f32],
+    sin: &[f32],
+    out: &mut [f32],
+    kernel: K,
+) where
+    K: Fn(f32, f32, f32, f32, f32) -> f32 + Copy,
+{
+    let nb = x.len();
+    assert!(
+        nb.is_multiple_of(LANES) && y.len() == nb && z.len() == nb,
+        "bins padded to lanes"
+    );
+    assert!(
+        cos.len() >= out.len() * nb && sin.len() >= out.len() * nb,
+        "one table row per lag"
+    );
+    for ((o, c), s) in out
+        .iter_mut()
+        .zip(cos.chunks_exact(nb))
+        .zip(sin.chunks_exact(nb))
+    {
+        let mut acc = [0.0f32; LANES];
+        let rows = x
+            .chunks_exact(LANES)
+            .zip(y.chunks_exact(LANES))
+            .zip(z.chunks_exact(LANES))
+            .zip(c.chunks_exact(LANES).zip(s.chunks_exact(LANES)));
+        for (((x8, y8), z8), (c8, s8)) in rows {
+            for l in 0..LANES {
+                acc[l] += kernel(x8[l], y8[l], z8[l], c8[l], s8[l]);
             }
         }
-        let mut total: f32 = acc.iter().sum();
-        for b in chunks * 8..n_bins {
-            total += kernel(b, c[b], s[b]);
-        }
-        *o = total;
+        *o = acc.iter().sum();
     }
 }
 

@@ -58,7 +58,11 @@ impl Localizer {
     ///
     /// # Errors
     /// The first [`ConfigError`] found, including a band with no bin at this rate.
-    pub fn new(array: &MicArray, sample_rate: u32, config: &SslConfig) -> Result<Self, ConfigError> {
+    pub fn new(
+        array: &MicArray,
+        sample_rate: u32,
+        config: &SslConfig,
+    ) -> Result<Self, ConfigError> {
         config.validate()?;
         if sample_rate == 0 {
             return Err(ConfigError::SampleRate);
@@ -222,6 +226,15 @@ mod tests {
         let loc = Localizer::new(&MicArray::default(), 16_000, &SslConfig::default()).unwrap();
         let audio = Audio::new(16_000, vec![vec![0.0; 4000]; 4]).unwrap();
         let e = loc.locate(&audio).unwrap_err();
-        assert!(matches!(e, Error::ChannelMismatch { expected: 6, got: 4 }), "{e}");
+        assert!(
+            matches!(
+                e,
+                Error::ChannelMismatch {
+                    expected: 6,
+                    got: 4
+                }
+            ),
+            "{e}"
+        );
     }
 }

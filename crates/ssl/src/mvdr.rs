@@ -28,7 +28,7 @@ use std::sync::Arc;
 use realfft::num_complex::Complex32;
 
 use crate::SpectrumEstimator;
-use crate::grid::{PairLags, lag_sums};
+use crate::grid::{PairLags, lag_sums, padded};
 use crate::stft::Spectrogram;
 
 /// The pairwise MVDR estimator for one array, grid, band and sample rate.
@@ -76,8 +76,12 @@ impl SpectrumEstimator for Mvdr {
 
     fn estimate_into(&self, stft: &Spectrogram, frames: Range<usize>, out: &mut [f32]) {
         let l = &*self.lags;
-        let nb = l.n_bins;
-        assert_eq!(stft.bins().len(), nb, "spectrogram band differs from the plan");
+        let nb = stft.bins().len();
+        assert_eq!(
+            padded(nb),
+            l.n_bins,
+            "spectrogram band differs from the plan"
+        );
         out.fill(0.0);
         let n_ch = stft.num_channels();
         // Channel powers, summed over frames then smoothed over bins.
@@ -96,7 +100,12 @@ impl SpectrumEstimator for Mvdr {
         let a = 1.0 + eps;
         let mut cross = vec![Complex32::default(); nb];
         let mut smooth = vec![Complex32::default(); nb];
-        let (mut gr, mut gi, mut num) = (vec![0.0f32; nb], vec![0.0f32; nb], vec![0.0f32; nb]);
+        // Padded bins keep num = 0 and so add nothing.
+        let (mut gr, mut gi, mut num) = (
+            vec![0.0f32; l.n_bins],
+            vec![0.0f32; l.n_bins],
+            vec![0.0f32; l.n_bins],
+        );
         let mut lagfn = Vec::new();
         let norm = 1.0 / (nb * l.pairs.len()) as f32;
         for (p, &(i, j)) in l.pairs.iter().enumerate() {
@@ -121,8 +130,8 @@ impl SpectrumEstimator for Mvdr {
             }
             let (cos, sin) = l.rows(p);
             lagfn.resize(2 * l.half[p] + 1, 0.0);
-            lag_sums(nb, cos, sin, &mut lagfn, |b, c, s| {
-                num[b] / (a - (gr[b] * c - gi[b] * s))
+            lag_sums(&gr, &gi, &num, cos, sin, &mut lagfn, |gr, gi, num, c, s| {
+                num / (a - (gr * c - gi * s))
             });
             lagfn.iter_mut().for_each(|v| *v *= norm);
             l.accumulate(p, &lagfn, out);
@@ -139,7 +148,7 @@ mod tests {
         let v: Vec<f32> = (0..10).map(|i| (i * i % 7) as f32).collect();
         let mut out = vec![0.0; 10];
         box_smooth(&v, 2, &mut out);
-        for b in 0..10 {
+        for b in 0..10usize {
             let want: f32 = v[b.saturating_sub(2)..(b + 3).min(10)].iter().sum();
             assert_eq!(out[b], want, "bin {b}");
         }

@@ -192,7 +192,9 @@ mod tests {
     fn fft_matches_a_direct_dft() {
         // Oracle: the direct sum X[k] = sum_n x[n] w[n] e^{-2 pi i k n / N}.
         let n = 32;
-        let x: Vec<f32> = (0..80).map(|i| ((i * 7919) % 13) as f32 / 13.0 - 0.5).collect();
+        let x: Vec<f32> = (0..80)
+            .map(|i| ((i * 7919) % 13) as f32 / 13.0 - 0.5)
+            .collect();
         let audio = Audio::new(1000, vec![x.clone()]).unwrap();
         let stft = Stft::new(n, 12).unwrap();
         let spec = stft.analyze(&audio, 0..n / 2 + 1).unwrap();
@@ -217,7 +219,10 @@ mod tests {
     #[test]
     fn audio_shorter_than_a_frame_is_an_error() {
         let audio = Audio::new(1000, vec![vec![0.0; 20]]).unwrap();
-        let e = Stft::new(32, 16).unwrap().analyze(&audio, 0..17).unwrap_err();
+        let e = Stft::new(32, 16)
+            .unwrap()
+            .analyze(&audio, 0..17)
+            .unwrap_err();
         assert!(matches!(
             e,
             Error::TooShort {

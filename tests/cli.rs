@@ -1,0 +1,217 @@
+//! `iasm ssl` through the binary: DoAs of files and data sets, scores, and bad input.
+
+use crate::util::*;
+
+fn json(o: &std::process::Output) -> serde_json::Value {
+    assert!(o.status.success(), "{}", show(o));
+    serde_json::from_slice(&o.stdout).expect("JSON on stdout")
+}
+
+#[test]
+fn ssl_finds_a_source_in_a_wav_file() {
+    let dir = tempdir();
+    let wav = path(&dir, "one.wav");
+    write_wav(&wav, &plane_wave_recording(&iasm6(), &[-72.0], SEED), FS);
+    for method in ["gcc-phat", "mvdr"] {
+        let o = iasm(&["ssl", arg(&wav), "--method", method, "--num", "2", "--json"]);
+        let v = json(&o);
+        assert_eq!(v["schema_version"], 1);
+        assert_eq!(v["method"], method);
+        let doas = v["files"][0]["doas"].as_array().unwrap();
+        assert!(!doas.is_empty() && doas.len() <= 2);
+        let az = doas[0]["azimuth_deg"].as_f64().unwrap();
+        assert!((az + 72.0).abs() < 2.0, "{method}: {az}");
+    }
+}
+
+/// A data set in the published layout: a robot at three poses hearing one far source;
+/// the recordings are named so that only a number-aware order matches the poses.
+fn synthetic_dataset(dir: &tempfile::TempDir) -> std::path::PathBuf {
+    let root = path(dir, "ds");
+    std::fs::create_dir_all(root.join("audio")).unwrap();
+    std::fs::create_dir_all(root.join("pose")).unwrap();
+    let source = [40.0, 25.0];
+    let poses = [(0.0, 0.0, 0.0), (1.0, 0.0, 90.0), (2.0, 1.0, -45.0)];
+    let names = ["sub9.wav", "sub10.wav", "sub11.wav"];
+    let mut csv = String::from("x,y,theta\n");
+    for (k, ((x, y, th), name)) in poses.iter().zip(names).enumerate() {
+        let bearing = f64::atan2(source[1] - y, source[0] - x).to_degrees();
+        let az = ssl::wrap_deg(bearing - th);
+        write_wav(
+            &root.join("audio").join(name),
+            &plane_wave_recording(&iasm6(), &[az], SEED + k as u64),
+            FS,
+        );
+        csv.push_str(&format!("{x},{y},{th}\n"));
+    }
+    std::fs::write(root.join("pose/poses.csv"), csv).unwrap();
+    std::fs::write(root.join("src_gt.txt"), "s1 [40.0, 25.0, 0]\n").unwrap();
+    root
+}
+
+#[test]
+fn ssl_dataset_writes_a_table_in_natural_order_and_scores_it() {
+    let dir = tempdir();
+    let root = synthetic_dataset(&dir);
+    let out = path(&dir, "doas.csv");
+    let o = iasm(&[
+        "ssl",
+        "--dataset",
+        arg(&root),
+        "--num",
+        "1",
+        "--out",
+        arg(&out),
+        "--header",
+        "--score",
+        "--json",
+    ]);
+    let v = json(&o);
+    // Every DoA points at the source only if rows follow sub9, sub10, sub11.
+    assert_eq!(v["ours"]["hits"], 3, "{v}");
+    assert_eq!(v["ours"]["score"], 1.0);
+    let table = std::fs::read_to_string(&out).unwrap();
+    let lines: Vec<&str> = table.lines().collect();
+    assert_eq!(lines[0], "az1_deg");
+    assert_eq!(lines.len(), 4);
+}
+
+#[test]
+fn a_missed_threshold_exits_with_status_1() {
+    let dir = tempdir();
+    let root = synthetic_dataset(&dir);
+    // Two DoAs per recording but one source: at most half can hit.
+    let o = iasm(&[
+        "ssl",
+        "--dataset",
+        arg(&root),
+        "--num",
+        "2",
+        "--score",
+        "--min-score",
+        "0.9",
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", show(&o));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("below --min-score"));
+}
+
+#[test]
+fn wrong_channel_count_is_a_clear_error() {
+    let dir = tempdir();
+    let wav = path(&dir, "four.wav");
+    let mics4 = ssl::MicArray::preset("respeaker4")
+        .unwrap()
+        .positions()
+        .to_vec();
+    write_wav(&wav, &plane_wave_recording(&mics4, &[10.0], SEED), FS);
+    let o = iasm(&["ssl", arg(&wav)]);
+    assert_clear_error(&o, &["four.wav", "4 channels", "6 microphones"]);
+}
+
+#[test]
+fn a_file_that_is_not_a_wav_is_a_clear_error() {
+    let dir = tempdir();
+    let wav = path(&dir, "text.wav");
+    std::fs::write(&wav, "this is a text file and not RIFF audio at all").unwrap();
+    assert_clear_error(&iasm(&["ssl", arg(&wav)]), &["text.wav", "not a"]);
+}
+
+#[test]
+fn an_empty_file_is_a_clear_error() {
+    let dir = tempdir();
+    let wav = path(&dir, "empty.wav");
+    std::fs::write(&wav, "").unwrap();
+    assert_clear_error(&iasm(&["ssl", arg(&wav)]), &["empty.wav"]);
+}
+
+#[test]
+fn a_truncated_wav_is_a_clear_error() {
+    let dir = tempdir();
+    let wav = path(&dir, "cut.wav");
+    write_wav(&wav, &plane_wave_recording(&iasm6(), &[10.0], SEED), FS);
+    let bytes = std::fs::read(&wav).unwrap();
+    std::fs::write(&wav, &bytes[..bytes.len() / 2]).unwrap();
+    assert_clear_error(&iasm(&["ssl", arg(&wav)]), &["cut.wav", "truncated"]);
+}
+
+#[test]
+fn a_recording_shorter_than_a_frame_is_a_clear_error() {
+    let dir = tempdir();
+    let wav = path(&dir, "blip.wav");
+    write_wav(&wav, &vec![vec![0.01; 100]; 6], FS);
+    assert_clear_error(
+        &iasm(&["ssl", arg(&wav)]),
+        &["blip.wav", "shorter than one"],
+    );
+}
+
+#[test]
+fn an_array_file_with_one_microphone_is_a_clear_error() {
+    let dir = tempdir();
+    let wav = path(&dir, "x.wav");
+    write_wav(&wav, &plane_wave_recording(&iasm6(), &[10.0], SEED), FS);
+    let arr = path(&dir, "mono.toml");
+    std::fs::write(&arr, "positions = [[0.0, 0.0, 0.0]]\n").unwrap();
+    assert_clear_error(
+        &iasm(&["ssl", arg(&wav), "--array", arg(&arr)]),
+        &["mono.toml", "at least two microphones"],
+    );
+}
+
+#[test]
+fn an_array_file_with_duplicate_positions_is_a_clear_error() {
+    let dir = tempdir();
+    let wav = path(&dir, "x.wav");
+    write_wav(&wav, &plane_wave_recording(&iasm6(), &[10.0], SEED), FS);
+    let arr = path(&dir, "dup.json");
+    std::fs::write(&arr, r#"{"positions": [[0,0,0],[0.1,0,0],[0.1,0,0]]}"#).unwrap();
+    assert_clear_error(
+        &iasm(&["ssl", arg(&wav), "--array", arg(&arr)]),
+        &["dup.json", "microphones 1 and 2"],
+    );
+}
+
+#[test]
+fn an_unknown_array_or_method_is_a_clear_error() {
+    let dir = tempdir();
+    let wav = path(&dir, "x.wav");
+    write_wav(&wav, &plane_wave_recording(&iasm6(), &[10.0], SEED), FS);
+    assert_clear_error(
+        &iasm(&["ssl", arg(&wav), "--array", "nosuch"]),
+        &["nosuch", "iasm6"],
+    );
+    assert_clear_error(
+        &iasm(&["ssl", arg(&wav), "--method", "music"]),
+        &["music", "gcc-phat"],
+    );
+}
+
+#[test]
+fn a_missing_file_is_a_clear_error() {
+    assert_clear_error(&iasm(&["ssl", "no/such/file.wav"]), &["no/such/file.wav"]);
+}
+
+#[test]
+fn demo_finds_every_built_in_source_with_every_method() {
+    let rows = iasm::demo::run_scene(1).unwrap();
+    assert_eq!(rows.len(), ssl::Method::ALL.len());
+    for r in rows {
+        assert_eq!(r.found.len(), iasm::demo::SOURCES.len(), "{r:?}");
+        for e in &r.errors {
+            assert!(*e < 3.0, "{}: {r:?}", r.method);
+        }
+    }
+    let o = iasm(&["demo"]);
+    assert!(o.status.success(), "{}", show(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("mvdr"));
+}
+
+#[test]
+fn the_shipped_array_file_is_the_iasm6_preset() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let file = ssl::MicArray::from_file(&root.join("fixtures/arrays/iasm6.toml")).unwrap();
+    assert_eq!(file, ssl::MicArray::preset("iasm6").unwrap());
+    let text = std::fs::read_to_string(root.join("fixtures/ssl-mbss-like.toml")).unwrap();
+    let c: ssl::SslConfig = toml::from_str(&text).unwrap();
+    assert_eq!((c.frame_len, c.block_frames), (Some(4096), 1));
+}

@@ -1,0 +1,96 @@
+//! Helpers shared by the integration tests: synthetic recordings and running the binary.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use sim::farfield::{PlaneWave, render};
+use sim::signal::Signal;
+
+/// Seed of every synthetic recording.
+pub const SEED: u64 = 7;
+/// Sample rate of synthetic recordings (Hz).
+pub const FS: u32 = 48_000;
+
+/// The paper's array, as the `ssl` crate knows it.
+pub fn iasm6() -> Vec<[f64; 3]> {
+    ssl::MicArray::default().positions().to_vec()
+}
+
+/// Writes `channels` (channel-major, in [-1, 1)) as a 16-bit PCM WAV.
+pub fn write_wav(path: &Path, channels: &[Vec<f64>], fs: u32) {
+    let spec = hound::WavSpec {
+        channels: channels.len() as u16,
+        sample_rate: fs,
+        bits_per_sample: 16,
+        sample_format: hound::SampleFormat::Int,
+    };
+    let mut w = hound::WavWriter::create(path, spec).unwrap();
+    for t in 0..channels[0].len() {
+        for ch in channels {
+            w.write_sample((ch[t] * 32767.0).round().clamp(-32768.0, 32767.0) as i16)
+                .unwrap();
+        }
+    }
+    w.finalize().unwrap();
+}
+
+/// A 0.5 s recording at the given microphones of noise sources at the given azimuths.
+pub fn plane_wave_recording(mics: &[[f64; 3]], azimuths_deg: &[f64], seed: u64) -> Vec<Vec<f64>> {
+    let waves: Vec<PlaneWave> = azimuths_deg
+        .iter()
+        .map(|&azimuth_deg| PlaneWave {
+            azimuth_deg,
+            elevation_deg: 0.0,
+            signal: Signal::Noise,
+        })
+        .collect();
+    let mut a = render(mics, &waves, FS, FS as usize / 2, 343.0, Some(30.0), seed);
+    for ch in &mut a {
+        ch.iter_mut().for_each(|v| *v *= 0.1);
+    }
+    a
+}
+
+/// Runs the `iasm` binary.
+pub fn iasm(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_iasm"))
+        .args(args)
+        .output()
+        .expect("the iasm binary runs")
+}
+
+/// A path as a `&str` argument.
+pub fn arg(p: &Path) -> &str {
+    p.to_str().expect("UTF-8 temp path")
+}
+
+/// Stdout and stderr of a finished command, for failure messages.
+pub fn show(o: &Output) -> String {
+    format!(
+        "status {:?}\n--- stdout\n{}\n--- stderr\n{}",
+        o.status.code(),
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
+
+/// Asserts that a command failed with exit status 2, without a panic, and that its
+/// message names every one of `needles`.
+pub fn assert_clear_error(o: &Output, needles: &[&str]) {
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{}", show(o));
+    assert!(!err.contains("panicked"), "{}", show(o));
+    for n in needles {
+        assert!(err.contains(n), "stderr lacks {n:?}:\n{}", show(o));
+    }
+}
+
+/// A fresh temporary folder.
+pub fn tempdir() -> tempfile::TempDir {
+    tempfile::tempdir().unwrap()
+}
+
+/// `dir/name`.
+pub fn path(dir: &tempfile::TempDir, name: &str) -> PathBuf {
+    dir.path().join(name)
+}
