@@ -14,8 +14,10 @@ pub struct Cli {
     pub command: Command,
 }
 
-/// The subcommands.
+/// The subcommands. (Parsed once per process: the size difference between variants is
+/// irrelevant, so they are not boxed.)
 #[derive(Debug, Subcommand)]
+#[allow(clippy::large_enum_variant)]
 pub enum Command {
     /// Render a built-in scene, localise it with every method, and compare with the truth.
     Demo {
