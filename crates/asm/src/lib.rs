@@ -1,4 +1,75 @@
-//! Acoustic scene mapping with I-ASM (Fu et al.): the particle filter, DBSCAN clustering,
-//! implicit association, occupancy maps and the OSPA metric.
+//! Acoustic scene mapping with I-ASM (Fu, He, Wang, Qiao & Kong): from DoAs heard at a
+//! robot's stops to a map of the sound sources around it.
 //!
-//! This crate is laid down by the workspace skeleton; issue 3 fills it.
+//! # Overview
+//!
+//! - [`map`]: ROS occupancy maps (YAML + PGM), with the ROS pixel-to-world convention.
+//! - [`pf`]: the particle filter, its likelihood and low-variance resampling.
+//! - [`dbscan`]: grid-indexed DBSCAN that is fastest where particle clouds are densest.
+//! - [`mapper`]: I-ASM itself, the Filtering-Clustering-Implicit-Associating loop.
+//! - [`ospa`]: the OSPA metric with its localisation and cardinality parts.
+//!
+//! # Example
+//!
+//! ```
+//! use asm::{IasmConfig, Mapper, Pose, map::{Cell, OccupancyMap}, ospa::ospa};
+//! use rand::{SeedableRng, rngs::StdRng};
+//! // A free 4 x 4 m room, a robot at 8 stops, one source at (2, 3).
+//! let map = OccupancyMap::new(80, 80, 0.05, [0.0, 0.0], vec![Cell::Free; 6400]);
+//! let poses: Vec<Pose> = (0..8).map(|k| Pose { x: 0.5 + 0.4 * k as f64, y: 0.5, theta: 0.0 }).collect();
+//! let doas: Vec<Vec<f64>> = poses.iter().map(|p| vec![(3.0 - p.y).atan2(2.0 - p.x)]).collect();
+//! let result = Mapper::new(&map, &IasmConfig::default())?.run(&poses, &doas, &mut StdRng::seed_from_u64(1))?;
+//! assert!(ospa(&result.positions(), &[[2.0, 3.0]], 1.0, 1.0).total < 0.2);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
+//! # Conventions
+//!
+//! SI units (m, s); angles in radians inside this crate (degrees only at the CLI's edges);
+//! world frame right-handed, azimuth counter-clockwise from `x`; DoAs are in the array
+//! frame, whose `x` axis is the robot's heading. All randomness comes from the caller's
+//! `Rng`: the same seed gives the same map.
+
+pub mod dbscan;
+pub mod error;
+pub mod map;
+pub mod mapper;
+pub mod ospa;
+pub mod pf;
+
+pub use error::{ConfigError, Error, MapError, Result};
+pub use mapper::{IasmConfig, MapResult, Mapper, Pose, Source, Variant};
+
+/// Wraps an angle (rad) to `(-pi, pi]`.
+pub fn wrap_rad(a: f64) -> f64 {
+    let two_pi = std::f64::consts::TAU;
+    let w = a - two_pi * ((a + std::f64::consts::PI) / two_pi).floor();
+    if w <= -std::f64::consts::PI {
+        w + two_pi
+    } else {
+        w
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn wrap_rad_stays_in_range() {
+        use std::f64::consts::PI;
+        for (a, w) in [
+            (0.0, 0.0),
+            (PI, PI),
+            (-PI, PI),
+            (3.0 * PI / 2.0, -PI / 2.0),
+            (-7.0, -7.0 + 2.0 * PI),
+        ] {
+            assert!(
+                (wrap_rad(a) - w).abs() < 1e-12,
+                "{a} -> {} (want {w})",
+                wrap_rad(a)
+            );
+        }
+    }
+}

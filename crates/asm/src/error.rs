@@ -1,0 +1,108 @@
+//! Error types: [`ConfigError`] for parameters refused at construction, [`MapError`] for
+//! occupancy maps that cannot be read, and [`Error`] for mapping inputs that do not fit.
+
+use std::path::PathBuf;
+
+/// A mapping parameter that [`crate::IasmConfig::validate`] refused.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ConfigError {
+    /// A parameter that must be positive and finite is not.
+    #[error("{name} must be positive and finite, got {value}")]
+    NotPositive {
+        /// The parameter.
+        name: &'static str,
+        /// Its value.
+        value: f64,
+    },
+    /// A fraction outside `(0, 1]`.
+    #[error("{name} must be in (0, 1], got {value}")]
+    Fraction {
+        /// The parameter.
+        name: &'static str,
+        /// Its value.
+        value: f64,
+    },
+    /// A count that must be at least one is zero.
+    #[error("{0} must be at least 1")]
+    Zero(&'static str),
+}
+
+/// An occupancy map that cannot be read.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum MapError {
+    /// The file could not be read.
+    #[error("failed to read {path}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// What the operating system said.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The YAML metadata is malformed or lacks a key.
+    #[error("{path}: {message}")]
+    Yaml {
+        /// The YAML file.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+    /// The PGM image is malformed.
+    #[error("{path}: {message}")]
+    Pgm {
+        /// The image.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+    /// A map with no known (free or occupied) cell: nowhere to put particles.
+    #[error("{path}: the map has no known (free or occupied) cell")]
+    NoKnownCell {
+        /// The YAML file.
+        path: PathBuf,
+    },
+}
+
+/// Mapping inputs that do not fit together.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// A parameter was refused.
+    #[error(transparent)]
+    Config(#[from] ConfigError),
+    /// Pose and DoA tables of different lengths.
+    #[error("{poses} poses but {doas} rows of DoAs: they must match one to one")]
+    LengthMismatch {
+        /// Pose rows.
+        poses: usize,
+        /// DoA rows.
+        doas: usize,
+    },
+    /// No pose at all.
+    #[error("no observation point: the pose table is empty")]
+    NoPoses,
+    /// A pose with a NaN or infinite value.
+    #[error("pose {index} (row {row}) has a non-finite value", row = index + 1)]
+    NonFinitePose {
+        /// Zero-based index.
+        index: usize,
+    },
+    /// A DoA row with more than N azimuths.
+    #[error("DoA row {row} has {got} azimuths but N = {n}", row = index + 1)]
+    TooManyDoas {
+        /// Zero-based row.
+        index: usize,
+        /// Azimuths in the row.
+        got: usize,
+        /// The configured N.
+        n: usize,
+    },
+    /// A map with no known cell.
+    #[error("the occupancy map has no known (free or occupied) cell")]
+    EmptyMap,
+}
+
+/// Result with this crate's [`Error`].
+pub type Result<T, E = Error> = std::result::Result<T, E>;

@@ -1,0 +1,489 @@
+use std::path::{Path, PathBuf};
+
+use crate::error::MapError;
+
+/// The state of one grid cell.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub enum Cell {
+    /// Known to be free.
+    Free,
+    /// Known to be occupied (walls, furniture).
+    Occupied,
+    /// Never observed.
+    Unknown,
+}
+
+/// An occupancy grid: `width x height` cells of `resolution` metres, row 0 at the top
+/// (image order), lower-left cell at `origin`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OccupancyMap {
+    width: usize,
+    height: usize,
+    resolution: f64,
+    origin: [f64; 2],
+    cells: Vec<Cell>,
+}
+
+/// The YAML metadata, as read.
+struct Meta {
+    image: String,
+    resolution: f64,
+    origin: [f64; 3],
+    negate: bool,
+    occupied_thresh: f64,
+    free_thresh: f64,
+    mode: String,
+}
+
+impl OccupancyMap {
+    /// A map from cells in image order (row 0 at the top).
+    ///
+    /// # Panics
+    /// If `cells.len() != width * height`, or `resolution` is not positive.
+    pub fn new(
+        width: usize,
+        height: usize,
+        resolution: f64,
+        origin: [f64; 2],
+        cells: Vec<Cell>,
+    ) -> Self {
+        assert_eq!(cells.len(), width * height, "one cell per pixel");
+        assert!(resolution > 0.0, "positive resolution");
+        Self {
+            width,
+            height,
+            resolution,
+            origin,
+            cells,
+        }
+    }
+
+    /// Reads a ROS map: the YAML at `yaml` and the image it names (relative to the YAML's
+    /// folder).
+    ///
+    /// # Errors
+    /// [`MapError`] if either file cannot be read or is malformed, the origin has a yaw,
+    /// or no cell is known.
+    pub fn load(yaml: &Path) -> Result<Self, MapError> {
+        Self::load_with_image(yaml, None)
+    }
+
+    /// As [`OccupancyMap::load`], but reads `image` instead of the image the YAML names
+    /// when given (for published maps whose YAML names a file that is not there).
+    ///
+    /// # Errors
+    /// As [`OccupancyMap::load`].
+    pub fn load_with_image(yaml: &Path, image: Option<&Path>) -> Result<Self, MapError> {
+        let text = std::fs::read_to_string(yaml).map_err(|source| MapError::Io {
+            path: yaml.to_owned(),
+            source,
+        })?;
+        let meta = parse_yaml(&text).map_err(|message| MapError::Yaml {
+            path: yaml.to_owned(),
+            message,
+        })?;
+        let img_path = match image {
+            Some(p) => p.to_owned(),
+            None => Self::image_path(yaml).map_err(|message| MapError::Yaml {
+                path: yaml.to_owned(),
+                message,
+            })?,
+        };
+        let bytes = std::fs::read(&img_path).map_err(|source| MapError::Io {
+            path: img_path.clone(),
+            source,
+        })?;
+        let (w, h, maxval, pixels) = parse_pgm(&bytes).map_err(|message| MapError::Pgm {
+            path: img_path.clone(),
+            message,
+        })?;
+        let cells = pixels
+            .iter()
+            .map(|&v| {
+                let v = f64::from(v) / f64::from(maxval);
+                let p = if meta.negate { v } else { 1.0 - v };
+                if p > meta.occupied_thresh {
+                    Cell::Occupied
+                } else if p < meta.free_thresh {
+                    Cell::Free
+                } else {
+                    Cell::Unknown
+                }
+            })
+            .collect();
+        let _ = (&meta.image, &meta.mode);
+        let map = Self::new(
+            w,
+            h,
+            meta.resolution,
+            [meta.origin[0], meta.origin[1]],
+            cells,
+        );
+        if map.known_cells().next().is_none() {
+            return Err(MapError::NoKnownCell {
+                path: yaml.to_owned(),
+            });
+        }
+        Ok(map)
+    }
+
+    /// The image a map YAML names, resolved against the YAML's folder.
+    ///
+    /// # Errors
+    /// A message if the YAML cannot be read or names no image.
+    pub fn image_path(yaml: &Path) -> Result<PathBuf, String> {
+        let text = std::fs::read_to_string(yaml).map_err(|e| e.to_string())?;
+        let meta = parse_yaml(&text)?;
+        let p = Path::new(&meta.image);
+        Ok(if p.is_absolute() {
+            p.to_owned()
+        } else {
+            yaml.parent().unwrap_or(Path::new(".")).join(p)
+        })
+    }
+
+    /// Width (cells).
+    pub fn width(&self) -> usize {
+        self.width
+    }
+
+    /// Height (cells).
+    pub fn height(&self) -> usize {
+        self.height
+    }
+
+    /// Cell size (m).
+    pub fn resolution(&self) -> f64 {
+        self.resolution
+    }
+
+    /// World position of the lower-left corner of the lower-left cell (m).
+    pub fn origin(&self) -> [f64; 2] {
+        self.origin
+    }
+
+    /// The cell at column `i`, row `j` (row 0 at the top).
+    pub fn cell(&self, i: usize, j: usize) -> Cell {
+        self.cells[j * self.width + i]
+    }
+
+    /// World centre (m) of the cell at column `i`, row `j`.
+    pub fn cell_center(&self, i: usize, j: usize) -> [f64; 2] {
+        [
+            self.origin[0] + (i as f64 + 0.5) * self.resolution,
+            self.origin[1] + ((self.height - 1 - j) as f64 + 0.5) * self.resolution,
+        ]
+    }
+
+    /// The cell (column, row) holding world point `p`, if inside the map.
+    pub fn world_to_cell(&self, p: [f64; 2]) -> Option<(usize, usize)> {
+        let fi = ((p[0] - self.origin[0]) / self.resolution).floor();
+        let fr = ((p[1] - self.origin[1]) / self.resolution).floor();
+        if fi < 0.0 || fr < 0.0 || fi >= self.width as f64 || fr >= self.height as f64 {
+            return None;
+        }
+        Some((fi as usize, self.height - 1 - fr as usize))
+    }
+
+    /// Centres of every known (free or occupied) cell, in image order.
+    pub fn known_cells(&self) -> impl Iterator<Item = [f64; 2]> + '_ {
+        (0..self.height).flat_map(move |j| {
+            (0..self.width)
+                .filter(move |&i| self.cell(i, j) != Cell::Unknown)
+                .map(move |i| self.cell_center(i, j))
+        })
+    }
+}
+
+fn parse_yaml(text: &str) -> Result<Meta, String> {
+    let mut image = None;
+    let mut resolution = None;
+    let mut origin = None;
+    let mut negate = false;
+    let mut occupied_thresh = 0.65;
+    let mut free_thresh = 0.196;
+    let mut mode = "trinary".to_owned();
+    for (n, raw) in text.lines().enumerate() {
+        let line = raw.split('#').next().unwrap_or("").trim();
+        if line.is_empty() {
+            continue;
+        }
+        let (key, value) = line
+            .split_once(':')
+            .ok_or_else(|| format!("line {}: expected `key: value`, got {raw:?}", n + 1))?;
+        let value = value.trim().trim_matches(|c| c == '"' || c == '\'');
+        let num = |what: &str| {
+            value
+                .parse::<f64>()
+                .map_err(|_| format!("line {}: {what} {value:?} is not a number", n + 1))
+        };
+        match key.trim() {
+            "image" => image = Some(value.to_owned()),
+            "resolution" => resolution = Some(num("resolution")?),
+            "origin" => {
+                let inner = value
+                    .strip_prefix('[')
+                    .and_then(|v| v.strip_suffix(']'))
+                    .ok_or_else(|| format!("line {}: origin must be [x, y, yaw]", n + 1))?;
+                let v: Vec<f64> = inner
+                    .split(',')
+                    .map(|s| s.trim().parse::<f64>())
+                    .collect::<Result<_, _>>()
+                    .map_err(|_| {
+                        format!("line {}: origin {value:?} is not three numbers", n + 1)
+                    })?;
+                if v.len() != 3 {
+                    return Err(format!(
+                        "line {}: origin must be [x, y, yaw], got {} values",
+                        n + 1,
+                        v.len()
+                    ));
+                }
+                origin = Some([v[0], v[1], v[2]]);
+            }
+            "negate" => negate = num("negate")? != 0.0,
+            "occupied_thresh" => occupied_thresh = num("occupied_thresh")?,
+            "free_thresh" => free_thresh = num("free_thresh")?,
+            "mode" => mode = value.to_owned(),
+            _ => {} // other map_server keys do not affect occupancy
+        }
+    }
+    let resolution = resolution.ok_or("missing key `resolution`")?;
+    if !(resolution.is_finite() && resolution > 0.0) {
+        return Err(format!("resolution {resolution} must be positive"));
+    }
+    let origin = origin.ok_or("missing key `origin`")?;
+    if origin.iter().any(|v| !v.is_finite()) {
+        return Err("origin has a non-finite value".into());
+    }
+    if origin[2] != 0.0 {
+        return Err(format!(
+            "origin yaw {} is not supported (only 0): rotate the map instead",
+            origin[2]
+        ));
+    }
+    if mode != "trinary" {
+        return Err(format!("mode {mode:?} is not supported (only trinary)"));
+    }
+    if !(0.0..=1.0).contains(&free_thresh)
+        || !(0.0..=1.0).contains(&occupied_thresh)
+        || free_thresh > occupied_thresh
+    {
+        return Err(format!(
+            "thresholds free {free_thresh}, occupied {occupied_thresh} must satisfy 0 <= free <= occupied <= 1"
+        ));
+    }
+    Ok(Meta {
+        image: image.ok_or("missing key `image`")?,
+        resolution,
+        origin,
+        negate,
+        occupied_thresh,
+        free_thresh,
+        mode,
+    })
+}
+
+/// Parses a binary (P5) or plain (P2) PGM: width, height, maxval and pixels in row order.
+fn parse_pgm(bytes: &[u8]) -> Result<(usize, usize, u16, Vec<u16>), String> {
+    let mut pos = 0;
+    let mut token = || -> Result<String, String> {
+        loop {
+            while pos < bytes.len() && bytes[pos].is_ascii_whitespace() {
+                pos += 1;
+            }
+            if pos < bytes.len() && bytes[pos] == b'#' {
+                while pos < bytes.len() && bytes[pos] != b'\n' {
+                    pos += 1;
+                }
+                continue;
+            }
+            break;
+        }
+        let start = pos;
+        while pos < bytes.len() && !bytes[pos].is_ascii_whitespace() {
+            pos += 1;
+        }
+        if start == pos {
+            return Err("unexpected end of the header".into());
+        }
+        Ok(String::from_utf8_lossy(&bytes[start..pos]).into_owned())
+    };
+    let magic = token()?;
+    if magic != "P5" && magic != "P2" {
+        return Err(format!(
+            "not a PGM image (magic {magic:?}, expected P5 or P2)"
+        ));
+    }
+    let mut dim = |what: &str| -> Result<usize, String> {
+        let t = token()?;
+        t.parse::<usize>()
+            .map_err(|_| format!("{what} {t:?} is not a whole number"))
+    };
+    let (w, h) = (dim("width")?, dim("height")?);
+    let maxval = dim("maxval")?;
+    if w == 0 || h == 0 || maxval == 0 || maxval > 65535 {
+        return Err(format!("bad header: {w} x {h}, maxval {maxval}"));
+    }
+    let n = w.checked_mul(h).ok_or("image too large")?;
+    let mut pixels = Vec::with_capacity(n);
+    if magic == "P5" {
+        let data = &bytes[(pos + 1).min(bytes.len())..];
+        let width = if maxval < 256 { 1 } else { 2 };
+        if data.len() < n * width {
+            return Err(format!(
+                "{w} x {h} image needs {} bytes of pixels but the file holds {}",
+                n * width,
+                data.len()
+            ));
+        }
+        for k in 0..n {
+            pixels.push(if width == 1 {
+                u16::from(data[k])
+            } else {
+                u16::from_be_bytes([data[2 * k], data[2 * k + 1]])
+            });
+        }
+    } else {
+        let rest = String::from_utf8_lossy(&bytes[pos..]);
+        for t in rest.split_ascii_whitespace() {
+            if pixels.len() == n {
+                break;
+            }
+            pixels.push(
+                t.parse::<u16>()
+                    .map_err(|_| format!("pixel {:?} is not a number", t))?,
+            );
+        }
+        if pixels.len() < n {
+            return Err(format!(
+                "{w} x {h} image needs {n} pixels but the file holds {}",
+                pixels.len()
+            ));
+        }
+    }
+    if let Some(v) = pixels.iter().find(|&&v| usize::from(v) > maxval) {
+        return Err(format!("pixel value {v} exceeds maxval {maxval}"));
+    }
+    Ok((w, h, maxval as u16, pixels))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn write_map(dir: &Path, yaml: &str, pgm: &[u8]) -> PathBuf {
+        std::fs::write(dir.join("m.pgm"), pgm).unwrap();
+        let y = dir.join("m.yaml");
+        std::fs::write(&y, yaml).unwrap();
+        y
+    }
+
+    const YAML: &str = "image: m.pgm\nresolution: 0.5\norigin: [-1.0, 2.0, 0.0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n";
+
+    #[test]
+    fn ros_convention_puts_the_lower_left_pixel_at_the_origin() {
+        // 3 x 2 image, top row: free, occupied, unknown; bottom row: free, free, occupied.
+        let dir = tempfile::tempdir().unwrap();
+        let mut pgm = b"P5\n# comment\n3 2\n255\n".to_vec();
+        pgm.extend([254u8, 0, 205, 254, 254, 0]);
+        let m = OccupancyMap::load(&write_map(dir.path(), YAML, &pgm)).unwrap();
+        assert_eq!((m.width(), m.height()), (3, 2));
+        assert_eq!(m.cell(1, 0), Cell::Occupied);
+        assert_eq!(m.cell(2, 0), Cell::Unknown);
+        assert_eq!(m.cell(0, 1), Cell::Free);
+        // Bottom-left pixel (0, 1): centre at origin + half a cell.
+        assert_eq!(m.cell_center(0, 1), [-0.75, 2.25]);
+        // Top-right pixel (2, 0): x = -1 + 2.5 * 0.5, y = 2 + 1.5 * 0.5.
+        assert_eq!(m.cell_center(2, 0), [0.25, 2.75]);
+        assert_eq!(m.known_cells().count(), 5);
+    }
+
+    #[test]
+    fn pixel_to_world_round_trips() {
+        let m = OccupancyMap::new(7, 5, 0.05, [-4.0, -5.0], vec![Cell::Free; 35]);
+        for j in 0..5 {
+            for i in 0..7 {
+                assert_eq!(m.world_to_cell(m.cell_center(i, j)), Some((i, j)));
+            }
+        }
+        assert_eq!(m.world_to_cell([-4.01, -4.99]), None);
+    }
+
+    #[test]
+    fn plain_pgm_reads_like_binary() {
+        let dir = tempfile::tempdir().unwrap();
+        let y = write_map(dir.path(), YAML, b"P2\n3 2\n255\n254 0 205\n254 254 0\n");
+        let m = OccupancyMap::load(&y).unwrap();
+        assert_eq!(m.cell(1, 0), Cell::Occupied);
+        assert_eq!(m.cell(0, 1), Cell::Free);
+    }
+
+    #[test]
+    fn a_yawed_origin_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let y = write_map(
+            dir.path(),
+            &YAML.replace("0.0]", "0.3]"),
+            b"P2\n1 1\n255\n254\n",
+        );
+        let e = OccupancyMap::load(&y).unwrap_err().to_string();
+        assert!(e.contains("yaw") && e.contains("m.yaml"), "{e}");
+    }
+
+    #[test]
+    fn malformed_yaml_and_pgm_are_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let y = write_map(
+            dir.path(),
+            "image: m.pgm\nresolution: fine\n",
+            b"P2\n1 1\n255\n254\n",
+        );
+        assert!(
+            OccupancyMap::load(&y)
+                .unwrap_err()
+                .to_string()
+                .contains("resolution")
+        );
+        let y = write_map(
+            dir.path(),
+            "image: m.pgm\norigin: [0, 0, 0]\n",
+            b"P2\n1 1\n255\n254\n",
+        );
+        assert!(
+            OccupancyMap::load(&y)
+                .unwrap_err()
+                .to_string()
+                .contains("missing key `resolution`")
+        );
+        let y = write_map(dir.path(), YAML, b"P5\n4 4\n255\nabc");
+        let e = OccupancyMap::load(&y).unwrap_err().to_string();
+        assert!(e.contains("m.pgm") && e.contains("16 bytes"), "{e}");
+        let y = write_map(dir.path(), YAML, b"GIF89a");
+        assert!(
+            OccupancyMap::load(&y)
+                .unwrap_err()
+                .to_string()
+                .contains("not a PGM")
+        );
+    }
+
+    #[test]
+    fn a_map_with_no_known_cell_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let y = write_map(dir.path(), YAML, b"P2\n2 1\n255\n205 205\n");
+        assert!(matches!(
+            OccupancyMap::load(&y),
+            Err(MapError::NoKnownCell { .. })
+        ));
+    }
+
+    #[test]
+    fn a_missing_image_is_refused_with_its_path() {
+        let dir = tempfile::tempdir().unwrap();
+        let y = dir.path().join("m.yaml");
+        std::fs::write(&y, YAML.replace("m.pgm", "gone.pgm")).unwrap();
+        let e = OccupancyMap::load(&y).unwrap_err().to_string();
+        assert!(e.contains("gone.pgm"), "{e}");
+    }
+}

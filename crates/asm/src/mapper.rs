@@ -1,0 +1,548 @@
+//! I-ASM (Algorithm 1 of the paper): filtering, clustering and implicit association,
+//! repeated until clustering finds nothing.
+//!
+//! ## Algorithm
+//! 1. Turn every DoA into a world bearing, `wrap(azimuth + theta_k)`.
+//! 2. **Filter**: draw `M = floor(n / D)` particles from the map's `n` known cells; visit the
+//!    stops `1..K` `passes` times (twice in the paper), each time predicting (random walk),
+//!    weighting with the stop's remaining DoAs, resampling when `N_eff < ceil(M / C)`, and
+//!    stopping early once the cloud's largest covariance eigenvalue is below
+//!    `lambda_thresh`.
+//! 3. **Cluster** the particles with DBSCAN (`eps`, `MinPts = 0.1 M`); if there is no
+//!    cluster, stop. The largest cluster's centroid is the new source (the WS variant takes
+//!    the weighted mean of all particles instead).
+//! 4. **Associate**: at every stop, the DoA nearest the source's bearing, if within
+//!    `gamma = 3 sigma`, is explained by it and removed. A round whose source explains no
+//!    DoA would repeat forever: it ends the mapping, and its estimate is dropped.
+//! 5. Finally, merge estimates closer than 0.5 m into their mean.
+//!
+//! Every angle difference is wrapped to `(-pi, pi]` (the authors' code compares unwrapped
+//! angles, so a DoA near ±180 degrees can miss its source).
+
+use rand::Rng;
+use serde::{Deserialize, Serialize};
+
+use crate::dbscan::{DbscanParams, Label};
+use crate::error::{ConfigError, Error, Result};
+use crate::map::OccupancyMap;
+use crate::pf::{Likelihood, ParticleFilter, covariance, mean};
+use crate::wrap_rad;
+
+/// The paper's ablation variants.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Variant {
+    /// Cluster average: the full I-ASM.
+    #[default]
+    Ca,
+    /// Weighted sum: the particles' weighted mean instead of the largest cluster's centroid.
+    Ws,
+    /// Without distance penalty: the likelihood drops `exp(-d / beta)`.
+    Wdp,
+}
+
+impl Variant {
+    /// All variants, in the paper's order.
+    pub const ALL: [Variant; 3] = [Variant::Ca, Variant::Ws, Variant::Wdp];
+
+    /// Short name (`ca`, `ws`, `wdp`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Variant::Ca => "ca",
+            Variant::Ws => "ws",
+            Variant::Wdp => "wdp",
+        }
+    }
+}
+
+impl std::str::FromStr for Variant {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s.to_ascii_lowercase().as_str() {
+            "ca" => Ok(Variant::Ca),
+            "ws" => Ok(Variant::Ws),
+            "wdp" => Ok(Variant::Wdp),
+            _ => Err(format!(
+                "unknown variant {s:?}; expected one of: ca, ws, wdp"
+            )),
+        }
+    }
+}
+
+/// I-ASM parameters; every default is the paper's (or its authors' code's) value.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct IasmConfig {
+    /// Particle density divisor `D`: `M = floor(known cells / D)`. Default: 9.
+    pub density_d: f64,
+    /// Random-walk standard deviation `sigma_p` (m). Default: 0.01.
+    pub sigma_p_m: f64,
+    /// DoA standard deviation `sigma` (degrees). Default: 5.
+    pub sigma_deg: f64,
+    /// Distance decay `beta` (m): the code's 50 pixels at 0.05 m. Default: 2.5.
+    pub beta_m: f64,
+    /// Early-exit threshold on the covariance's largest eigenvalue (m^2). Default: 0.1.
+    pub lambda_thresh_m2: f64,
+    /// DBSCAN radius (m). Default: 0.1.
+    pub dbscan_eps_m: f64,
+    /// DBSCAN `MinPts` as a fraction of `M`, in `(0, 1]`. Default: 0.1.
+    pub min_pts_frac: f64,
+    /// Resample when `N_eff < ceil(frac M)` (`1 / C`, in `(0, 1]`). Default: 0.1.
+    pub resample_frac: f64,
+    /// Association range `gamma` in units of `sigma`. Default: 3.
+    pub gamma_sigmas: f64,
+    /// Traversals of the stops per round (the paper's `2K` steps). Default: 2.
+    pub passes: usize,
+    /// Estimates closer than this (m) are merged at the end. Default: 0.5.
+    pub merge_dist_m: f64,
+    /// Upper bound on filtering rounds (a guard; each round finds at most one source).
+    /// Default: 64.
+    pub max_rounds: usize,
+    /// DoAs per stop `N`: a row with more is an error. Default: 4.
+    pub num_doas: usize,
+    /// Ablation variant. Default: [`Variant::Ca`].
+    pub variant: Variant,
+}
+
+impl Default for IasmConfig {
+    fn default() -> Self {
+        Self {
+            density_d: 9.0,
+            sigma_p_m: 0.01,
+            sigma_deg: 5.0,
+            beta_m: 2.5,
+            lambda_thresh_m2: 0.1,
+            dbscan_eps_m: 0.1,
+            min_pts_frac: 0.1,
+            resample_frac: 0.1,
+            gamma_sigmas: 3.0,
+            passes: 2,
+            merge_dist_m: 0.5,
+            max_rounds: 64,
+            num_doas: 4,
+            variant: Variant::Ca,
+        }
+    }
+}
+
+impl IasmConfig {
+    /// Checks every parameter.
+    ///
+    /// # Errors
+    /// The first [`ConfigError`] found.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        for (name, value) in [
+            ("density_d", self.density_d),
+            ("sigma_p_m", self.sigma_p_m),
+            ("sigma_deg", self.sigma_deg),
+            ("beta_m", self.beta_m),
+            ("lambda_thresh_m2", self.lambda_thresh_m2),
+            ("dbscan_eps_m", self.dbscan_eps_m),
+            ("gamma_sigmas", self.gamma_sigmas),
+        ] {
+            if !(value.is_finite() && value > 0.0) {
+                return Err(ConfigError::NotPositive { name, value });
+            }
+        }
+        if !(self.merge_dist_m.is_finite() && self.merge_dist_m >= 0.0) {
+            return Err(ConfigError::NotPositive {
+                name: "merge_dist_m",
+                value: self.merge_dist_m,
+            });
+        }
+        for (name, value) in [
+            ("min_pts_frac", self.min_pts_frac),
+            ("resample_frac", self.resample_frac),
+        ] {
+            if !(value > 0.0 && value <= 1.0) {
+                return Err(ConfigError::Fraction { name, value });
+            }
+        }
+        for (name, v) in [
+            ("passes", self.passes),
+            ("max_rounds", self.max_rounds),
+            ("num_doas", self.num_doas),
+        ] {
+            if v == 0 {
+                return Err(ConfigError::Zero(name));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A robot pose: position (m) and heading (rad), world frame.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Pose {
+    /// x (m).
+    pub x: f64,
+    /// y (m).
+    pub y: f64,
+    /// Heading (rad, counter-clockwise from the world x axis).
+    pub theta: f64,
+}
+
+/// One mapped source.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Source {
+    /// x (m, world frame).
+    pub x: f64,
+    /// y (m, world frame).
+    pub y: f64,
+    /// DoAs explained by it (removed by implicit association).
+    pub observations: usize,
+    /// Particles in its cluster.
+    pub particles: usize,
+    /// Covariance of its cluster's particles (m^2): an uncertainty ellipse.
+    pub covariance: [[f64; 2]; 2],
+    /// The filtering round (from 1) that found it.
+    pub round: usize,
+    /// Its cluster's particles (for pictures; not serialised).
+    #[serde(skip)]
+    pub cluster: Vec<[f64; 2]>,
+}
+
+/// The result of one I-ASM run.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct MapResult {
+    /// The sources, in the order found (merged ones at the first's place).
+    pub sources: Vec<Source>,
+    /// Filtering rounds run.
+    pub rounds: usize,
+    /// Particles per round, `M`.
+    pub particles: usize,
+    /// DoAs that no source explained.
+    pub unexplained: usize,
+}
+
+impl MapResult {
+    /// Source positions (m).
+    pub fn positions(&self) -> Vec<[f64; 2]> {
+        self.sources.iter().map(|s| [s.x, s.y]).collect()
+    }
+}
+
+/// A validated I-ASM mapper for one occupancy map.
+#[derive(Clone, Debug)]
+pub struct Mapper {
+    config: IasmConfig,
+    cells: Vec<[f64; 2]>,
+    m: usize,
+}
+
+impl Mapper {
+    /// Validates `config` and collects the map's known cells.
+    ///
+    /// # Errors
+    /// [`Error::Config`] for a refused parameter, [`Error::EmptyMap`] if the map has no
+    /// known cell or too few for one particle.
+    pub fn new(map: &OccupancyMap, config: &IasmConfig) -> Result<Self> {
+        config.validate()?;
+        let cells: Vec<[f64; 2]> = map.known_cells().collect();
+        let m = (cells.len() as f64 / config.density_d).floor() as usize;
+        if m == 0 {
+            return Err(Error::EmptyMap);
+        }
+        Ok(Self {
+            config: config.clone(),
+            cells,
+            m,
+        })
+    }
+
+    /// Particles per round, `M`.
+    pub fn num_particles(&self) -> usize {
+        self.m
+    }
+
+    /// The parameters.
+    pub fn config(&self) -> &IasmConfig {
+        &self.config
+    }
+
+    /// Maps the sources heard from `poses`, given each stop's DoAs (array-frame azimuths,
+    /// rad, strongest first, at most `N`), with randomness from `rng`.
+    ///
+    /// # Errors
+    /// [`Error`] if the tables differ in length, a pose is not finite, or a row holds more
+    /// than `N` DoAs.
+    pub fn run(&self, poses: &[Pose], doas: &[Vec<f64>], rng: &mut impl Rng) -> Result<MapResult> {
+        if poses.is_empty() {
+            return Err(Error::NoPoses);
+        }
+        if poses.len() != doas.len() {
+            return Err(Error::LengthMismatch {
+                poses: poses.len(),
+                doas: doas.len(),
+            });
+        }
+        if let Some(index) = poses
+            .iter()
+            .position(|p| !(p.x.is_finite() && p.y.is_finite() && p.theta.is_finite()))
+        {
+            return Err(Error::NonFinitePose { index });
+        }
+        let c = &self.config;
+        if let Some(index) = doas.iter().position(|r| r.len() > c.num_doas) {
+            return Err(Error::TooManyDoas {
+                index,
+                got: doas[index].len(),
+                n: c.num_doas,
+            });
+        }
+        let mut bearings: Vec<Vec<f64>> = doas
+            .iter()
+            .zip(poses)
+            .map(|(row, p)| {
+                row.iter()
+                    .filter(|a| a.is_finite())
+                    .map(|a| wrap_rad(a + p.theta))
+                    .collect()
+            })
+            .collect();
+        let sigma = c.sigma_deg.to_radians();
+        let gamma = c.gamma_sigmas * sigma;
+        let beta = (c.variant != Variant::Wdp).then_some(c.beta_m);
+        let lik = Likelihood::new(sigma, beta);
+        let m = self.m;
+        let min_pts = ((c.min_pts_frac * m as f64).round() as usize).max(1);
+        let resample_below = (c.resample_frac * m as f64).ceil();
+        let dbscan = DbscanParams {
+            eps: c.dbscan_eps_m,
+            min_pts,
+        }
+        .check()?;
+        let k_stops = poses.len();
+        let mut sources: Vec<Source> = Vec::new();
+        let mut rounds = 0;
+        while rounds < c.max_rounds {
+            rounds += 1;
+            // Filtering.
+            let mut pf = ParticleFilter::from_cells(&self.cells, m, rng);
+            for step in 0..c.passes * k_stops {
+                let k = step % k_stops;
+                pf.predict(c.sigma_p_m, rng);
+                pf.update([poses[k].x, poses[k].y], &bearings[k], &lik);
+                if pf.neff() < resample_below {
+                    pf.resample(rng);
+                }
+                if pf.max_cov_eigenvalue() < c.lambda_thresh_m2 {
+                    break;
+                }
+            }
+            // Clustering.
+            let labels = dbscan.cluster(pf.particles());
+            let mut sizes: Vec<usize> = Vec::new();
+            for l in &labels {
+                if let Label::Cluster(k) = *l {
+                    let k = k as usize;
+                    if sizes.len() <= k {
+                        sizes.resize(k + 1, 0);
+                    }
+                    sizes[k] += 1;
+                }
+            }
+            let Some((largest, _)) = sizes
+                .iter()
+                .enumerate()
+                .max_by_key(|&(i, &s)| (s, std::cmp::Reverse(i)))
+            else {
+                break;
+            };
+            let cluster: Vec<[f64; 2]> = pf
+                .particles()
+                .iter()
+                .zip(&labels)
+                .filter(|(_, l)| **l == Label::Cluster(largest as u32))
+                .map(|(p, _)| *p)
+                .collect();
+            let est = match c.variant {
+                Variant::Ws => pf.weighted_mean(),
+                Variant::Ca | Variant::Wdp => mean(&cluster),
+            };
+            // Implicit association.
+            let mut taken = 0;
+            for (p, row) in poses.iter().zip(bearings.iter_mut()) {
+                let theta = (est[1] - p.y).atan2(est[0] - p.x);
+                let best = row
+                    .iter()
+                    .enumerate()
+                    .map(|(n, &b)| (n, wrap_rad(theta - b).abs()))
+                    .min_by(|a, b| a.1.total_cmp(&b.1));
+                if let Some((n, d)) = best
+                    && d < gamma
+                {
+                    row.remove(n);
+                    taken += 1;
+                }
+            }
+            if taken == 0 {
+                break;
+            }
+            sources.push(Source {
+                x: est[0],
+                y: est[1],
+                observations: taken,
+                particles: cluster.len(),
+                covariance: covariance(&cluster),
+                round: rounds,
+                cluster,
+            });
+        }
+        merge_close(&mut sources, c.merge_dist_m);
+        Ok(MapResult {
+            sources,
+            rounds,
+            particles: m,
+            unexplained: bearings.iter().map(Vec::len).sum(),
+        })
+    }
+}
+
+/// Repeatedly merges the closest pair of sources nearer than `dist` into their mean.
+fn merge_close(sources: &mut Vec<Source>, dist: f64) {
+    loop {
+        let mut best: Option<(usize, usize, f64)> = None;
+        for i in 0..sources.len() {
+            for j in i + 1..sources.len() {
+                let d = (sources[i].x - sources[j].x).hypot(sources[i].y - sources[j].y);
+                if d < dist && best.is_none_or(|b| d < b.2) {
+                    best = Some((i, j, d));
+                }
+            }
+        }
+        let Some((i, j, _)) = best else { return };
+        let b = sources.remove(j);
+        let a = &mut sources[i];
+        a.x = 0.5 * (a.x + b.x);
+        a.y = 0.5 * (a.y + b.y);
+        a.observations += b.observations;
+        a.particles += b.particles;
+        a.cluster.extend(b.cluster);
+        a.covariance = covariance(&a.cluster);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::map::Cell;
+    use crate::ospa::ospa;
+    use rand::{SeedableRng, rngs::StdRng};
+
+    const SEED: u64 = 17;
+
+    /// An open 8 x 6 m room at 0.05 m, a robot driving along y = 0 and a few sources.
+    fn scene(sources: &[[f64; 2]], k: usize) -> (OccupancyMap, Vec<Pose>, Vec<Vec<f64>>) {
+        let (w, h) = (160, 120);
+        let map = OccupancyMap::new(w, h, 0.05, [-1.0, -3.0], vec![Cell::Free; w * h]);
+        let poses: Vec<Pose> = (0..k)
+            .map(|i| Pose {
+                x: 6.0 * i as f64 / (k - 1) as f64,
+                y: 0.0,
+                theta: 0.3 * i as f64,
+            })
+            .collect();
+        let doas = poses
+            .iter()
+            .map(|p| {
+                sources
+                    .iter()
+                    .map(|s| wrap_rad((s[1] - p.y).atan2(s[0] - p.x) - p.theta))
+                    .collect()
+            })
+            .collect();
+        (map, poses, doas)
+    }
+
+    #[test]
+    fn exact_doas_map_every_source() {
+        let truth = [[1.5, 1.5], [4.0, -1.2], [5.5, 2.0]];
+        let (map, poses, doas) = scene(&truth, 20);
+        let mapper = Mapper::new(&map, &IasmConfig::default()).unwrap();
+        assert_eq!(mapper.num_particles(), 160 * 120 / 9);
+        let r = mapper
+            .run(&poses, &doas, &mut StdRng::seed_from_u64(SEED))
+            .unwrap();
+        let o = ospa(&r.positions(), &truth, 1.0, 1.0);
+        assert!(o.total < 0.15, "seed {SEED}: {:?} -> {o:?}", r.positions());
+        assert_eq!(r.sources.len(), 3);
+        assert_eq!(r.unexplained, 0);
+    }
+
+    #[test]
+    fn the_same_seed_gives_the_same_map() {
+        let (map, poses, doas) = scene(&[[2.0, 1.0], [4.0, -1.0]], 12);
+        let mapper = Mapper::new(&map, &IasmConfig::default()).unwrap();
+        let a = mapper
+            .run(&poses, &doas, &mut StdRng::seed_from_u64(3))
+            .unwrap();
+        let b = mapper
+            .run(&poses, &doas, &mut StdRng::seed_from_u64(3))
+            .unwrap();
+        assert_eq!(a, b);
+    }
+
+    #[test]
+    fn no_doas_map_no_source() {
+        let (map, poses, _) = scene(&[], 10);
+        let doas = vec![Vec::new(); 10];
+        let r = Mapper::new(&map, &IasmConfig::default())
+            .unwrap()
+            .run(&poses, &doas, &mut StdRng::seed_from_u64(SEED))
+            .unwrap();
+        assert!(r.sources.is_empty());
+    }
+
+    #[test]
+    fn bad_tables_are_refused() {
+        let (map, poses, doas) = scene(&[[2.0, 1.0]], 5);
+        let mapper = Mapper::new(&map, &IasmConfig::default()).unwrap();
+        let mut rng = StdRng::seed_from_u64(SEED);
+        assert!(matches!(
+            mapper.run(&poses[..4], &doas, &mut rng),
+            Err(Error::LengthMismatch { poses: 4, doas: 5 })
+        ));
+        let mut bad = poses.clone();
+        bad[2].y = f64::NAN;
+        assert!(matches!(
+            mapper.run(&bad, &doas, &mut rng),
+            Err(Error::NonFinitePose { index: 2 })
+        ));
+        let wide = vec![vec![0.0; 5]; 5];
+        assert!(matches!(
+            mapper.run(&poses, &wide, &mut rng),
+            Err(Error::TooManyDoas {
+                index: 0,
+                got: 5,
+                n: 4
+            })
+        ));
+    }
+
+    #[test]
+    fn close_estimates_merge_into_their_mean() {
+        let s = |x: f64, y: f64| Source {
+            x,
+            y,
+            observations: 1,
+            particles: 1,
+            covariance: [[0.0; 2]; 2],
+            round: 1,
+            cluster: vec![[x, y]],
+        };
+        let mut v = vec![s(0.0, 0.0), s(0.3, 0.0), s(3.0, 0.0)];
+        merge_close(&mut v, 0.5);
+        assert_eq!(v.len(), 2);
+        assert_eq!((v[0].x, v[0].observations), (0.15, 2));
+    }
+
+    #[test]
+    fn a_map_without_known_cells_is_refused() {
+        let map = OccupancyMap::new(3, 3, 0.05, [0.0, 0.0], vec![Cell::Unknown; 9]);
+        assert!(matches!(
+            Mapper::new(&map, &IasmConfig::default()),
+            Err(Error::EmptyMap)
+        ));
+    }
+}

@@ -1,0 +1,213 @@
+//! The OSPA metric (Schuhmacher, Vo & Vo, 2008) between two finite sets of points.
+//!
+//! With cutoff `c` and order `p`, for sets `X` (`m` points) and `Y` (`n` points),
+//! `m <= n` (else swap them):
+//!
+//! `d(X, Y) = ( (1/n) (min_pi sum_i min(c, |x_i - y_pi(i)|)^p + c^p (n - m)) )^(1/p)`.
+//!
+//! It splits into a localisation part (the assignment term) and a cardinality part (the
+//! `c^p (n - m)` term); for `p = 1` they add up to the total. The optimal assignment is
+//! found with the Hungarian algorithm, `O(n^2 m)`.
+
+use serde::Serialize;
+
+/// An OSPA distance and its parts (m).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Ospa {
+    /// The OSPA distance.
+    pub total: f64,
+    /// `((1/n) min sum d_c^p)^(1/p)`: how far matched points are.
+    pub localization: f64,
+    /// `(c^p (n - m) / n)^(1/p)`: how many points are missing or extra.
+    pub cardinality: f64,
+}
+
+/// OSPA between `est` and `truth` (either order gives the same), cutoff `c` (m), order `p`.
+///
+/// # Panics
+/// If `c` or `p` is not positive.
+pub fn ospa(est: &[[f64; 2]], truth: &[[f64; 2]], c: f64, p: f64) -> Ospa {
+    assert!(c > 0.0 && p > 0.0, "OSPA needs c > 0 and p > 0");
+    let (x, y) = if est.len() <= truth.len() {
+        (est, truth)
+    } else {
+        (truth, est)
+    };
+    let (m, n) = (x.len(), y.len());
+    if n == 0 {
+        return Ospa {
+            total: 0.0,
+            localization: 0.0,
+            cardinality: 0.0,
+        };
+    }
+    let cost: Vec<Vec<f64>> = x
+        .iter()
+        .map(|a| {
+            y.iter()
+                .map(|b| ((a[0] - b[0]).hypot(a[1] - b[1])).min(c).powf(p))
+                .collect()
+        })
+        .collect();
+    let assigned = if m == 0 { 0.0 } else { min_assignment(&cost) };
+    let card = c.powf(p) * (n - m) as f64;
+    let nf = n as f64;
+    Ospa {
+        total: ((assigned + card) / nf).powf(1.0 / p),
+        localization: (assigned / nf).powf(1.0 / p),
+        cardinality: (card / nf).powf(1.0 / p),
+    }
+}
+
+/// The least total cost of assigning each row to a distinct column (`rows <= cols`):
+/// the Hungarian algorithm with potentials.
+pub fn min_assignment(cost: &[Vec<f64>]) -> f64 {
+    let n = cost.len();
+    let m = cost.first().map_or(0, Vec::len);
+    assert!(n <= m, "rows must not outnumber columns");
+    // 1-based arrays as in the classic formulation; p[j] = row matched to column j.
+    let (mut u, mut v) = (vec![0.0; n + 1], vec![0.0; m + 1]);
+    let (mut p, mut way) = (vec![0usize; m + 1], vec![0usize; m + 1]);
+    for i in 1..=n {
+        p[0] = i;
+        let mut j0 = 0;
+        let mut minv = vec![f64::INFINITY; m + 1];
+        let mut used = vec![false; m + 1];
+        loop {
+            used[j0] = true;
+            let i0 = p[j0];
+            let mut delta = f64::INFINITY;
+            let mut j1 = 0;
+            for j in 1..=m {
+                if !used[j] {
+                    let cur = cost[i0 - 1][j - 1] - u[i0] - v[j];
+                    if cur < minv[j] {
+                        minv[j] = cur;
+                        way[j] = j0;
+                    }
+                    if minv[j] < delta {
+                        delta = minv[j];
+                        j1 = j;
+                    }
+                }
+            }
+            for j in 0..=m {
+                if used[j] {
+                    u[p[j]] += delta;
+                    v[j] -= delta;
+                } else {
+                    minv[j] -= delta;
+                }
+            }
+            j0 = j1;
+            if p[j0] == 0 {
+                break;
+            }
+        }
+        loop {
+            let j1 = way[j0];
+            p[j0] = p[j1];
+            j0 = j1;
+            if j0 == 0 {
+                break;
+            }
+        }
+    }
+    (1..=m)
+        .filter(|&j| p[j] != 0)
+        .map(|j| cost[p[j] - 1][j - 1])
+        .sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_abs_diff_eq;
+    use proptest::prelude::*;
+
+    fn brute_force(cost: &[Vec<f64>]) -> f64 {
+        fn go(cost: &[Vec<f64>], row: usize, used: &mut Vec<bool>) -> f64 {
+            if row == cost.len() {
+                return 0.0;
+            }
+            let mut best = f64::INFINITY;
+            for j in 0..used.len() {
+                if !used[j] {
+                    used[j] = true;
+                    best = best.min(cost[row][j] + go(cost, row + 1, used));
+                    used[j] = false;
+                }
+            }
+            best
+        }
+        go(cost, 0, &mut vec![false; cost[0].len()])
+    }
+
+    #[test]
+    fn equal_sets_are_at_zero() {
+        let s = [[1.0, 2.0], [3.0, -1.0], [0.0, 0.0]];
+        let mut shuffled = s;
+        shuffled.reverse();
+        assert_eq!(ospa(&s, &shuffled, 1.0, 1.0).total, 0.0);
+    }
+
+    #[test]
+    fn against_an_empty_set_it_is_c() {
+        let s = [[1.0, 2.0], [3.0, -1.0]];
+        let o = ospa(&[], &s, 1.0, 1.0);
+        assert_eq!((o.total, o.localization, o.cardinality), (1.0, 0.0, 1.0));
+        assert_eq!(ospa(&s, &[], 2.5, 2.0).total, 2.5);
+        assert_eq!(ospa(&[], &[], 1.0, 1.0).total, 0.0);
+    }
+
+    #[test]
+    fn hand_worked_example() {
+        // Truth: (0,0), (4,0). Estimates: (0.3,0.4) [0.5 from the first], (4,0.2) [0.2],
+        // (9,9) [extra]. p = 1, c = 1: (0.5 + 0.2 + 1 * 1) / 3 = 0.5667.
+        let truth = [[0.0, 0.0], [4.0, 0.0]];
+        let est = [[0.3, 0.4], [4.0, 0.2], [9.0, 9.0]];
+        let o = ospa(&est, &truth, 1.0, 1.0);
+        assert_abs_diff_eq!(o.total, 1.7 / 3.0, epsilon = 1e-12);
+        assert_abs_diff_eq!(o.localization, 0.7 / 3.0, epsilon = 1e-12);
+        assert_abs_diff_eq!(o.cardinality, 1.0 / 3.0, epsilon = 1e-12);
+        // p = 2: sqrt((0.25 + 0.04 + 1) / 3).
+        assert_abs_diff_eq!(
+            ospa(&est, &truth, 1.0, 2.0).total,
+            (1.29f64 / 3.0).sqrt(),
+            epsilon = 1e-12
+        );
+        // A far miss costs at most c.
+        let o = ospa(&[[50.0, 0.0]], &[[0.0, 0.0]], 1.0, 1.0);
+        assert_eq!(o.total, 1.0);
+    }
+
+    #[test]
+    fn a_greedy_match_is_not_optimal_but_hungarian_is() {
+        // Greedy takes (0,0)-(0,0) then pays 0.9; optimal pays 0.5 + 0.5.
+        let cost = vec![vec![0.0, 0.5], vec![0.5, 0.9]];
+        assert_abs_diff_eq!(min_assignment(&cost), 0.9, epsilon = 1e-12);
+        let cost = vec![vec![0.1, 0.5], vec![0.2, 0.9]];
+        assert_abs_diff_eq!(min_assignment(&cost), 0.7, epsilon = 1e-12);
+    }
+
+    fn points(n: usize) -> impl Strategy<Value = Vec<[f64; 2]>> {
+        prop::collection::vec((-3.0f64..3.0, -3.0f64..3.0).prop_map(|(x, y)| [x, y]), 0..n)
+    }
+
+    proptest! {
+        #[test]
+        fn hungarian_matches_brute_force(rows in 1usize..6, extra in 0usize..3, seed in prop::collection::vec(0.0f64..2.0, 48)) {
+            let cols = rows + extra;
+            let cost: Vec<Vec<f64>> = (0..rows).map(|i| (0..cols).map(|j| seed[(i * cols + j) % 48]).collect()).collect();
+            prop_assert!((min_assignment(&cost) - brute_force(&cost)).abs() < 1e-9);
+        }
+
+        #[test]
+        fn ospa_is_a_metric_bounded_by_c(a in points(6), b in points(6), z in points(6)) {
+            let d = |x: &[[f64; 2]], y: &[[f64; 2]]| ospa(x, y, 1.0, 1.0).total;
+            prop_assert!((d(&a, &b) - d(&b, &a)).abs() < 1e-12);
+            prop_assert!((0.0..=1.0 + 1e-12).contains(&d(&a, &b)));
+            prop_assert!(d(&a, &z) <= d(&a, &b) + d(&b, &z) + 1e-9);
+        }
+    }
+}

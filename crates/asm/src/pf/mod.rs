@@ -1,0 +1,298 @@
+//! The I-ASM particle filter over candidate source positions.
+//!
+//! Each particle is a hypothesis of one source's position (world frame, m). Particles
+//! start on the map's known cells, drift by a small random walk (the sources are static;
+//! the walk keeps the cloud from collapsing onto one cell), and are weighted by how well
+//! their bearing from the robot matches the nearest DoA, with a floor so that one missed
+//! or false DoA cannot wipe a hypothesis out, and a distance penalty against far ghosts.
+
+mod resample;
+
+use rand::Rng;
+use rand::seq::index::sample;
+use rand_distr::{Distribution, Normal};
+
+pub use resample::low_variance;
+
+use crate::wrap_rad;
+
+/// The I-ASM likelihood of a particle given the DoAs of one stop.
+///
+/// With `f` the zero-mean normal density of standard deviation `sigma` (rad):
+/// `L = max(lambda, f(dtheta) exp(-d / beta))`, `lambda = f(2 sigma)`, where `dtheta` is the
+/// smallest wrapped angle between the particle's bearing and a DoA, and `d` the particle's
+/// distance from the robot (as the authors coded it; without `beta`, the paper's WDP
+/// variant, the exponential is dropped).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Likelihood {
+    inv_two_var: f64,
+    norm: f64,
+    floor: f64,
+    inv_beta: f64,
+}
+
+impl Likelihood {
+    /// `sigma` in radians, `beta` in metres (`None`: no distance penalty).
+    pub fn new(sigma: f64, beta: Option<f64>) -> Self {
+        let norm = 1.0 / (sigma * (2.0 * std::f64::consts::PI).sqrt());
+        let inv_two_var = 1.0 / (2.0 * sigma * sigma);
+        Self {
+            inv_two_var,
+            norm,
+            floor: norm * (-4.0f64 * sigma * sigma * inv_two_var).exp(),
+            inv_beta: beta.map_or(0.0, |b| 1.0 / b),
+        }
+    }
+
+    /// The floor `lambda = f(2 sigma)`.
+    pub fn floor(&self) -> f64 {
+        self.floor
+    }
+
+    /// The likelihood for angular mismatch `dtheta` (rad, `>= 0`) at distance `d` (m).
+    pub fn eval(&self, dtheta: f64, d: f64) -> f64 {
+        let f = self.norm * (-dtheta * dtheta * self.inv_two_var).exp();
+        (f * (-d * self.inv_beta).exp()).max(self.floor)
+    }
+}
+
+/// A weighted particle set.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ParticleFilter {
+    particles: Vec<[f64; 2]>,
+    weights: Vec<f64>,
+}
+
+impl ParticleFilter {
+    /// `m` particles drawn without replacement from `cells` (cell centres), equal weights.
+    ///
+    /// # Panics
+    /// If `m` is 0 or exceeds `cells.len()`.
+    pub fn from_cells(cells: &[[f64; 2]], m: usize, rng: &mut impl Rng) -> Self {
+        assert!(m > 0 && m <= cells.len(), "0 < M <= cells");
+        let particles: Vec<[f64; 2]> = sample(rng, cells.len(), m)
+            .into_iter()
+            .map(|i| cells[i])
+            .collect();
+        Self {
+            weights: vec![1.0 / m as f64; m],
+            particles,
+        }
+    }
+
+    /// A filter from explicit particles and weights (normalised here).
+    ///
+    /// # Panics
+    /// If the lengths differ, the set is empty, or the weights do not sum to a positive number.
+    pub fn from_parts(particles: Vec<[f64; 2]>, mut weights: Vec<f64>) -> Self {
+        assert!(!particles.is_empty() && particles.len() == weights.len());
+        let s: f64 = weights.iter().sum();
+        assert!(s > 0.0, "positive total weight");
+        weights.iter_mut().for_each(|w| *w /= s);
+        Self { particles, weights }
+    }
+
+    /// Particle positions (m).
+    pub fn particles(&self) -> &[[f64; 2]] {
+        &self.particles
+    }
+
+    /// Normalised weights.
+    pub fn weights(&self) -> &[f64] {
+        &self.weights
+    }
+
+    /// Random-walk state update: every coordinate moves by `N(0, sigma_p^2)`.
+    pub fn predict(&mut self, sigma_p: f64, rng: &mut impl Rng) {
+        let n = Normal::new(0.0, sigma_p).expect("sigma_p validated positive");
+        for p in &mut self.particles {
+            p[0] += n.sample(rng);
+            p[1] += n.sample(rng);
+        }
+    }
+
+    /// Weight update with the DoAs (world bearings, rad) seen from `robot`; a stop with no
+    /// DoA left carries no information and changes nothing.
+    pub fn update(&mut self, robot: [f64; 2], bearings: &[f64], lik: &Likelihood) {
+        if bearings.is_empty() {
+            return;
+        }
+        let mut total = 0.0;
+        for (p, w) in self.particles.iter().zip(self.weights.iter_mut()) {
+            let (dx, dy) = (p[0] - robot[0], p[1] - robot[1]);
+            let theta = dy.atan2(dx);
+            let dtheta = bearings
+                .iter()
+                .map(|&b| wrap_rad(theta - b).abs())
+                .fold(f64::INFINITY, f64::min);
+            *w *= lik.eval(dtheta, dx.hypot(dy));
+            total += *w;
+        }
+        if total > 0.0 && total.is_finite() {
+            self.weights.iter_mut().for_each(|w| *w /= total);
+        } else {
+            // Every weight underflowed: no particle is preferred.
+            let u = 1.0 / self.weights.len() as f64;
+            self.weights.iter_mut().for_each(|w| *w = u);
+        }
+    }
+
+    /// The effective sample size `1 / sum w^2`, in `[1, M]`.
+    pub fn neff(&self) -> f64 {
+        1.0 / self.weights.iter().map(|w| w * w).sum::<f64>()
+    }
+
+    /// Low-variance resampling; weights become equal.
+    pub fn resample(&mut self, rng: &mut impl Rng) {
+        let idx = low_variance(&self.weights, rng);
+        self.particles = idx.iter().map(|&i| self.particles[i]).collect();
+        let m = self.particles.len();
+        self.weights = vec![1.0 / m as f64; m];
+    }
+
+    /// The largest eigenvalue (m^2) of the particles' unweighted sample covariance: the
+    /// cloud's spread along its widest direction.
+    pub fn max_cov_eigenvalue(&self) -> f64 {
+        let c = covariance(&self.particles);
+        max_eigenvalue(c)
+    }
+
+    /// The weighted mean position (the WS variant's estimate).
+    pub fn weighted_mean(&self) -> [f64; 2] {
+        let mut m = [0.0; 2];
+        for (p, w) in self.particles.iter().zip(&self.weights) {
+            m[0] += w * p[0];
+            m[1] += w * p[1];
+        }
+        m
+    }
+}
+
+/// Mean of points.
+pub fn mean(points: &[[f64; 2]]) -> [f64; 2] {
+    let n = points.len().max(1) as f64;
+    let s = points
+        .iter()
+        .fold([0.0; 2], |a, p| [a[0] + p[0], a[1] + p[1]]);
+    [s[0] / n, s[1] / n]
+}
+
+/// Unbiased sample covariance `[[xx, xy], [xy, yy]]` of points (0 for fewer than two).
+pub fn covariance(points: &[[f64; 2]]) -> [[f64; 2]; 2] {
+    if points.len() < 2 {
+        return [[0.0; 2]; 2];
+    }
+    let m = mean(points);
+    let (mut xx, mut xy, mut yy) = (0.0, 0.0, 0.0);
+    for p in points {
+        let (dx, dy) = (p[0] - m[0], p[1] - m[1]);
+        xx += dx * dx;
+        xy += dx * dy;
+        yy += dy * dy;
+    }
+    let k = 1.0 / (points.len() - 1) as f64;
+    [[xx * k, xy * k], [xy * k, yy * k]]
+}
+
+/// The larger eigenvalue of a symmetric 2 x 2 matrix.
+pub fn max_eigenvalue(c: [[f64; 2]; 2]) -> f64 {
+    let (a, b, d) = (c[0][0], c[0][1], c[1][1]);
+    0.5 * (a + d) + (0.25 * (a - d) * (a - d) + b * b).sqrt()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_abs_diff_eq;
+    use rand::{SeedableRng, rngs::StdRng};
+
+    const SEED: u64 = 5;
+
+    #[test]
+    fn likelihood_matches_hand_computed_values() {
+        let sigma = 5f64.to_radians();
+        let l = Likelihood::new(sigma, Some(2.5));
+        let f = |x: f64| {
+            (-x * x / (2.0 * sigma * sigma)).exp() / (sigma * (2.0 * std::f64::consts::PI).sqrt())
+        };
+        // On the DoA, 1 m away: f(0) e^{-0.4}.
+        assert_abs_diff_eq!(l.eval(0.0, 1.0), f(0.0) * (-0.4f64).exp(), epsilon = 1e-12);
+        // The floor is f(2 sigma) = f(0) e^{-2}.
+        assert_abs_diff_eq!(l.floor(), f(0.0) * (-2.0f64).exp(), epsilon = 1e-12);
+        // Far off the DoA: the floor.
+        assert_eq!(l.eval(0.5, 1.0), l.floor());
+        // On the DoA but 10 m away: f(0) e^{-4} < f(2 sigma): the floor again.
+        assert_eq!(l.eval(0.0, 10.0), l.floor());
+        // WDP: no distance term.
+        let w = Likelihood::new(sigma, None);
+        assert_abs_diff_eq!(w.eval(sigma, 50.0), f(sigma), epsilon = 1e-12);
+    }
+
+    #[test]
+    fn weights_follow_the_nearest_doa() {
+        // Robot at the origin; DoAs towards +x and +y. Particles on +x (1 m), on +y (2 m),
+        // and at -x (1 m, no DoA).
+        let mut pf =
+            ParticleFilter::from_parts(vec![[1.0, 0.0], [0.0, 2.0], [-1.0, 0.0]], vec![1.0; 3]);
+        let sigma = 5f64.to_radians();
+        let l = Likelihood::new(sigma, Some(2.5));
+        pf.update([0.0, 0.0], &[0.0, std::f64::consts::FRAC_PI_2], &l);
+        let raw = [l.eval(0.0, 1.0), l.eval(0.0, 2.0), l.floor()];
+        let s: f64 = raw.iter().sum();
+        for (w, r) in pf.weights().iter().zip(raw) {
+            assert_abs_diff_eq!(*w, r / s, epsilon = 1e-12);
+        }
+        assert_abs_diff_eq!(pf.weights().iter().sum::<f64>(), 1.0, epsilon = 1e-12);
+    }
+
+    #[test]
+    fn bearings_wrap_across_pi() {
+        // A particle at bearing 179 degrees is 2 degrees from a DoA at -179 degrees.
+        let mut pf = ParticleFilter::from_parts(
+            vec![[-1.0, 179f64.to_radians().tan() * -1.0], [0.0, -1.0]],
+            vec![1.0; 2],
+        );
+        let l = Likelihood::new(5f64.to_radians(), None);
+        pf.update([0.0, 0.0], &[-179f64.to_radians()], &l);
+        // Wrapped, the first is 2 degrees off: f(2) against the floor f(10) of the second,
+        // a ratio of exp((10^2 - 2^2) / (2 * 5^2)); unwrapped, both would sit on the floor.
+        let ratio = pf.weights()[0] / pf.weights()[1];
+        assert_abs_diff_eq!(ratio, (96.0f64 / 50.0).exp(), epsilon = 1e-9);
+    }
+
+    #[test]
+    fn covariance_eigenvalue_of_a_line() {
+        // Points on y = x, spread 1 in x: variance along the diagonal is 2 * var(x).
+        let pts: Vec<[f64; 2]> = (0..5).map(|i| [i as f64, i as f64]).collect();
+        let c = covariance(&pts);
+        assert_abs_diff_eq!(c[0][0], 2.5, epsilon = 1e-12);
+        assert_abs_diff_eq!(max_eigenvalue(c), 5.0, epsilon = 1e-12);
+    }
+
+    #[test]
+    fn resampling_keeps_m_particles_and_favours_heavy_ones() {
+        let mut rng = StdRng::seed_from_u64(SEED);
+        let pts: Vec<[f64; 2]> = (0..1000).map(|i| [i as f64, 0.0]).collect();
+        let mut w = vec![1.0; 1000];
+        w[7] = 1000.0; // half the total weight
+        let mut pf = ParticleFilter::from_parts(pts, w);
+        pf.resample(&mut rng);
+        assert_eq!(pf.particles().len(), 1000);
+        let sevens = pf.particles().iter().filter(|p| p[0] == 7.0).count();
+        // Low-variance resampling gives exactly floor or ceil of M w = 500.2.
+        assert!((500..=501).contains(&sevens), "{sevens}");
+        assert_abs_diff_eq!(pf.neff(), 1000.0, epsilon = 1e-6);
+    }
+
+    #[test]
+    fn initial_particles_are_distinct_known_cells() {
+        let mut rng = StdRng::seed_from_u64(SEED);
+        let cells: Vec<[f64; 2]> = (0..100).map(|i| [i as f64, 1.0]).collect();
+        let pf = ParticleFilter::from_cells(&cells, 11, &mut rng);
+        let mut xs: Vec<i64> = pf.particles().iter().map(|p| p[0] as i64).collect();
+        xs.sort();
+        xs.dedup();
+        assert_eq!(xs.len(), 11);
+        assert_abs_diff_eq!(pf.weights().iter().sum::<f64>(), 1.0, epsilon = 1e-12);
+    }
+}
