@@ -27,6 +27,113 @@ pub enum Command {
     },
     /// Directions of arrival from multichannel WAV files (or a whole data set).
     Ssl(SslArgs),
+    /// Map the sound sources with I-ASM from DoA tables or raw audio.
+    Map(MapArgs),
+    /// The paper's Monte Carlo evaluation: OSPA of CA, WS and WDP over many seeds.
+    Eval(EvalArgs),
+}
+
+/// Where the mapping inputs come from (shared by `map` and `eval`).
+#[derive(Debug, Clone, Args)]
+pub struct InputArgs {
+    /// A data set folder in the published layout (map/, pose/, audio/, azimuth/, src_gt*).
+    #[arg(long, value_name = "DIR")]
+    pub dataset: Option<PathBuf>,
+    /// ROS occupancy map YAML (overrides the data set's).
+    #[arg(long, value_name = "YAML")]
+    pub map: Option<PathBuf>,
+    /// Pose table: x, y, theta per stop, CSV or .xlsx (overrides the data set's).
+    #[arg(long, value_name = "FILE")]
+    pub poses: Option<PathBuf>,
+    /// Unit of theta in the pose table: deg or rad.
+    #[arg(long, default_value = "deg")]
+    pub theta_unit: String,
+    /// DoA table: up to N azimuths per stop (degrees, array frame), CSV or .xlsx.
+    #[arg(long, value_name = "TABLE", conflicts_with = "audio")]
+    pub doas: Option<PathBuf>,
+    /// Folder of WAV recordings, one per stop, localised with --method (default: the
+    /// data set's audio/ when no --doas is given).
+    #[arg(long, value_name = "DIR")]
+    pub audio: Option<PathBuf>,
+    /// SSL method for raw audio: gcc-phat or mvdr.
+    #[arg(long, default_value = "mvdr")]
+    pub method: String,
+    /// Microphone array for raw audio: a preset or a TOML/JSON file.
+    #[arg(long, default_value = "iasm6")]
+    pub array: String,
+    /// DoAs per stop, N.
+    #[arg(long, default_value_t = 4, value_name = "N")]
+    pub num: usize,
+    /// Ground-truth source positions (overrides the data set's src_gt*).
+    #[arg(long, value_name = "FILE")]
+    pub truth: Option<PathBuf>,
+    /// A TOML file of I-ASM parameters (the `asm::IasmConfig` fields).
+    #[arg(long = "iasm-config", value_name = "FILE")]
+    pub iasm_config: Option<PathBuf>,
+}
+
+/// `iasm map`.
+#[derive(Debug, Clone, Args)]
+pub struct MapArgs {
+    /// The inputs.
+    #[command(flatten)]
+    pub input: InputArgs,
+    /// Variant: ca (full I-ASM), ws (weighted sum) or wdp (no distance penalty).
+    #[arg(long, default_value = "ca")]
+    pub variant: String,
+    /// Seed of the particle filter.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Write the map as JSON here.
+    #[arg(long, value_name = "FILE")]
+    pub out: Option<PathBuf>,
+    /// Write the sources as CSV here.
+    #[arg(long, value_name = "FILE")]
+    pub csv: Option<PathBuf>,
+    /// Draw the map as a PNG here.
+    #[arg(long, value_name = "FILE")]
+    pub png: Option<PathBuf>,
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    pub json: bool,
+    /// OSPA order p.
+    #[arg(long, default_value_t = 1.0)]
+    pub ospa_p: f64,
+    /// OSPA cutoff c (m).
+    #[arg(long, default_value_t = 1.0)]
+    pub ospa_c: f64,
+}
+
+/// `iasm eval`.
+#[derive(Debug, Clone, Args)]
+pub struct EvalArgs {
+    /// The inputs.
+    #[command(flatten)]
+    pub input: InputArgs,
+    /// Runs per variant (seeds seed..seed+runs).
+    #[arg(long, default_value_t = 50)]
+    pub runs: usize,
+    /// First seed.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    pub json: bool,
+    /// OSPA order p.
+    #[arg(long, default_value_t = 1.0)]
+    pub ospa_p: f64,
+    /// OSPA cutoff c (m).
+    #[arg(long, default_value_t = 1.0)]
+    pub ospa_c: f64,
+    /// Exit with status 1 if CA's mean OSPA is above this (m).
+    #[arg(long, value_name = "M")]
+    pub max_mean_ospa: Option<f64>,
+    /// Exit with status 1 unless WS and WDP both have a higher mean OSPA than CA.
+    #[arg(long)]
+    pub expect_ablation: bool,
+    /// Worker threads (default: all cores).
+    #[arg(long, value_name = "N")]
+    pub threads: Option<usize>,
 }
 
 /// `iasm ssl`.

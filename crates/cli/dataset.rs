@@ -257,10 +257,10 @@ pub struct Dataset {
 }
 
 impl Dataset {
-    /// Finds the parts of a data set under `root`.
+    /// Finds the parts of a data set under `root`; any part may be missing.
     ///
     /// # Errors
-    /// If `root/audio` holds no WAV file.
+    /// If `root` is not a folder.
     pub fn open(root: &Path) -> Result<Self> {
         ensure!(
             root.is_dir(),
@@ -273,12 +273,6 @@ impl Dataset {
         } else {
             Vec::new()
         };
-        ensure!(
-            !audio.is_empty(),
-            "{}: no WAV file in {}",
-            root.display(),
-            audio_dir.display()
-        );
         let first = |dir: &Path, pred: &dyn Fn(&str) -> bool| -> Option<PathBuf> {
             let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
                 .ok()?

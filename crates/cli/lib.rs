@@ -2,12 +2,16 @@
 //!
 //! - [`demo`]: `iasm demo`, a built-in scene localised against its truth.
 //! - [`ssl_cmd`]: `iasm ssl`, DoAs from WAV files or a data set, and their score.
+//! - [`map_cmd`]: `iasm map` and `iasm eval`, I-ASM maps and their Monte Carlo OSPA.
+//! - [`render`]: the map picture.
 //! - [`dataset`]: the published data-set layout, tables and natural file order.
 //! - [`score`]: the DoA score against known sources.
 
 pub mod args;
 pub mod dataset;
 pub mod demo;
+pub mod map_cmd;
+pub mod render;
 pub mod score;
 pub mod ssl_cmd;
 
@@ -28,6 +32,16 @@ pub fn run(cli: &args::Cli) -> anyhow::Result<Outcome> {
     match &cli.command {
         args::Command::Ssl(a) => ssl_cmd::run(a),
         args::Command::Demo { seed } => demo::run(*seed),
+        args::Command::Map(a) => map_cmd::run_map(a),
+        args::Command::Eval(a) => {
+            if let Some(t) = a.threads {
+                // Only the first call in a process can size the global pool.
+                let _ = rayon::ThreadPoolBuilder::new()
+                    .num_threads(t)
+                    .build_global();
+            }
+            map_cmd::run_eval(a)
+        }
     }
 }
 

@@ -159,6 +159,12 @@ pub fn run(args: &SslArgs) -> Result<Outcome> {
         return Ok(Outcome::Success);
     };
     let ds = Dataset::open(dir)?;
+    anyhow::ensure!(
+        !ds.audio.is_empty(),
+        "{}: no WAV file in {}",
+        dir.display(),
+        dir.join("audio").display()
+    );
     let t0 = Instant::now();
     let rows = localise_files(&ds.audio, &array, &config)?;
     let elapsed = t0.elapsed().as_secs_f64();

@@ -2,6 +2,80 @@ use std::collections::HashMap;
 
 use super::Label;
 
+/// Points binned into a dense grid of square cells, as compressed rows: the points of
+/// cell `c` are `order[start[c]..start[c + 1]]`.
+struct Grid {
+    nx: i64,
+    ny: i64,
+    start: Vec<u32>,
+    order: Vec<u32>,
+    cell_of: Vec<u32>,
+}
+
+impl Grid {
+    fn new(points: &[[f64; 2]], side: f64) -> Self {
+        let (mut x0, mut y0, mut x1, mut y1) = (
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+        );
+        for p in points {
+            x0 = x0.min(p[0]);
+            y0 = y0.min(p[1]);
+            x1 = x1.max(p[0]);
+            y1 = y1.max(p[1]);
+        }
+        let nx = ((x1 - x0) / side).floor() as i64 + 1;
+        let ny = ((y1 - y0) / side).floor() as i64 + 1;
+        let cell_of: Vec<u32> = points
+            .iter()
+            .map(|p| {
+                let cx = (((p[0] - x0) / side).floor() as i64).clamp(0, nx - 1);
+                let cy = (((p[1] - y0) / side).floor() as i64).clamp(0, ny - 1);
+                (cy * nx + cx) as u32
+            })
+            .collect();
+        let n_cells = (nx * ny) as usize;
+        let mut start = vec![0u32; n_cells + 1];
+        for &c in &cell_of {
+            start[c as usize + 1] += 1;
+        }
+        for c in 0..n_cells {
+            start[c + 1] += start[c];
+        }
+        let mut fill = start.clone();
+        let mut order = vec![0u32; points.len()];
+        for (i, &c) in cell_of.iter().enumerate() {
+            order[fill[c as usize] as usize] = i as u32;
+            fill[c as usize] += 1;
+        }
+        Self {
+            nx,
+            ny,
+            start,
+            order,
+            cell_of,
+        }
+    }
+
+    fn members(&self, c: usize) -> &[u32] {
+        &self.order[self.start[c] as usize..self.start[c + 1] as usize]
+    }
+
+    /// The cells in the 5 x 5 block around `c` (itself included) that exist.
+    fn around(&self, c: usize) -> impl Iterator<Item = usize> + '_ {
+        let (cx, cy) = (c as i64 % self.nx, c as i64 / self.nx);
+        (-2..=2).flat_map(move |dy| {
+            (-2..=2).filter_map(move |dx| {
+                let (x, y) = (cx + dx, cy + dy);
+                (x >= 0 && y >= 0 && x < self.nx && y < self.ny)
+                    .then_some((y * self.nx + x) as usize)
+            })
+        })
+    }
+}
+
 /// Labels `points` with DBSCAN(`eps`, `min_pts`); see the module docs for the method.
 ///
 /// # Panics
@@ -9,37 +83,38 @@ use super::Label;
 pub fn dbscan(points: &[[f64; 2]], eps: f64, min_pts: usize) -> Vec<Label> {
     assert!(eps > 0.0, "eps must be positive");
     let n = points.len();
-    let side = eps / std::f64::consts::SQRT_2;
-    let key = |p: &[f64; 2]| ((p[0] / side).floor() as i64, (p[1] / side).floor() as i64);
-    let mut cells: HashMap<(i64, i64), Vec<u32>> = HashMap::new();
-    for (i, p) in points.iter().enumerate() {
-        cells.entry(key(p)).or_default().push(i as u32);
+    if n == 0 {
+        return Vec::new();
     }
+    // Side eps / sqrt(2): the diagonal of a cell is eps, so a cell's points all neighbour
+    // each other, and neighbours are at most two cells away in x and in y.
+    let grid = Grid::new(points, eps / std::f64::consts::SQRT_2);
     let eps2 = eps * eps;
     let near = |a: usize, b: usize| {
         let (p, q) = (points[a], points[b]);
         (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) <= eps2
     };
-    let around =
-        |k: (i64, i64)| (-2..=2).flat_map(move |dx| (-2..=2).map(move |dy| (k.0 + dx, k.1 + dy)));
+    let n_cells = grid.start.len() - 1;
 
     // 1. Core points.
     let mut core = vec![false; n];
-    for (&k, members) in &cells {
+    for c in 0..n_cells {
+        let members = grid.members(c);
+        if members.is_empty() {
+            continue;
+        }
         if members.len() >= min_pts {
             members.iter().for_each(|&i| core[i as usize] = true);
             continue;
         }
         for &i in members {
             let mut count = members.len();
-            'search: for other in around(k).filter(|&o| o != k) {
-                if let Some(ms) = cells.get(&other) {
-                    for &j in ms {
-                        if near(i as usize, j as usize) {
-                            count += 1;
-                            if count >= min_pts {
-                                break 'search;
-                            }
+            'search: for other in grid.around(c).filter(|&o| o != c) {
+                for &j in grid.members(other) {
+                    if near(i as usize, j as usize) {
+                        count += 1;
+                        if count >= min_pts {
+                            break 'search;
                         }
                     }
                 }
@@ -48,10 +123,17 @@ pub fn dbscan(points: &[[f64; 2]], eps: f64, min_pts: usize) -> Vec<Label> {
         }
     }
 
-    // 2. Union cells' core points.
-    let keys: Vec<(i64, i64)> = cells.keys().copied().collect();
-    let index: HashMap<(i64, i64), usize> = keys.iter().enumerate().map(|(i, &k)| (k, i)).collect();
-    let mut parent: Vec<usize> = (0..keys.len()).collect();
+    // 2. Union cells' core points (a cell's core points are one set).
+    let cores: Vec<Vec<u32>> = (0..n_cells)
+        .map(|c| {
+            grid.members(c)
+                .iter()
+                .copied()
+                .filter(|&i| core[i as usize])
+                .collect()
+        })
+        .collect();
+    let mut parent: Vec<usize> = (0..n_cells).collect();
     fn find(parent: &mut [usize], mut x: usize) -> usize {
         while parent[x] != x {
             parent[x] = parent[parent[x]];
@@ -59,29 +141,18 @@ pub fn dbscan(points: &[[f64; 2]], eps: f64, min_pts: usize) -> Vec<Label> {
         }
         x
     }
-    let core_of = |k: &(i64, i64)| -> Vec<u32> {
-        cells[k]
-            .iter()
-            .copied()
-            .filter(|&i| core[i as usize])
-            .collect()
-    };
-    let cores: Vec<Vec<u32>> = keys.iter().map(core_of).collect();
-    for (a, k) in keys.iter().enumerate() {
+    for a in 0..n_cells {
         if cores[a].is_empty() {
             continue;
         }
-        for other in around(*k) {
-            let Some(&b) = index.get(&other) else {
-                continue;
-            };
+        for b in grid.around(a) {
             if b <= a || cores[b].is_empty() || find(&mut parent, a) == find(&mut parent, b) {
                 continue;
             }
-            let linked = cores[a]
+            if cores[a]
                 .iter()
-                .any(|&i| cores[b].iter().any(|&j| near(i as usize, j as usize)));
-            if linked {
+                .any(|&i| cores[b].iter().any(|&j| near(i as usize, j as usize)))
+            {
                 let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
                 parent[ra] = rb;
             }
@@ -91,28 +162,19 @@ pub fn dbscan(points: &[[f64; 2]], eps: f64, min_pts: usize) -> Vec<Label> {
     // 3. Labels, numbered in order of first appearance; border points join a core neighbour.
     let mut names: HashMap<usize, u32> = HashMap::new();
     let mut labels = vec![Label::Noise; n];
-    let mut name = |root: usize| -> u32 {
-        let next = names.len() as u32;
-        *names.entry(root).or_insert(next)
-    };
     for i in 0..n {
-        let k = key(&points[i]);
-        let root = if core[i] {
-            Some(find(&mut parent, index[&k]))
+        let c = grid.cell_of[i] as usize;
+        let root = if core[i] || !cores[c].is_empty() {
+            // Own cell first: every point there is within eps.
+            Some(find(&mut parent, c))
         } else {
-            // Own cell first (every point there is within eps), then the ring around it.
-            let own = &cores[index[&k]];
-            if !own.is_empty() {
-                Some(find(&mut parent, index[&k]))
-            } else {
-                around(k)
-                    .filter_map(|o| index.get(&o).copied())
-                    .find(|&b| cores[b].iter().any(|&j| near(i, j as usize)))
-                    .map(|b| find(&mut parent, b))
-            }
+            grid.around(c)
+                .find(|&b| cores[b].iter().any(|&j| near(i, j as usize)))
+                .map(|b| find(&mut parent, b))
         };
         if let Some(r) = root {
-            labels[i] = Label::Cluster(name(r));
+            let next = names.len() as u32;
+            labels[i] = Label::Cluster(*names.entry(r).or_insert(next));
         }
     }
     labels
