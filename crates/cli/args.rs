@@ -67,6 +67,10 @@ pub struct InputArgs {
     /// Ground-truth source positions (overrides the data set's src_gt*).
     #[arg(long, value_name = "FILE")]
     pub truth: Option<PathBuf>,
+    /// Refine each source by bearing least squares over the DoAs it explains (not in the
+    /// paper; see `asm::IasmConfig::refine`).
+    #[arg(long)]
+    pub refine: bool,
     /// A TOML file of I-ASM parameters (the `asm::IasmConfig` fields).
     #[arg(long = "iasm-config", value_name = "FILE")]
     pub iasm_config: Option<PathBuf>,

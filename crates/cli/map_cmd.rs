@@ -188,6 +188,7 @@ pub fn iasm_config(a: &InputArgs, variant: Option<&str>) -> Result<IasmConfig> {
         None => IasmConfig::default(),
     };
     c.num_doas = a.num;
+    c.refine |= a.refine;
     if let Some(v) = variant {
         c.variant = v.parse::<Variant>().map_err(anyhow::Error::msg)?;
     }

@@ -13,7 +13,8 @@
 //!    the weighted mean of all particles instead).
 //! 4. **Associate**: at every stop, the DoA nearest the source's bearing, if within
 //!    `gamma = 3 sigma`, is explained by it and removed. A round whose source explains no
-//!    DoA would repeat forever: it ends the mapping, and its estimate is dropped.
+//!    DoA is dropped; after `retries + 1` such rounds in a row the mapping ends (the
+//!    paper's loop would repeat forever), as it does after `max_rounds` rounds.
 //! 5. Finally, merge estimates closer than 0.5 m into their mean.
 //!
 //! Every angle difference is wrapped to `(-pi, pi]` (the authors' code compares unwrapped
@@ -100,8 +101,18 @@ pub struct IasmConfig {
     pub max_rounds: usize,
     /// DoAs per stop `N`: a row with more is an error. Default: 4.
     pub num_doas: usize,
+    /// Rounds retried, each from a fresh particle draw, after a round whose estimate
+    /// explains no DoA, before the mapping ends (the paper's loop has no such guard and
+    /// would repeat forever). Default: 2.
+    pub retries: usize,
     /// Ablation variant. Default: [`Variant::Ca`].
     pub variant: Variant,
+    /// After mapping, move each source to the least-squares intersection of the bearings
+    /// it explains (Gauss-Newton on the angular residuals, the maximum-likelihood position
+    /// under Gaussian DoA noise once the association is known), dropping rays beyond
+    /// `2 sigma` one at a time. Not in the paper: I-ASM's association makes it possible, and the
+    /// cluster centroid of a cloud stopped at `lambda_thresh` is coarser. Default: false.
+    pub refine: bool,
 }
 
 impl Default for IasmConfig {
@@ -120,7 +131,9 @@ impl Default for IasmConfig {
             merge_dist_m: 0.5,
             max_rounds: 64,
             num_doas: 4,
+            retries: 2,
             variant: Variant::Ca,
+            refine: false,
         }
     }
 }
@@ -200,6 +213,12 @@ pub struct Source {
     /// Its cluster's particles (for pictures; not serialised).
     #[serde(skip)]
     pub cluster: Vec<[f64; 2]>,
+    /// The DoAs it explains: robot position (m) and world bearing (rad) (not serialised).
+    #[serde(skip)]
+    pub rays: Vec<([f64; 2], f64)>,
+    /// Whether the position was refined by bearing least squares (see
+    /// [`IasmConfig::refine`]).
+    pub refined: bool,
 }
 
 /// The result of one I-ASM run.
@@ -315,6 +334,7 @@ impl Mapper {
         let k_stops = poses.len();
         let mut sources: Vec<Source> = Vec::new();
         let mut rounds = 0;
+        let mut failed = 0;
         while rounds < c.max_rounds {
             rounds += 1;
             // Filtering.
@@ -362,6 +382,7 @@ impl Mapper {
             };
             // Implicit association.
             let mut taken = 0;
+            let mut rays = Vec::new();
             for (p, row) in poses.iter().zip(bearings.iter_mut()) {
                 let theta = (est[1] - p.y).atan2(est[0] - p.x);
                 let best = row
@@ -372,13 +393,21 @@ impl Mapper {
                 if let Some((n, d)) = best
                     && d < gamma
                 {
-                    row.remove(n);
+                    rays.push(([p.x, p.y], row.remove(n)));
                     taken += 1;
                 }
             }
             if taken == 0 {
-                break;
+                // The cloud settled where no remaining DoA points (an intersection of
+                // DoAs of different sources): a random event, so retry from a fresh
+                // draw a few times before concluding that nothing is left.
+                failed += 1;
+                if failed >= c.retries + 1 {
+                    break;
+                }
+                continue;
             }
+            failed = 0;
             sources.push(Source {
                 x: est[0],
                 y: est[1],
@@ -387,15 +416,86 @@ impl Mapper {
                 covariance: covariance(&cluster),
                 round: rounds,
                 cluster,
+                rays,
+                refined: false,
             });
         }
         merge_close(&mut sources, c.merge_dist_m);
+        if c.refine {
+            let sigma = c.sigma_deg.to_radians();
+            for s in &mut sources {
+                if let Some(p) = refine_by_bearings([s.x, s.y], &s.rays, sigma) {
+                    (s.x, s.y, s.refined) = (p[0], p[1], true);
+                }
+            }
+        }
         Ok(MapResult {
             sources,
             rounds,
             particles: m,
             unexplained: bearings.iter().map(Vec::len).sum(),
         })
+    }
+}
+
+/// The position that minimises the squared wrapped angles between `rays` (robot position,
+/// world bearing) and the bearings from their robots to it, from `start`: Gauss-Newton,
+/// dropping the worst ray and refitting while a residual exceeds `2 sigma`. `None` when fewer than
+/// three rays remain, the geometry is degenerate (parallel rays), or the solution leaves
+/// the neighbourhood of `start` (2 m), where the particle estimate is the safer one.
+pub fn refine_by_bearings(
+    start: [f64; 2],
+    rays: &[([f64; 2], f64)],
+    sigma: f64,
+) -> Option<[f64; 2]> {
+    let solve = |rays: &[([f64; 2], f64)], from: [f64; 2]| -> Option<[f64; 2]> {
+        if rays.len() < 3 {
+            return None;
+        }
+        let mut s = from;
+        for _ in 0..20 {
+            let (mut a11, mut a12, mut a22, mut b1, mut b2) = (0.0, 0.0, 0.0, 0.0, 0.0);
+            for &(r, phi) in rays {
+                let (dx, dy) = (s[0] - r[0], s[1] - r[1]);
+                let d2 = (dx * dx + dy * dy).max(1e-6);
+                let e = wrap_rad(dy.atan2(dx) - phi);
+                let (jx, jy) = (-dy / d2, dx / d2);
+                a11 += jx * jx;
+                a12 += jx * jy;
+                a22 += jy * jy;
+                b1 += jx * e;
+                b2 += jy * e;
+            }
+            let det = a11 * a22 - a12 * a12;
+            if det.abs() < 1e-12 * (a11 * a22).max(1e-300) {
+                return None;
+            }
+            let step = [(a22 * b1 - a12 * b2) / det, (a11 * b2 - a12 * b1) / det];
+            s = [s[0] - step[0], s[1] - step[1]];
+            if step[0].hypot(step[1]) < 1e-6 {
+                break;
+            }
+        }
+        (s.iter().all(|v| v.is_finite()) && (s[0] - start[0]).hypot(s[1] - start[1]) < 2.0)
+            .then_some(s)
+    };
+    // Drop the worst ray while it lies beyond 2 sigma, refitting each time: one outlier
+    // cannot then drag the fit far enough to push good rays out of the gate.
+    let mut kept = rays.to_vec();
+    let mut s = solve(&kept, start)?;
+    loop {
+        let resid =
+            |&(r, phi): &([f64; 2], f64)| wrap_rad((s[1] - r[1]).atan2(s[0] - r[0]) - phi).abs();
+        let (worst, e) = kept
+            .iter()
+            .enumerate()
+            .map(|(i, ray)| (i, resid(ray)))
+            .max_by(|a, b| a.1.total_cmp(&b.1))?;
+        if e <= 2.0 * sigma {
+            return Some(s);
+        }
+        kept.swap_remove(worst);
+        s = solve(&kept, s)?;
     }
 }
 
@@ -419,6 +519,7 @@ fn merge_close(sources: &mut Vec<Source>, dist: f64) {
         a.observations += b.observations;
         a.particles += b.particles;
         a.cluster.extend(b.cluster);
+        a.rays.extend(b.rays);
         a.covariance = covariance(&a.cluster);
     }
 }
@@ -530,11 +631,57 @@ mod tests {
             covariance: [[0.0; 2]; 2],
             round: 1,
             cluster: vec![[x, y]],
+            rays: vec![],
+            refined: false,
         };
         let mut v = vec![s(0.0, 0.0), s(0.3, 0.0), s(3.0, 0.0)];
         merge_close(&mut v, 0.5);
         assert_eq!(v.len(), 2);
         assert_eq!((v[0].x, v[0].observations), (0.15, 2));
+    }
+
+    #[test]
+    fn bearing_least_squares_finds_the_intersection() {
+        // Rays from three robot positions through (2, 1), one of them 0.5 degrees off.
+        let truth = [2.0f64, 1.0];
+        let rays: Vec<([f64; 2], f64)> = [[0.0, 0.0], [1.0, -1.0], [3.5, -0.5], [4.0, 0.0]]
+            .iter()
+            .enumerate()
+            .map(|(i, r)| {
+                (
+                    *r,
+                    (truth[1] - r[1]).atan2(truth[0] - r[0])
+                        + if i == 0 { 0.5f64.to_radians() } else { 0.0 },
+                )
+            })
+            .collect();
+        let p = refine_by_bearings([2.4, 1.3], &rays, 5f64.to_radians()).unwrap();
+        assert!((p[0] - 2.0).hypot(p[1] - 1.0) < 0.02, "{p:?}");
+        // An outlier ray (30 degrees off) is dropped by the second pass.
+        let mut bad = rays.clone();
+        bad.push(([0.0, 2.0], 0.5));
+        bad.push(([4.0, 2.0], (1.0f64 - 2.0).atan2(2.0 - 4.0)));
+        let p = refine_by_bearings([2.4, 1.3], &bad, 5f64.to_radians()).unwrap();
+        assert!((p[0] - 2.0).hypot(p[1] - 1.0) < 0.02, "{p:?}");
+        // Two rays are not enough to trust.
+        assert_eq!(refine_by_bearings([2.0, 1.0], &rays[..2], 0.1), None);
+    }
+
+    #[test]
+    fn refinement_sharpens_an_exact_map() {
+        let truth = [[1.5, 1.5], [4.0, -1.2], [5.5, 2.0]];
+        let (map, poses, doas) = scene(&truth, 20);
+        let cfg = IasmConfig {
+            refine: true,
+            ..IasmConfig::default()
+        };
+        let r = Mapper::new(&map, &cfg)
+            .unwrap()
+            .run(&poses, &doas, &mut StdRng::seed_from_u64(SEED))
+            .unwrap();
+        assert!(r.sources.iter().all(|s| s.refined));
+        let o = ospa(&r.positions(), &truth, 1.0, 1.0);
+        assert!(o.total < 0.01, "seed {SEED}: {:?} -> {o:?}", r.positions());
     }
 
     #[test]

@@ -80,16 +80,49 @@ pub struct ElevationRange {
     pub min_deg: f64,
     /// Highest elevation (degrees, `<= 90`). Default: 0.
     pub max_deg: f64,
-    /// Step (degrees, `> 0`). Default: 5.
+    /// Step (degrees, `> 0`). Default: 10.
     pub step_deg: f64,
 }
 
 impl Default for ElevationRange {
+    /// The horizontal plane only.
     fn default() -> Self {
         Self {
             min_deg: 0.0,
             max_deg: 0.0,
-            step_deg: 5.0,
+            step_deg: 10.0,
+        }
+    }
+}
+
+impl ElevationRange {
+    /// The horizontal plane only.
+    pub const PLANE: ElevationRange = ElevationRange {
+        min_deg: 0.0,
+        max_deg: 0.0,
+        step_deg: 10.0,
+    };
+
+    /// -60 to 60 degrees in 10-degree steps: sources seen from a robot are rarely more than
+    /// 60 degrees off its horizon, and a robot array's vertical aperture (a tenth of a metre)
+    /// resolves elevation no finer than tens of degrees at speech frequencies.
+    pub const ROBOT: ElevationRange = ElevationRange {
+        min_deg: -60.0,
+        max_deg: 60.0,
+        step_deg: 10.0,
+    };
+
+    /// The automatic choice for `array`: [`ElevationRange::ROBOT`] when its microphones are
+    /// not all at one height (a 3-D array resolves elevation, and a horizontal-only search
+    /// turns a source's elevation into an azimuth error), else [`ElevationRange::PLANE`] (a
+    /// planar array's delays all scale by `cos(elevation)` alike: azimuth stays unbiased).
+    pub fn auto(array: &crate::MicArray) -> Self {
+        let z = array.positions().iter().map(|p| p[2]);
+        let span = z.clone().fold(f64::NEG_INFINITY, f64::max) - z.fold(f64::INFINITY, f64::min);
+        if span > 1e-3 {
+            Self::ROBOT
+        } else {
+            Self::PLANE
         }
     }
 }
@@ -103,6 +136,9 @@ impl Default for ElevationRange {
 ///   whole circle) while room modes dominate.
 /// - **Frame about 20 ms** (1024 samples at 48 kHz): speech is quasi-stationary over 20-30 ms,
 ///   and several talkers are more often separated in time-frequency at that scale.
+/// - **Elevation searched for 3-D arrays** ([`ElevationRange::auto`]). Loudspeakers a metre
+///   from a robot sit 30 degrees below its array; searched in the plane, their DoAs bend
+///   towards the array's axis and the map's sources with them.
 /// - **Blocks of 4 frames (about 50 ms), pooled with max.** Within a block one talker tends
 ///   to dominate each bin, so the block's covariance is close to rank one and its peak sharp;
 ///   across blocks, talkers take turns, and max pooling keeps every talker's best moment.
@@ -126,8 +162,9 @@ pub struct SslConfig {
     pub fmax_hz: f64,
     /// Azimuth grid step (degrees, in `(0, 90]`). Default: 1.
     pub az_step_deg: f64,
-    /// Elevations searched. Default: the horizontal plane only (0 degrees).
-    pub elevation: ElevationRange,
+    /// Elevations searched. Default: `None`, chosen from the array by
+    /// [`ElevationRange::auto`]: -60 to 60 degrees for a 3-D array, 0 for a planar one.
+    pub elevation: Option<ElevationRange>,
     /// Frames per block: statistics are averaged within a block, then blocks are pooled
     /// (`>= 1`). Default: 4 (53 ms at the default frame and hop at 48 kHz).
     pub block_frames: usize,
@@ -156,7 +193,7 @@ impl Default for SslConfig {
             fmin_hz: 200.0,
             fmax_hz: 8000.0,
             az_step_deg: 1.0,
-            elevation: ElevationRange::default(),
+            elevation: None,
             block_frames: 4,
             pooling: Pooling::default(),
             num_peaks: 4,
@@ -184,8 +221,11 @@ impl SslConfig {
         if !(self.az_step_deg > 0.0 && self.az_step_deg <= 90.0) {
             return Err(ConfigError::AzimuthStep(self.az_step_deg));
         }
-        let e = self.elevation;
-        if !(e.min_deg >= -90.0 && e.min_deg <= e.max_deg && e.max_deg <= 90.0 && e.step_deg > 0.0)
+        if let Some(e) = self.elevation
+            && !(e.min_deg >= -90.0
+                && e.min_deg <= e.max_deg
+                && e.max_deg <= 90.0
+                && e.step_deg > 0.0)
         {
             return Err(ConfigError::Elevation {
                 min: e.min_deg,
@@ -222,6 +262,14 @@ mod tests {
         assert_eq!(c.frame_len_at(48_000), 1024);
         assert_eq!(c.frame_len_at(44_100), 1024);
         assert_eq!(c.frame_len_at(16_000), 512);
+    }
+
+    #[test]
+    fn elevation_is_searched_for_3d_arrays_only() {
+        let a3 = crate::MicArray::preset("iasm6").unwrap();
+        let a2 = crate::MicArray::preset("respeaker6").unwrap();
+        assert_eq!(ElevationRange::auto(&a3), ElevationRange::ROBOT);
+        assert_eq!(ElevationRange::auto(&a2), ElevationRange::PLANE);
     }
 
     #[test]

@@ -55,6 +55,7 @@ impl SpectrumEstimator for GccPhat {
         let mut gr = vec![0.0f32; l.n_bins];
         let mut gi = vec![0.0f32; l.n_bins];
         let mut lagfn = Vec::new();
+        let mut segments = Vec::new();
         let norm = 1.0 / (frames.len() * nb * l.pairs.len()) as f32;
         // PHAT factorises: X_i X_j^* / |X_i X_j^*| = (X_i / |X_i|) (X_j / |X_j|)^*, so each
         // channel's bins are normalised once per frame instead of once per pair.
@@ -90,7 +91,7 @@ impl SpectrumEstimator for GccPhat {
                 gr * c - gi * s
             });
             lagfn.iter_mut().for_each(|v| *v *= norm);
-            l.accumulate(p, &lagfn, out);
+            l.accumulate(p, &lagfn, &mut segments, out);
         }
     }
 }

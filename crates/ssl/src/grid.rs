@@ -188,11 +188,23 @@ impl PairLags {
     }
 
     /// Adds pair `p`'s lag function, read off at every direction, to `out`.
-    pub fn accumulate(&self, p: usize, lagfn: &[f32], out: &mut [f32]) {
+    ///
+    /// `segments` is scratch: it is refilled with each lag's value and slope, so that each
+    /// direction costs one load and one multiply-add (this loop runs pairs x directions x
+    /// blocks times, the most of any in the crate).
+    pub fn accumulate(
+        &self,
+        p: usize,
+        lagfn: &[f32],
+        segments: &mut Vec<[f32; 2]>,
+        out: &mut [f32],
+    ) {
+        segments.clear();
+        segments.extend(lagfn.windows(2).map(|w| [w[0], w[1] - w[0]]));
         let look = &self.lookup[p * self.n_dirs..(p + 1) * self.n_dirs];
         for (o, &(k, f)) in out.iter_mut().zip(look) {
-            let k = k as usize;
-            *o += lagfn[k] + f * (lagfn[k + 1] - lagfn[k]);
+            let [v, slope] = segments[k as usize];
+            *o += v + f * slope;
         }
     }
 }

@@ -91,7 +91,10 @@ impl Localizer {
             });
         }
         let bins = lo..hi + 1;
-        let grid = DirectionGrid::new(config.az_step_deg, config.elevation)?;
+        let elevation = config
+            .elevation
+            .unwrap_or_else(|| crate::ElevationRange::auto(array));
+        let grid = DirectionGrid::new(config.az_step_deg, elevation)?;
         let lags = Arc::new(PairLags::new(
             array,
             &grid,

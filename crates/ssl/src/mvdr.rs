@@ -107,6 +107,7 @@ impl SpectrumEstimator for Mvdr {
             vec![0.0f32; l.n_bins],
         );
         let mut lagfn = Vec::new();
+        let mut segments = Vec::new();
         let norm = 1.0 / (nb * l.pairs.len()) as f32;
         for (p, &(i, j)) in l.pairs.iter().enumerate() {
             cross.fill(Complex32::default());
@@ -134,7 +135,7 @@ impl SpectrumEstimator for Mvdr {
                 num / (a - (gr * c - gi * s))
             });
             lagfn.iter_mut().for_each(|v| *v *= norm);
-            l.accumulate(p, &lagfn, out);
+            l.accumulate(p, &lagfn, &mut segments, out);
         }
     }
 }
