@@ -402,7 +402,7 @@ impl Mapper {
                 // DoAs of different sources): a random event, so retry from a fresh
                 // draw a few times before concluding that nothing is left.
                 failed += 1;
-                if failed >= c.retries + 1 {
+                if failed > c.retries {
                     break;
                 }
                 continue;
