@@ -1,4 +1,5 @@
 //! The application's integration tests: one binary (ripgrep's layout).
 
 mod cli;
+mod map;
 mod util;

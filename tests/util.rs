@@ -94,3 +94,52 @@ pub fn tempdir() -> tempfile::TempDir {
 pub fn path(dir: &tempfile::TempDir, name: &str) -> PathBuf {
     dir.path().join(name)
 }
+
+/// A mapping data set in the published layout under `root`: an open 8 x 6 m room
+/// (`map/room.yaml` + `room.pgm`, origin (-1, -3)), `pose/poses.csv` (x, y, theta in
+/// degrees), `src_gt.txt`, and `doas.csv` with the exact bearing (array frame, degrees) of
+/// every source from every pose.
+pub fn mapping_dataset(root: &Path, sources: &[[f64; 2]], poses: &[(f64, f64, f64)]) {
+    std::fs::create_dir_all(root.join("map")).unwrap();
+    std::fs::create_dir_all(root.join("pose")).unwrap();
+    let (w, h) = (160usize, 120usize);
+    let mut pgm = format!("P5\n{w} {h}\n255\n").into_bytes();
+    pgm.extend(std::iter::repeat_n(254u8, w * h));
+    std::fs::write(root.join("map/room.pgm"), pgm).unwrap();
+    std::fs::write(
+        root.join("map/room.yaml"),
+        "image: room.pgm\nresolution: 0.05\norigin: [-1.0, -3.0, 0.0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n",
+    )
+    .unwrap();
+    let mut csv = String::new();
+    let mut doas = String::new();
+    for &(x, y, th) in poses {
+        csv.push_str(&format!("{x},{y},{th}\n"));
+        let row: Vec<String> = sources
+            .iter()
+            .map(|s| {
+                format!(
+                    "{:.3}",
+                    ssl::wrap_deg((s[1] - y).atan2(s[0] - x).to_degrees() - th)
+                )
+            })
+            .collect();
+        doas.push_str(&row.join(","));
+        doas.push('\n');
+    }
+    std::fs::write(root.join("pose/poses.csv"), csv).unwrap();
+    std::fs::write(root.join("doas.csv"), doas).unwrap();
+    let gt: String = sources
+        .iter()
+        .enumerate()
+        .map(|(i, s)| format!("s{} [{}, {}, 0]\n", i + 1, s[0], s[1]))
+        .collect();
+    std::fs::write(root.join("src_gt.txt"), gt).unwrap();
+}
+
+/// Twenty stops along y = 0 with turning headings.
+pub fn drive() -> Vec<(f64, f64, f64)> {
+    (0..20)
+        .map(|k| (0.3 * k as f64, 0.0, 9.0 * k as f64 - 90.0))
+        .collect()
+}

@@ -8,7 +8,9 @@
 //!    weighting with the stop's remaining DoAs, resampling when `N_eff < ceil(M / C)`, and
 //!    stopping early once the cloud's largest covariance eigenvalue is below
 //!    `lambda_thresh`.
-//! 3. **Cluster** the particles with DBSCAN (`eps`, `MinPts = 0.1 M`); if there is no
+//! 3. **Cluster** the particles with DBSCAN (`eps`, `MinPts = 0.1 M`); if the adaptive
+//!    resampling never ran in the round (few stops), resample once first, since the
+//!    uniform initial cloud has no cluster and its weights would be lost; if there is no
 //!    cluster, stop. The largest cluster's centroid is the new source (the WS variant takes
 //!    the weighted mean of all particles instead).
 //! 4. **Associate**: at every stop, the DoA nearest the source's bearing, if within
@@ -339,18 +341,27 @@ impl Mapper {
             rounds += 1;
             // Filtering.
             let mut pf = ParticleFilter::from_cells(&self.cells, m, rng);
+            let mut resampled = false;
             for step in 0..c.passes * k_stops {
                 let k = step % k_stops;
                 pf.predict(c.sigma_p_m, rng);
                 pf.update([poses[k].x, poses[k].y], &bearings[k], &lik);
                 if pf.neff() < resample_below {
                     pf.resample(rng);
+                    resampled = true;
                 }
                 if pf.max_cov_eigenvalue() < c.lambda_thresh_m2 {
                     break;
                 }
             }
-            // Clustering.
+            // Clustering. DBSCAN counts particles, not weights: if the adaptive resampling
+            // never ran (few stops), the cloud is still the uniform initial draw and all
+            // the evidence is in its weights, so it is resampled once to turn them into
+            // density. Otherwise the cloud is clustered as the paper does.
+            let weighted_mean = pf.weighted_mean();
+            if !resampled {
+                pf.resample(rng);
+            }
             let labels = dbscan.cluster(pf.particles());
             let mut sizes: Vec<usize> = Vec::new();
             for l in &labels {
@@ -377,7 +388,7 @@ impl Mapper {
                 .map(|(p, _)| *p)
                 .collect();
             let est = match c.variant {
-                Variant::Ws => pf.weighted_mean(),
+                Variant::Ws => weighted_mean,
                 Variant::Ca | Variant::Wdp => mean(&cluster),
             };
             // Implicit association.

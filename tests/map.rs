@@ -1,0 +1,254 @@
+//! `iasm map` and `iasm eval` through the binary: maps from DoA tables and from raw audio,
+//! the picture and tables they write, and bad input.
+
+use std::path::Path;
+
+use crate::util::*;
+
+const TRUTH: [[f64; 2]; 3] = [[1.5, 1.5], [4.0, -1.2], [5.5, 2.0]];
+
+fn json(o: &std::process::Output) -> serde_json::Value {
+    assert!(o.status.success(), "{}", show(o));
+    serde_json::from_slice(&o.stdout).expect("JSON on stdout")
+}
+
+fn dataset(dir: &tempfile::TempDir) -> std::path::PathBuf {
+    let root = path(dir, "ds");
+    mapping_dataset(&root, &TRUTH, &drive());
+    root
+}
+
+#[test]
+fn map_from_a_doa_table_finds_every_source() {
+    let dir = tempdir();
+    let root = dataset(&dir);
+    let (png, csv, out) = (
+        path(&dir, "m.png"),
+        path(&dir, "m.csv"),
+        path(&dir, "m.json"),
+    );
+    let o = iasm(&[
+        "map",
+        "--dataset",
+        arg(&root),
+        "--doas",
+        arg(&root.join("doas.csv")),
+        "--num",
+        "3",
+        "--seed",
+        "4",
+        "--png",
+        arg(&png),
+        "--csv",
+        arg(&csv),
+        "--out",
+        arg(&out),
+        "--json",
+    ]);
+    let v = json(&o);
+    assert_eq!(v["schema_version"], 1);
+    assert_eq!(v["seed"], 4);
+    assert_eq!(v["sources"].as_array().unwrap().len(), 3, "{v}");
+    assert!(v["ospa"]["total"].as_f64().unwrap() < 0.15, "{v}");
+    assert_eq!(v["params"]["sigma_deg"], 5.0);
+    // The files.
+    assert_eq!(&std::fs::read(&png).unwrap()[..8], b"\x89PNG\r\n\x1a\n");
+    assert_eq!(std::fs::read_to_string(&csv).unwrap().lines().count(), 4);
+    let saved: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    assert_eq!(saved, v);
+}
+
+#[test]
+fn map_from_raw_audio_finds_the_sources() {
+    // Each stop hears the two sources as plane waves from their bearings.
+    let dir = tempdir();
+    let root = path(&dir, "ds");
+    let truth = [[2.0, 2.5], [4.5, -2.0]];
+    let poses = drive();
+    mapping_dataset(&root, &truth, &poses);
+    std::fs::create_dir_all(root.join("audio")).unwrap();
+    for (k, &(x, y, th)) in poses.iter().enumerate() {
+        let az: Vec<f64> = truth
+            .iter()
+            .map(|s| ssl::wrap_deg((s[1] - y).atan2(s[0] - x).to_degrees() - th))
+            .collect();
+        write_wav(
+            &root.join(format!("audio/sub{}.wav", k + 1)),
+            &plane_wave_recording(&iasm6(), &az, SEED + k as u64),
+            FS,
+        );
+    }
+    let v = json(&iasm(&[
+        "map",
+        "--dataset",
+        arg(&root),
+        "--method",
+        "mvdr",
+        "--num",
+        "2",
+        "--json",
+    ]));
+    assert_eq!(v["doas"], "ssl:mvdr");
+    assert_eq!(v["sources"].as_array().unwrap().len(), 2, "{v}");
+    assert!(v["ospa"]["total"].as_f64().unwrap() < 0.2, "{v}");
+}
+
+#[test]
+fn eval_reports_every_variant() {
+    let dir = tempdir();
+    let root = dataset(&dir);
+    let v = json(&iasm(&[
+        "eval",
+        "--dataset",
+        arg(&root),
+        "--doas",
+        arg(&root.join("doas.csv")),
+        "--num",
+        "3",
+        "--runs",
+        "4",
+        "--json",
+    ]));
+    let names: Vec<&str> = v["variants"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["variant"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["ca", "ws", "wdp"]);
+    let ca = &v["variants"][0];
+    assert_eq!(ca["runs"].as_array().unwrap().len(), 4);
+    assert!(ca["mean"].as_f64().unwrap() < 0.15, "{v}");
+    // An impossible bound fails with status 1.
+    let o = iasm(&[
+        "eval",
+        "--dataset",
+        arg(&root),
+        "--doas",
+        arg(&root.join("doas.csv")),
+        "--num",
+        "3",
+        "--runs",
+        "2",
+        "--max-mean-ospa",
+        "0.0",
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", show(&o));
+}
+
+#[test]
+fn a_missing_map_image_falls_back_to_the_only_pgm_with_a_warning() {
+    let dir = tempdir();
+    let root = dataset(&dir);
+    let yaml = root.join("map/room.yaml");
+    let text = std::fs::read_to_string(&yaml)
+        .unwrap()
+        .replace("room.pgm", "0201.pgm");
+    std::fs::write(&yaml, text).unwrap();
+    let o = iasm(&[
+        "map",
+        "--dataset",
+        arg(&root),
+        "--doas",
+        arg(&root.join("doas.csv")),
+        "--num",
+        "3",
+    ]);
+    assert!(o.status.success(), "{}", show(&o));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("warning") && err.contains("0201.pgm") && err.contains("room.pgm"),
+        "{err}"
+    );
+}
+
+fn map_with(root: &Path, extra: &[&str]) -> std::process::Output {
+    let mut args = vec!["map", "--dataset", arg(root), "--num", "3"];
+    args.extend_from_slice(extra);
+    iasm(&args)
+}
+
+#[test]
+fn poses_and_doas_of_different_lengths_are_a_clear_error() {
+    let dir = tempdir();
+    let root = dataset(&dir);
+    let doas = std::fs::read_to_string(root.join("doas.csv")).unwrap();
+    let short: String = doas.lines().take(5).map(|l| format!("{l}\n")).collect();
+    std::fs::write(root.join("short.csv"), short).unwrap();
+    let o = map_with(&root, &["--doas", arg(&root.join("short.csv"))]);
+    assert_clear_error(&o, &["5 rows of DoAs", "20 poses", "short.csv"]);
+}
+
+#[test]
+fn a_nan_or_non_numeric_pose_is_a_clear_error() {
+    let dir = tempdir();
+    let root = dataset(&dir);
+    let poses = root.join("pose/poses.csv");
+    let good = std::fs::read_to_string(&poses).unwrap();
+    std::fs::write(&poses, good.replacen("0.3,0,", "0.3,NaN,", 1)).unwrap();
+    let o = map_with(&root, &["--doas", arg(&root.join("doas.csv"))]);
+    assert_clear_error(&o, &["poses.csv", "row 2", "y"]);
+    std::fs::write(&poses, good.replacen("0.3,0,", "0.3,north,", 1)).unwrap();
+    let o = map_with(&root, &["--doas", arg(&root.join("doas.csv"))]);
+    assert_clear_error(&o, &["poses.csv", "row 2, column 2", "north"]);
+}
+
+#[test]
+fn a_map_with_no_known_cell_is_a_clear_error() {
+    let dir = tempdir();
+    let root = dataset(&dir);
+    let mut pgm = b"P5\n160 120\n255\n".to_vec();
+    pgm.extend(std::iter::repeat_n(205u8, 160 * 120));
+    std::fs::write(root.join("map/room.pgm"), pgm).unwrap();
+    let o = map_with(&root, &["--doas", arg(&root.join("doas.csv"))]);
+    assert_clear_error(&o, &["room.yaml", "no known"]);
+}
+
+#[test]
+fn malformed_yaml_and_pgm_are_clear_errors() {
+    let dir = tempdir();
+    let root = dataset(&dir);
+    let yaml = root.join("map/room.yaml");
+    let good = std::fs::read_to_string(&yaml).unwrap();
+    std::fs::write(
+        &yaml,
+        good.replace("resolution: 0.05", "resolution: five cm"),
+    )
+    .unwrap();
+    assert_clear_error(
+        &map_with(&root, &["--doas", arg(&root.join("doas.csv"))]),
+        &["room.yaml", "resolution"],
+    );
+    std::fs::write(
+        &yaml,
+        good.replace("origin: [-1.0, -3.0, 0.0]", "origin: [-1.0, -3.0, 0.5]"),
+    )
+    .unwrap();
+    assert_clear_error(
+        &map_with(&root, &["--doas", arg(&root.join("doas.csv"))]),
+        &["room.yaml", "yaw"],
+    );
+    std::fs::write(&yaml, good).unwrap();
+    std::fs::write(root.join("map/room.pgm"), b"P5\n160 120\n255\nshort").unwrap();
+    assert_clear_error(
+        &map_with(&root, &["--doas", arg(&root.join("doas.csv"))]),
+        &["room.pgm", "bytes"],
+    );
+}
+
+#[test]
+fn a_doa_table_wider_than_n_is_a_clear_error() {
+    let dir = tempdir();
+    let root = dataset(&dir);
+    let o = iasm(&[
+        "map",
+        "--dataset",
+        arg(&root),
+        "--doas",
+        arg(&root.join("doas.csv")),
+        "--num",
+        "2",
+    ]);
+    assert_clear_error(&o, &["DoA row 1", "3 azimuths", "N = 2"]);
+}
