@@ -76,6 +76,20 @@ pub struct InputArgs {
     pub iasm_config: Option<PathBuf>,
 }
 
+/// How `map` and `eval` report: the format and the OSPA metric's parameters.
+#[derive(Debug, Clone, Args)]
+pub struct ReportArgs {
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    pub json: bool,
+    /// OSPA order p.
+    #[arg(long, default_value_t = 1.0)]
+    pub ospa_p: f64,
+    /// OSPA cutoff c (m).
+    #[arg(long, default_value_t = 1.0)]
+    pub ospa_c: f64,
+}
+
 /// `iasm map`.
 #[derive(Debug, Clone, Args)]
 pub struct MapArgs {
@@ -97,15 +111,9 @@ pub struct MapArgs {
     /// Draw the map as a PNG here.
     #[arg(long, value_name = "FILE")]
     pub png: Option<PathBuf>,
-    /// Print JSON instead of a table.
-    #[arg(long)]
-    pub json: bool,
-    /// OSPA order p.
-    #[arg(long, default_value_t = 1.0)]
-    pub ospa_p: f64,
-    /// OSPA cutoff c (m).
-    #[arg(long, default_value_t = 1.0)]
-    pub ospa_c: f64,
+    /// Output and metric.
+    #[command(flatten)]
+    pub report: ReportArgs,
 }
 
 /// `iasm eval`.
@@ -120,15 +128,9 @@ pub struct EvalArgs {
     /// First seed.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// Print JSON instead of a table.
-    #[arg(long)]
-    pub json: bool,
-    /// OSPA order p.
-    #[arg(long, default_value_t = 1.0)]
-    pub ospa_p: f64,
-    /// OSPA cutoff c (m).
-    #[arg(long, default_value_t = 1.0)]
-    pub ospa_c: f64,
+    /// Output and metric.
+    #[command(flatten)]
+    pub report: ReportArgs,
     /// Exit with status 1 if CA's mean OSPA is above this (m).
     #[arg(long, value_name = "M")]
     pub max_mean_ospa: Option<f64>,

@@ -38,14 +38,7 @@ pub struct DemoRow {
 pub fn run_scene(seed: u64) -> Result<Vec<DemoRow>> {
     let fs = 48_000;
     let array = MicArray::default();
-    let waves: Vec<PlaneWave> = SOURCES
-        .iter()
-        .map(|&(azimuth_deg, elevation_deg, signal)| PlaneWave {
-            azimuth_deg,
-            elevation_deg,
-            signal,
-        })
-        .collect();
+    let waves: Vec<PlaneWave> = SOURCES.iter().map(|&s| s.into()).collect();
     let mics = render(
         array.positions(),
         &waves,

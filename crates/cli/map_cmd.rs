@@ -234,9 +234,9 @@ pub fn run_map(a: &MapArgs) -> Result<Outcome> {
     )?;
     let dt = t0.elapsed().as_secs_f64();
     let o = inputs.truth.as_ref().map(|t| OspaReport {
-        p: a.ospa_p,
-        c: a.ospa_c,
-        value: ospa(&result.positions(), t, a.ospa_c, a.ospa_p),
+        p: a.report.ospa_p,
+        c: a.report.ospa_c,
+        value: ospa(&result.positions(), t, a.report.ospa_c, a.report.ospa_p),
     });
     let report = MapReport {
         schema_version: SCHEMA_VERSION,
@@ -265,7 +265,7 @@ pub fn run_map(a: &MapArgs) -> Result<Outcome> {
             inputs.truth.as_deref(),
         )?;
     }
-    if a.json {
+    if a.report.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
         return Ok(Outcome::Success);
     }
@@ -434,18 +434,18 @@ pub fn run_eval(a: &EvalArgs) -> Result<Outcome> {
         &Variant::ALL,
         a.runs,
         a.seed,
-        a.ospa_c,
-        a.ospa_p,
+        a.report.ospa_c,
+        a.report.ospa_p,
     )?;
     let secs = t0.elapsed().as_secs_f64();
-    if a.json {
+    if a.report.json {
         let r = EvalReport {
             schema_version: SCHEMA_VERSION,
             doas: &inputs.doa_source,
             runs: a.runs,
             seed0: a.seed,
-            ospa_p: a.ospa_p,
-            ospa_c: a.ospa_c,
+            ospa_p: a.report.ospa_p,
+            ospa_c: a.report.ospa_c,
             seconds: secs,
             variants: &stats,
         };
@@ -453,7 +453,7 @@ pub fn run_eval(a: &EvalArgs) -> Result<Outcome> {
     } else {
         println!(
             "I-ASM Monte Carlo: {} runs per variant, DoAs from {}, OSPA p = {}, c = {} m ({:.1} s)",
-            a.runs, inputs.doa_source, a.ospa_p, a.ospa_c, secs
+            a.runs, inputs.doa_source, a.report.ospa_p, a.report.ospa_c, secs
         );
         println!(
             "{:<8} {:>10} {:>10} {:>10} {:>10} {:>9}",

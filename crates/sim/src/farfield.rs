@@ -22,6 +22,17 @@ pub struct PlaneWave {
     pub signal: Signal,
 }
 
+impl From<(f64, f64, Signal)> for PlaneWave {
+    /// `(azimuth_deg, elevation_deg, signal)`.
+    fn from((azimuth_deg, elevation_deg, signal): (f64, f64, Signal)) -> Self {
+        Self {
+            azimuth_deg,
+            elevation_deg,
+            signal,
+        }
+    }
+}
+
 /// Delays `x` by `d` samples (any real number, either sign), circularly.
 pub fn fractional_delay(x: &[f64], d: f64) -> Vec<f64> {
     let n = x.len();

@@ -22,7 +22,7 @@ use std::sync::Arc;
 use realfft::num_complex::Complex32;
 
 use crate::SpectrumEstimator;
-use crate::grid::{PairLags, lag_sums, padded};
+use crate::grid::{PairLags, padded};
 use crate::stft::Spectrogram;
 
 /// The GCC-PHAT estimator for one array, grid, band and sample rate.
@@ -50,12 +50,6 @@ impl SpectrumEstimator for GccPhat {
             l.n_bins,
             "spectrogram band differs from the plan"
         );
-        out.fill(0.0);
-        // Padded bins stay 0 and so add nothing.
-        let mut gr = vec![0.0f32; l.n_bins];
-        let mut gi = vec![0.0f32; l.n_bins];
-        let mut lagfn = Vec::new();
-        let mut segments = Vec::new();
         let norm = 1.0 / (frames.len() * nb * l.pairs.len()) as f32;
         // PHAT factorises: X_i X_j^* / |X_i X_j^*| = (X_i / |X_i|) (X_j / |X_j|)^*, so each
         // channel's bins are normalised once per frame instead of once per pair.
@@ -73,7 +67,8 @@ impl SpectrumEstimator for GccPhat {
                 }
             }
         }
-        for (p, &(i, j)) in l.pairs.iter().enumerate() {
+        // Bins past the band stay 0 and so add nothing.
+        let coefficients = |_, (i, j), gr: &mut [f32], gi: &mut [f32], _: &mut [f32]| {
             gr.fill(0.0);
             gi.fill(0.0);
             for k in 0..frames.len() {
@@ -85,13 +80,7 @@ impl SpectrumEstimator for GccPhat {
                     gi[b] += x.im;
                 }
             }
-            let (cos, sin) = l.rows(p);
-            lagfn.resize(2 * l.half[p] + 1, 0.0);
-            lag_sums(&gr, &gi, &gr, cos, sin, &mut lagfn, |gr, gi, _, c, s| {
-                gr * c - gi * s
-            });
-            lagfn.iter_mut().for_each(|v| *v *= norm);
-            l.accumulate(p, &lagfn, &mut segments, out);
-        }
+        };
+        l.pairwise_spectrum(out, norm, coefficients, |gr, gi, _, c, s| gr * c - gi * s);
     }
 }

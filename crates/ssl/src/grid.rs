@@ -187,18 +187,42 @@ impl PairLags {
         (&self.cos[r.clone()], &self.sin[r])
     }
 
+    /// Writes the direction spectrum `sum over pairs of scale * L_p(tau_p(d))` into `out`,
+    /// where each pair's lag function is `L_p(tau) = sum_b kernel(x_b, y_b, z_b, cos w_b tau,
+    /// sin w_b tau)` and `coefficients(pair, (i, j), x, y, z)` fills the pair's per-bin
+    /// coefficients (the padded tail of `x`, `y`, `z` must make the kernel 0). This is the
+    /// shape every pairwise method shares; a method only says what its bins hold and how a
+    /// bin votes at a lag.
+    pub fn pairwise_spectrum<F, K>(
+        &self,
+        out: &mut [f32],
+        scale: f32,
+        mut coefficients: F,
+        kernel: K,
+    ) where
+        F: FnMut(usize, (usize, usize), &mut [f32], &mut [f32], &mut [f32]),
+        K: Fn(f32, f32, f32, f32, f32) -> f32 + Copy,
+    {
+        out.fill(0.0);
+        let zeros = vec![0.0f32; self.n_bins];
+        let (mut x, mut y, mut z) = (zeros.clone(), zeros.clone(), zeros);
+        let (mut lagfn, mut segments) = (Vec::new(), Vec::new());
+        for (p, &pair) in self.pairs.iter().enumerate() {
+            coefficients(p, pair, &mut x, &mut y, &mut z);
+            let (cos, sin) = self.rows(p);
+            lagfn.resize(2 * self.half[p] + 1, 0.0);
+            lag_sums(&x, &y, &z, cos, sin, &mut lagfn, kernel);
+            lagfn.iter_mut().for_each(|v| *v *= scale);
+            self.accumulate(p, &lagfn, &mut segments, out);
+        }
+    }
+
     /// Adds pair `p`'s lag function, read off at every direction, to `out`.
     ///
     /// `segments` is scratch: it is refilled with each lag's value and slope, so that each
     /// direction costs one load and one multiply-add (this loop runs pairs x directions x
     /// blocks times, the most of any in the crate).
-    pub fn accumulate(
-        &self,
-        p: usize,
-        lagfn: &[f32],
-        segments: &mut Vec<[f32; 2]>,
-        out: &mut [f32],
-    ) {
+    fn accumulate(&self, p: usize, lagfn: &[f32], segments: &mut Vec<[f32; 2]>, out: &mut [f32]) {
         segments.clear();
         segments.extend(lagfn.windows(2).map(|w| [w[0], w[1] - w[0]]));
         let look = &self.lookup[p * self.n_dirs..(p + 1) * self.n_dirs];
@@ -225,7 +249,7 @@ pub(crate) fn padded(n: usize) -> usize {
 /// sum (float addition is not associative, so it will not reorder one accumulator); on
 /// x86-64 processors with AVX2 and FMA the same code is compiled a second time for them
 /// and chosen at run time.
-pub(crate) fn lag_sums<K>(
+fn lag_sums<K>(
     x: &[f32],
     y: &[f32],
     z: &[f32],

@@ -28,7 +28,7 @@ use std::sync::Arc;
 use realfft::num_complex::Complex32;
 
 use crate::SpectrumEstimator;
-use crate::grid::{PairLags, lag_sums, padded};
+use crate::grid::{PairLags, padded};
 use crate::stft::Spectrogram;
 
 /// The pairwise MVDR estimator for one array, grid, band and sample rate.
@@ -82,7 +82,6 @@ impl SpectrumEstimator for Mvdr {
             l.n_bins,
             "spectrogram band differs from the plan"
         );
-        out.fill(0.0);
         let n_ch = stft.num_channels();
         // Channel powers, summed over frames then smoothed over bins.
         let mut power = vec![vec![0.0f32; nb]; n_ch];
@@ -96,20 +95,11 @@ impl SpectrumEstimator for Mvdr {
             box_smooth(&tmp, self.smoothing, pw);
             tmp.fill(0.0);
         }
-        let eps = self.loading;
-        let a = 1.0 + eps;
+        let a = 1.0 + self.loading;
         let mut cross = vec![Complex32::default(); nb];
         let mut smooth = vec![Complex32::default(); nb];
-        // Padded bins keep num = 0 and so add nothing.
-        let (mut gr, mut gi, mut num) = (
-            vec![0.0f32; l.n_bins],
-            vec![0.0f32; l.n_bins],
-            vec![0.0f32; l.n_bins],
-        );
-        let mut lagfn = Vec::new();
-        let mut segments = Vec::new();
-        let norm = 1.0 / (nb * l.pairs.len()) as f32;
-        for (p, &(i, j)) in l.pairs.iter().enumerate() {
+        // Bins past the band keep num = 0 and so add nothing.
+        let coefficients = |_, (i, j), gr: &mut [f32], gi: &mut [f32], num: &mut [f32]| {
             cross.fill(Complex32::default());
             for f in frames.clone() {
                 let (xi, xj) = (stft.frame(f, i), stft.frame(f, j));
@@ -129,14 +119,11 @@ impl SpectrumEstimator for Mvdr {
                 gi[b] = g.im;
                 num[b] = 0.5 * (a * a - g.norm_sqr());
             }
-            let (cos, sin) = l.rows(p);
-            lagfn.resize(2 * l.half[p] + 1, 0.0);
-            lag_sums(&gr, &gi, &num, cos, sin, &mut lagfn, |gr, gi, num, c, s| {
-                num / (a - (gr * c - gi * s))
-            });
-            lagfn.iter_mut().for_each(|v| *v *= norm);
-            l.accumulate(p, &lagfn, &mut segments, out);
-        }
+        };
+        let norm = 1.0 / (nb * l.pairs.len()) as f32;
+        l.pairwise_spectrum(out, norm, coefficients, |gr, gi, num, c, s| {
+            num / (a - (gr * c - gi * s))
+        });
     }
 }
 

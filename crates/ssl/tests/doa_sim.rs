@@ -20,14 +20,7 @@ fn render(
     snr_db: f64,
     seed: u64,
 ) -> Audio {
-    let waves: Vec<PlaneWave> = sources
-        .iter()
-        .map(|&(azimuth_deg, elevation_deg, signal)| PlaneWave {
-            azimuth_deg,
-            elevation_deg,
-            signal,
-        })
-        .collect();
+    let waves: Vec<PlaneWave> = sources.iter().map(|&s| s.into()).collect();
     let n = (seconds * f64::from(FS)) as usize;
     let mics = farfield::render(array.positions(), &waves, FS, n, C, Some(snr_db), seed);
     let channels = mics
