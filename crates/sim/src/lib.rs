@@ -6,8 +6,12 @@
 //! - [`farfield`]: plane waves from known directions, delayed exactly (fractional delays
 //!   applied as a phase ramp) to each microphone: the analytic reference for DoA tests.
 //!
-//! The image-source room simulator (Allen & Berkley, 1979) that renders a robot moving
-//! through a reverberant room is the next layer of this crate (issue 4).
+//! - [`room`], [`ism`]: shoebox rooms and their impulse responses by the image-source
+//!   method (Allen & Berkley, 1979), with fractional-delay arrivals and Schroeder's
+//!   reverberation-time estimate.
+//!
+//! Rendering a robot moving through a room with many sources, and scene files, are the
+//! next layer of this crate (issue 4).
 //!
 //! # Example
 //!
@@ -25,5 +29,11 @@
 //! SI units; azimuth counter-clockwise from `x`, elevation above the `xy` plane, degrees at
 //! the API; audio channel-major (`audio[mic][sample]`).
 
+pub mod error;
 pub mod farfield;
+pub mod ism;
+pub mod room;
 pub mod signal;
+
+pub use error::SimError;
+pub use room::Room;
