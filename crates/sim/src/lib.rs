@@ -10,8 +10,11 @@
 //!   method (Allen & Berkley, 1979), with fractional-delay arrivals and Schroeder's
 //!   reverberation-time estimate.
 //!
-//! Rendering a robot moving through a room with many sources, and scene files, are the
-//! next layer of this crate (issue 4).
+//! - [`render`]: what each microphone hears of sources in a room (FFT convolution with the
+//!   image-source responses).
+//!
+//! Scenes (a robot moving through a room with many sources, from a TOML file) are the next
+//! layer of this crate (issue 4).
 //!
 //! # Example
 //!
@@ -32,6 +35,7 @@
 pub mod error;
 pub mod farfield;
 pub mod ism;
+pub mod render;
 pub mod room;
 pub mod signal;
 
