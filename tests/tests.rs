@@ -2,4 +2,5 @@
 
 mod cli;
 mod map;
+mod simulate;
 mod util;

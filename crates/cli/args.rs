@@ -27,6 +27,14 @@ pub enum Command {
     },
     /// Directions of arrival from multichannel WAV files (or a whole data set).
     Ssl(SslArgs),
+    /// Render a scene file (room, sources, array, trajectory) into a data set folder.
+    Simulate {
+        /// The scene (TOML).
+        scene: PathBuf,
+        /// The data set folder to write.
+        #[arg(long, value_name = "DIR")]
+        out: PathBuf,
+    },
     /// Map the sound sources with I-ASM from DoA tables or raw audio.
     Map(MapArgs),
     /// The paper's Monte Carlo evaluation: OSPA of CA, WS and WDP over many seeds.

@@ -4,6 +4,7 @@
 //! - [`ssl_cmd`]: `iasm ssl`, DoAs from WAV files or a data set, and their score.
 //! - [`map_cmd`]: `iasm map` and `iasm eval`, I-ASM maps and their Monte Carlo OSPA.
 //! - [`render`]: the map picture.
+//! - [`simulate`]: `iasm simulate`, a scene file rendered into a data set.
 //! - [`dataset`]: the published data-set layout, tables and natural file order.
 //! - [`score`]: the DoA score against known sources.
 
@@ -13,6 +14,7 @@ pub mod demo;
 pub mod map_cmd;
 pub mod render;
 pub mod score;
+pub mod simulate;
 pub mod ssl_cmd;
 
 /// How a command ended when it did not fail outright.
@@ -33,6 +35,7 @@ pub fn run(cli: &args::Cli) -> anyhow::Result<Outcome> {
         args::Command::Ssl(a) => ssl_cmd::run(a),
         args::Command::Demo { seed } => demo::run(*seed),
         args::Command::Map(a) => map_cmd::run_map(a),
+        args::Command::Simulate { scene, out } => simulate::run(scene, out),
         args::Command::Eval(a) => {
             if let Some(t) = a.threads {
                 // Only the first call in a process can size the global pool.

@@ -13,8 +13,8 @@
 //! - [`render`]: what each microphone hears of sources in a room (FFT convolution with the
 //!   image-source responses).
 //!
-//! Scenes (a robot moving through a room with many sources, from a TOML file) are the next
-//! layer of this crate (issue 4).
+//! - [`scene`]: a robot carrying an array through a room with sources, from a TOML file,
+//!   rendered stop by stop.
 //!
 //! # Example
 //!
@@ -37,6 +37,7 @@ pub mod farfield;
 pub mod ism;
 pub mod render;
 pub mod room;
+pub mod scene;
 pub mod signal;
 
 pub use error::SimError;

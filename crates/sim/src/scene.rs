@@ -1,0 +1,534 @@
+//! Scenes: a shoebox room with sources, and a robot carrying an array along a trajectory.
+//! One TOML file describes a scene; [`PreparedScene::render_stop`] renders what the array hears at
+//! one stop.
+//!
+//! ```toml
+//! name = "two_talkers"
+//! seed = 7
+//! fs = 16000            # Hz
+//! clip_s = 1.0          # seconds recorded at each stop
+//! snr_db = 30.0         # sensor noise against the mean signal power at the microphones
+//! [room]
+//! dims = [6.0, 4.0, 3.0]
+//! rt60 = 0.3            # or absorption = [x0, x1, y0, y1, floor, ceiling]
+//! [array]
+//! preset = "iasm6"      # resolved by the application; or positions = [[x, y, z], ...]
+//! height = 0.6          # height of the array frame's origin (m)
+//! [[sources]]
+//! pos = [1.5, 3.0, 1.2]
+//! signal = "voiced"     # white_noise | pink_noise | speech_shaped | voiced
+//! f0 = 140.0
+//! level_db = 65.0       # dB SPL at 1 m
+//! [trajectory]
+//! waypoints = [[1.0, 1.0], [5.0, 1.0]]
+//! spacing = 0.5         # or poses = [[x, y, theta_deg], ...]
+//! ```
+
+use rand::{Rng, SeedableRng, rngs::StdRng};
+use rand_distr::StandardNormal;
+use rustfft::{FftPlanner, num_complex::Complex64};
+use serde::Deserialize;
+
+use crate::error::SimError;
+use crate::render::{RenderConfig, RoomSource, render};
+use crate::room::Room;
+use crate::signal::{Signal, generate};
+
+fn invalid(field: impl Into<String>, message: impl Into<String>) -> SimError {
+    SimError::Invalid {
+        field: field.into(),
+        message: message.into(),
+    }
+}
+
+/// A scene as written in its TOML file.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// Name used in reports. Default: empty.
+    #[serde(default)]
+    pub name: String,
+    /// Seed of every random signal. Default: 0.
+    #[serde(default)]
+    pub seed: u64,
+    /// Sample rate (Hz). Default: 16000.
+    #[serde(default = "default_fs")]
+    pub fs: u32,
+    /// Seconds recorded at each stop. Default: 1.
+    #[serde(default = "default_clip")]
+    pub clip_s: f64,
+    /// Speed of sound (m/s). Default: 343.
+    #[serde(default = "default_c")]
+    pub speed_of_sound: f64,
+    /// Sensor noise (dB below the mean signal power at the microphones). Default: none.
+    #[serde(default)]
+    pub snr_db: Option<f64>,
+    /// At most this many reflections per image. Default: every image within the response.
+    #[serde(default)]
+    pub max_order: Option<u32>,
+    /// Response length (s). Default: the room's RT60 target, at most 0.5 s.
+    #[serde(default)]
+    pub rir_s: Option<f64>,
+    /// The room.
+    pub room: RoomSpec,
+    /// The array.
+    pub array: ArraySpec,
+    /// The sources.
+    pub sources: Vec<SourceSpec>,
+    /// The robot's stops.
+    pub trajectory: TrajectorySpec,
+    /// Box obstacles (they appear in the occupancy map; sound passes them).
+    #[serde(default)]
+    pub obstacles: Vec<Obstacle>,
+}
+
+fn default_fs() -> u32 {
+    16_000
+}
+fn default_clip() -> f64 {
+    1.0
+}
+fn default_c() -> f64 {
+    343.0
+}
+
+/// The room of a scene.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RoomSpec {
+    /// Dimensions (m).
+    pub dims: [f64; 3],
+    /// Target reverberation time (s); exclusive with `absorption`.
+    pub rt60: Option<f64>,
+    /// Per-wall energy absorption (x0, x1, y0, y1, floor, ceiling).
+    pub absorption: Option<[f64; 6]>,
+}
+
+/// The array of a scene.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ArraySpec {
+    /// A preset name, resolved by the application.
+    pub preset: Option<String>,
+    /// Microphone positions in the array frame (m).
+    pub positions: Option<Vec<[f64; 3]>>,
+    /// Height of the array frame's origin above the floor (m).
+    pub height: f64,
+}
+
+/// One source of a scene.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SourceSpec {
+    /// Position (m).
+    pub pos: [f64; 3],
+    /// `white_noise`, `pink_noise`, `speech_shaped` or `voiced`. Default: `speech_shaped`.
+    #[serde(default = "default_signal")]
+    pub signal: String,
+    /// Fundamental (Hz) of a voiced source. Default: 140.
+    #[serde(default = "default_f0")]
+    pub f0: f64,
+    /// Level (dB SPL at 1 m). Default: 65.
+    #[serde(default = "default_level")]
+    pub level_db: f64,
+}
+
+fn default_signal() -> String {
+    "speech_shaped".into()
+}
+fn default_f0() -> f64 {
+    140.0
+}
+fn default_level() -> f64 {
+    65.0
+}
+
+/// The robot's stops: explicit poses, or waypoints walked at a spacing.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TrajectorySpec {
+    /// `[x, y, theta_deg]` per stop.
+    pub poses: Option<Vec<[f64; 3]>>,
+    /// Corners of a polyline.
+    pub waypoints: Option<Vec<[f64; 2]>>,
+    /// Distance between stops along the polyline (m).
+    pub spacing: Option<f64>,
+}
+
+/// An axis-aligned box obstacle (m).
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Obstacle {
+    /// Lower corner (x, y).
+    pub min: [f64; 2],
+    /// Upper corner (x, y).
+    pub max: [f64; 2],
+}
+
+/// A checked scene, ready to render.
+#[derive(Clone, Debug)]
+pub struct PreparedScene {
+    /// The scene as written.
+    pub scene: Scene,
+    /// The room.
+    pub room: Room,
+    /// Microphone positions in the array frame (m).
+    pub mics: Vec<[f64; 3]>,
+    /// Stops: x, y (m), heading (rad).
+    pub stops: Vec<[f64; 3]>,
+    /// Each source's signal (pressure at 1 m, Pa).
+    pub signals: Vec<Vec<f64>>,
+}
+
+impl Scene {
+    /// Parses a scene.
+    ///
+    /// # Errors
+    /// The TOML parser's message (unknown keys are refused, and named).
+    pub fn from_toml(text: &str) -> Result<Self, SimError> {
+        toml::from_str(text).map_err(|e| invalid("scene", e.message()))
+    }
+
+    /// Checks the scene and precomputes the room, stops and signals. `preset` resolves
+    /// `array.preset` to positions.
+    ///
+    /// # Errors
+    /// [`SimError::Invalid`] naming the field: a source, stop or microphone outside the
+    /// room, an absorption outside [0, 1], an RT60 the room cannot have, a bad trajectory.
+    pub fn prepare(
+        self,
+        preset: impl Fn(&str) -> Option<Vec<[f64; 3]>>,
+    ) -> Result<PreparedScene, SimError> {
+        if self.fs < 1000 {
+            return Err(invalid("fs", format!("{} Hz is too low", self.fs)));
+        }
+        if !(self.clip_s.is_finite() && self.clip_s > 0.0) {
+            return Err(invalid(
+                "clip_s",
+                format!("{} s is not a positive duration", self.clip_s),
+            ));
+        }
+        if !(self.speed_of_sound.is_finite() && self.speed_of_sound > 0.0) {
+            return Err(invalid(
+                "speed_of_sound",
+                format!("{} m/s is not positive", self.speed_of_sound),
+            ));
+        }
+        let r = &self.room;
+        let room = match (r.rt60, r.absorption) {
+            (Some(t), None) => Room::with_rt60(r.dims, t, self.speed_of_sound)?,
+            (None, Some(a)) => Room::new(r.dims, a)?,
+            (None, None) => return Err(invalid("room", "give rt60 or absorption")),
+            (Some(_), Some(_)) => return Err(invalid("room", "give rt60 or absorption, not both")),
+        };
+        let mics = match (&self.array.preset, &self.array.positions) {
+            (Some(p), None) => {
+                preset(p).ok_or_else(|| invalid("array.preset", format!("unknown array {p:?}")))?
+            }
+            (None, Some(v)) if v.len() >= 2 => v.clone(),
+            (None, Some(_)) => {
+                return Err(invalid(
+                    "array.positions",
+                    "an array needs at least two microphones",
+                ));
+            }
+            _ => return Err(invalid("array", "give preset or positions, not both")),
+        };
+        for (i, s) in self.sources.iter().enumerate() {
+            if !room.contains(s.pos) {
+                return Err(invalid(
+                    format!("sources[{i}].pos"),
+                    format!("{:?} is outside the room {:?}", s.pos, r.dims),
+                ));
+            }
+        }
+        if self.sources.is_empty() {
+            return Err(invalid("sources", "a scene needs at least one source"));
+        }
+        let stops = self.stops()?;
+        for (k, st) in stops.iter().enumerate() {
+            for (m, p) in mics.iter().enumerate() {
+                let w = mic_world(*st, self.array.height, *p);
+                if !room.contains(w) {
+                    return Err(invalid(
+                        format!("trajectory stop {k}"),
+                        format!("microphone {m} at {w:?} is outside the room"),
+                    ));
+                }
+            }
+        }
+        let n = self.clip_samples();
+        let mut rng = StdRng::seed_from_u64(self.seed);
+        let signals = self
+            .sources
+            .iter()
+            .enumerate()
+            .map(|(i, s)| {
+                let unit = match s.signal.as_str() {
+                    "white_noise" => generate(Signal::Noise, n, self.fs, &mut rng),
+                    "voiced" => generate(Signal::Harmonic(s.f0), n, self.fs, &mut rng),
+                    "pink_noise" => shaped_noise(n, self.fs, &mut rng, |f| 1.0 / f.max(20.0).sqrt()),
+                    // Long-term speech spectrum: flat to 500 Hz, then -6 dB per octave.
+                    "speech_shaped" => shaped_noise(n, self.fs, &mut rng, |f| if f < 100.0 { f / 100.0 } else { (500.0 / f.max(500.0)).max(0.0) }),
+                    other => {
+                        return Err(invalid(format!("sources[{i}].signal"), format!("unknown signal {other:?} (white_noise, pink_noise, speech_shaped, voiced)")));
+                    }
+                };
+                // 94 dB SPL is 1 Pa RMS.
+                let rms = 10f64.powf((s.level_db - 94.0) / 20.0);
+                Ok(unit.into_iter().map(|v| v * rms).collect())
+            })
+            .collect::<Result<Vec<Vec<f64>>, SimError>>()?;
+        Ok(PreparedScene {
+            scene: self,
+            room,
+            mics,
+            stops,
+            signals,
+        })
+    }
+
+    fn clip_samples(&self) -> usize {
+        (self.clip_s * f64::from(self.fs)).round() as usize
+    }
+
+    fn stops(&self) -> Result<Vec<[f64; 3]>, SimError> {
+        let t = &self.trajectory;
+        match (&t.poses, &t.waypoints) {
+            (Some(p), None) if !p.is_empty() => {
+                Ok(p.iter().map(|q| [q[0], q[1], q[2].to_radians()]).collect())
+            }
+            (None, Some(w)) if w.len() >= 2 => {
+                let spacing = t
+                    .spacing
+                    .ok_or_else(|| invalid("trajectory.spacing", "waypoints need a spacing"))?;
+                if !(spacing.is_finite() && spacing > 0.0) {
+                    return Err(invalid(
+                        "trajectory.spacing",
+                        format!("{spacing} m is not positive"),
+                    ));
+                }
+                let mut out = Vec::new();
+                let mut carry = 0.0; // distance along the current segment to the next stop
+                for seg in w.windows(2) {
+                    let (a, b) = (seg[0], seg[1]);
+                    let len = (b[0] - a[0]).hypot(b[1] - a[1]);
+                    let heading = (b[1] - a[1]).atan2(b[0] - a[0]);
+                    let mut s = carry;
+                    while s <= len + 1e-9 {
+                        let f = if len > 0.0 { s / len } else { 0.0 };
+                        out.push([a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1]), heading]);
+                        s += spacing;
+                    }
+                    carry = s - len;
+                }
+                Ok(out)
+            }
+            _ => Err(invalid(
+                "trajectory",
+                "give poses, or at least two waypoints and a spacing",
+            )),
+        }
+    }
+}
+
+/// World position of array-frame point `p` with the robot at `stop` (x, y, heading).
+pub fn mic_world(stop: [f64; 3], height: f64, p: [f64; 3]) -> [f64; 3] {
+    let (s, c) = stop[2].sin_cos();
+    [
+        stop[0] + c * p[0] - s * p[1],
+        stop[1] + s * p[0] + c * p[1],
+        height + p[2],
+    ]
+}
+
+/// Unit-power noise with amplitude spectrum `shape(f)`.
+fn shaped_noise(n: usize, fs: u32, rng: &mut StdRng, shape: impl Fn(f64) -> f64) -> Vec<f64> {
+    let mut b: Vec<Complex64> = (0..n)
+        .map(|_| Complex64::new(rng.sample(StandardNormal), 0.0))
+        .collect();
+    let mut planner = FftPlanner::<f64>::new();
+    planner.plan_fft_forward(n).process(&mut b);
+    for (k, v) in b.iter_mut().enumerate() {
+        let f = k.min(n - k) as f64 * f64::from(fs) / n as f64;
+        *v *= shape(f);
+    }
+    planner.plan_fft_inverse(n).process(&mut b);
+    let x: Vec<f64> = b.iter().map(|v| v.re).collect();
+    let p = (x.iter().map(|v| v * v).sum::<f64>() / n as f64)
+        .sqrt()
+        .max(1e-300);
+    x.into_iter().map(|v| v / p).collect()
+}
+
+impl PreparedScene {
+    /// Samples per stop.
+    pub fn clip_samples(&self) -> usize {
+        self.scene.clip_samples()
+    }
+
+    /// What the array hears at stop `k` (channel-major, Pa), with sensor noise seeded by the
+    /// scene's seed and `k` (so stops can be rendered in any order, in parallel).
+    ///
+    /// # Panics
+    /// If `k` is not a stop.
+    pub fn render_stop(&self, k: usize) -> Vec<Vec<f64>> {
+        let sc = &self.scene;
+        let mics: Vec<[f64; 3]> = self
+            .mics
+            .iter()
+            .map(|&p| mic_world(self.stops[k], sc.array.height, p))
+            .collect();
+        let sources: Vec<RoomSource> = sc
+            .sources
+            .iter()
+            .zip(&self.signals)
+            .map(|(s, x)| RoomSource {
+                pos: s.pos,
+                signal: x.clone(),
+            })
+            .collect();
+        let rir_s = sc
+            .rir_s
+            .unwrap_or_else(|| sc.room.rt60.unwrap_or(0.3).min(0.5));
+        let cfg = RenderConfig {
+            fs: f64::from(sc.fs),
+            speed_of_sound: sc.speed_of_sound,
+            rir_len: (rir_s * f64::from(sc.fs)) as usize,
+            max_order: sc.max_order,
+        };
+        let mut out = render(&self.room, &sources, &mics, self.clip_samples(), &cfg);
+        if let Some(snr) = sc.snr_db {
+            let p = out.iter().flatten().map(|v| v * v).sum::<f64>()
+                / (out.len() * out[0].len()) as f64;
+            let sd = p.sqrt() * 10f64.powf(-snr / 20.0);
+            let mut rng = StdRng::seed_from_u64(
+                sc.seed ^ (0x9E37_79B9_7F4A_7C15u64.wrapping_mul(k as u64 + 1)),
+            );
+            for ch in &mut out {
+                for v in ch.iter_mut() {
+                    *v += sd * rng.sample::<f64, _>(StandardNormal);
+                }
+            }
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SCENE: &str = r#"
+seed = 3
+fs = 8000
+clip_s = 0.2
+[room]
+dims = [6.0, 4.0, 3.0]
+absorption = [0.5, 0.5, 0.5, 0.5, 0.5, 0.5]
+[array]
+positions = [[0.05, 0.0, 0.0], [-0.05, 0.0, 0.0]]
+height = 1.0
+[[sources]]
+pos = [1.5, 3.0, 1.2]
+[trajectory]
+waypoints = [[1.0, 1.0], [3.0, 1.0], [3.0, 2.0]]
+spacing = 0.5
+"#;
+
+    fn two_mics(_: &str) -> Option<Vec<[f64; 3]>> {
+        None
+    }
+
+    #[test]
+    fn waypoints_are_walked_at_the_spacing_with_their_heading() {
+        let p = Scene::from_toml(SCENE).unwrap().prepare(two_mics).unwrap();
+        let xs: Vec<[f64; 2]> = p.stops.iter().map(|s| [s[0], s[1]]).collect();
+        assert_eq!(
+            xs,
+            vec![
+                [1.0, 1.0],
+                [1.5, 1.0],
+                [2.0, 1.0],
+                [2.5, 1.0],
+                [3.0, 1.0],
+                [3.0, 1.5],
+                [3.0, 2.0]
+            ]
+        );
+        assert_eq!(p.stops[0][2], 0.0);
+        approx::assert_abs_diff_eq!(p.stops[6][2], std::f64::consts::FRAC_PI_2);
+    }
+
+    #[test]
+    fn the_same_seed_gives_the_same_audio() {
+        let a = Scene::from_toml(SCENE)
+            .unwrap()
+            .prepare(two_mics)
+            .unwrap()
+            .render_stop(2);
+        let b = Scene::from_toml(SCENE)
+            .unwrap()
+            .prepare(two_mics)
+            .unwrap()
+            .render_stop(2);
+        assert_eq!(a, b);
+        assert_eq!((a.len(), a[0].len()), (2, 1600));
+    }
+
+    #[test]
+    fn the_array_turns_with_the_robot() {
+        // Heading 90 degrees: the array's +x microphone points along world +y.
+        let w = mic_world(
+            [1.0, 2.0, std::f64::consts::FRAC_PI_2],
+            0.5,
+            [0.1, 0.0, 0.2],
+        );
+        approx::assert_abs_diff_eq!(w[0], 1.0, epsilon = 1e-12);
+        approx::assert_abs_diff_eq!(w[1], 2.1, epsilon = 1e-12);
+        approx::assert_abs_diff_eq!(w[2], 0.7, epsilon = 1e-12);
+    }
+
+    #[test]
+    fn bad_scenes_name_the_field() {
+        let e = Scene::from_toml(&SCENE.replace("seed = 3", "seed = 3\ncolour = 1"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("colour"), "{e}");
+        let e = Scene::from_toml(&SCENE.replace("pos = [1.5, 3.0, 1.2]", "pos = [1.5, 9.0, 1.2]"))
+            .unwrap()
+            .prepare(two_mics)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("sources[0].pos") && e.contains("outside the room"),
+            "{e}"
+        );
+        let e = Scene::from_toml(&SCENE.replace(
+            "[0.5, 0.5, 0.5, 0.5, 0.5, 0.5]",
+            "[0.5, 0.5, 1.5, 0.5, 0.5, 0.5]",
+        ))
+        .unwrap()
+        .prepare(two_mics)
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("absorption[2]"), "{e}");
+        let e = Scene::from_toml(
+            &SCENE.replace("absorption = [0.5, 0.5, 0.5, 0.5, 0.5, 0.5]", "rt60 = 0.05"),
+        )
+        .unwrap()
+        .prepare(two_mics)
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("room.rt60"), "{e}");
+        let e = Scene::from_toml(&SCENE.replace("height = 1.0", "height = 3.5"))
+            .unwrap()
+            .prepare(two_mics)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("trajectory stop 0") && e.contains("outside the room"),
+            "{e}"
+        );
+    }
+}

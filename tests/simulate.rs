@@ -1,0 +1,104 @@
+//! `iasm simulate` through the binary: a scene file becomes a data set that the mapper
+//! reads like real recordings.
+
+use crate::util::*;
+
+const SMALL: &str = r#"
+seed = 5
+fs = 16000
+clip_s = 0.2
+[room]
+dims = [5.0, 4.0, 3.0]
+absorption = [0.6, 0.6, 0.6, 0.6, 0.6, 0.6]
+[array]
+preset = "iasm6"
+height = 0.8
+[[sources]]
+pos = [1.0, 3.0, 1.0]
+[trajectory]
+poses = [[1.0, 1.0, 0.0], [2.0, 1.0, 30.0], [3.0, 1.2, 60.0]]
+"#;
+
+#[test]
+fn a_simulated_room_is_mapped_back_to_its_sources() {
+    let dir = tempdir();
+    let out = path(&dir, "sim");
+    let scene =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/rooms/two_talkers.toml");
+    let o = iasm(&["simulate", arg(&scene), "--out", arg(&out)]);
+    assert!(o.status.success(), "{}", show(&o));
+    let o = iasm(&["map", "--dataset", arg(&out), "--num", "2", "--json"]);
+    assert!(o.status.success(), "{}", show(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["sources"].as_array().unwrap().len(), 2, "{v}");
+    // The truth is (2.0, 4.0) and (4.5, 1.0).
+    assert!(v["ospa"]["total"].as_f64().unwrap() < 0.2, "{v}");
+}
+
+#[test]
+fn the_same_scene_gives_the_same_bytes() {
+    let dir = tempdir();
+    let scene = path(&dir, "small.toml");
+    std::fs::write(&scene, SMALL).unwrap();
+    let (a, b) = (path(&dir, "a"), path(&dir, "b"));
+    for out in [&a, &b] {
+        let o = iasm(&["simulate", arg(&scene), "--out", arg(out)]);
+        assert!(o.status.success(), "{}", show(&o));
+    }
+    for f in [
+        "audio/sub01.wav",
+        "audio/sub03.wav",
+        "pose/poses.csv",
+        "map/map.pgm",
+        "src_gt.csv",
+    ] {
+        assert_eq!(
+            std::fs::read(a.join(f)).unwrap(),
+            std::fs::read(b.join(f)).unwrap(),
+            "{f}"
+        );
+    }
+    let audio = ssl::read_wav(&a.join("audio/sub02.wav")).unwrap();
+    assert_eq!(
+        (
+            audio.num_channels(),
+            audio.num_samples(),
+            audio.sample_rate()
+        ),
+        (6, 3200, 16000)
+    );
+}
+
+#[test]
+fn bad_scenes_are_clear_errors() {
+    let dir = tempdir();
+    let scene = path(&dir, "bad.toml");
+    let out = path(&dir, "o");
+    for (edit, needles) in [
+        (
+            SMALL.replace("seed = 5", "seed = 5\nspeed = 1"),
+            vec!["bad.toml", "speed"],
+        ),
+        (
+            SMALL.replace("pos = [1.0, 3.0, 1.0]", "pos = [1.0, 5.0, 1.0]"),
+            vec!["sources[0].pos", "outside the room"],
+        ),
+        (
+            SMALL.replace(
+                "[0.6, 0.6, 0.6, 0.6, 0.6, 0.6]",
+                "[0.6, 0.6, 0.6, 0.6, 0.6, -0.1]",
+            ),
+            vec!["absorption[5]", "outside [0, 1]"],
+        ),
+        (
+            SMALL.replace("absorption = [0.6, 0.6, 0.6, 0.6, 0.6, 0.6]", "rt60 = 0.01"),
+            vec!["room.rt60", "shorter than"],
+        ),
+    ] {
+        std::fs::write(&scene, edit).unwrap();
+        assert_clear_error(
+            &iasm(&["simulate", arg(&scene), "--out", arg(&out)]),
+            &needles,
+        );
+    }
+}
