@@ -91,7 +91,9 @@ pub fn image_sources(
     out
 }
 
-/// `sinc(x) * hann` at offset `x` (samples) from the centre of the 81-tap filter.
+/// `sinc(x) * hann` at offset `x` (samples) from the centre of the 81-tap filter: the
+/// oracle of [`add_impulse`]'s recurrence.
+#[cfg(test)]
 fn windowed_sinc(x: f64) -> f64 {
     if x.abs() >= SINC_HALF as f64 + 1.0 {
         return 0.0;
@@ -106,11 +108,34 @@ fn windowed_sinc(x: f64) -> f64 {
 }
 
 /// Adds a band-limited impulse of amplitude `amp` at fractional time `t` (samples) to `h`.
+///
+/// Consecutive taps sit one sample apart, so `sin(pi x)` only changes sign from tap to tap
+/// and the window's cosine advances by a fixed angle: two trigonometric calls per impulse
+/// instead of two per tap (they were 83 % of a room's rendering time).
 pub fn add_impulse(h: &mut [f64], t: f64, amp: f64) {
     let k0 = (t.floor() as i64 - SINC_HALF as i64).max(0);
     let k1 = (t.floor() as i64 + SINC_HALF as i64 + 1).min(h.len() as i64 - 1);
-    for k in k0..=k1 {
-        h[k as usize] += amp * windowed_sinc(k as f64 - t);
+    if k0 > k1 {
+        return;
+    }
+    let pi = std::f64::consts::PI;
+    let x0 = k0 as f64 - t;
+    let mut sin_pix = (pi * x0).sin();
+    let step = pi / (SINC_HALF as f64 + 1.0);
+    let (mut c, mut s) = ((step * x0).cos(), (step * x0).sin());
+    let (cs, ss) = (step.cos(), step.sin());
+    for (j, k) in (k0..=k1).enumerate() {
+        let x = x0 + j as f64;
+        if x.abs() < SINC_HALF as f64 + 1.0 {
+            let sinc = if x.abs() < 1e-12 {
+                1.0
+            } else {
+                sin_pix / (pi * x)
+            };
+            h[k as usize] += amp * sinc * (0.5 + 0.5 * c);
+        }
+        sin_pix = -sin_pix;
+        (c, s) = (c * cs - s * ss, s * cs + c * ss);
     }
 }
 
@@ -294,6 +319,17 @@ mod tests {
         ];
         want.sort_by(|a, b| a.partial_cmp(b).unwrap());
         assert_eq!(first, want);
+    }
+
+    #[test]
+    fn the_fast_impulse_matches_the_windowed_sinc_tap_by_tap() {
+        for t in [100.0, 100.3, 100.999, 7.5, 3990.2] {
+            let mut h = vec![0.0; 4000];
+            add_impulse(&mut h, t, 0.7);
+            for (k, v) in h.iter().enumerate() {
+                assert_abs_diff_eq!(*v, 0.7 * windowed_sinc(k as f64 - t), epsilon = 1e-10);
+            }
+        }
     }
 
     #[test]
