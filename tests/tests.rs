@@ -2,5 +2,6 @@
 
 mod cli;
 mod map;
+mod regression;
 mod simulate;
 mod util;

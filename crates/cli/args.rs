@@ -35,6 +35,16 @@ pub enum Command {
         #[arg(long, value_name = "DIR")]
         out: PathBuf,
     },
+    /// The synthetic-room regression suite: simulate, localise and map every scene in a
+    /// folder and check its thresholds.
+    Regress {
+        /// Folder of scene files.
+        #[arg(default_value = "fixtures/rooms")]
+        dir: PathBuf,
+        /// Print JSON instead of a table.
+        #[arg(long)]
+        json: bool,
+    },
     /// Map the sound sources with I-ASM from DoA tables or raw audio.
     Map(MapArgs),
     /// The paper's Monte Carlo evaluation: OSPA of CA, WS and WDP over many seeds.

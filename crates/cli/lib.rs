@@ -5,6 +5,7 @@
 //! - [`map_cmd`]: `iasm map` and `iasm eval`, I-ASM maps and their Monte Carlo OSPA.
 //! - [`render`]: the map picture.
 //! - [`simulate`]: `iasm simulate`, a scene file rendered into a data set.
+//! - [`regress`]: `iasm regress`, the synthetic-room regression suite.
 //! - [`dataset`]: the published data-set layout, tables and natural file order.
 //! - [`score`]: the DoA score against known sources.
 
@@ -12,6 +13,7 @@ pub mod args;
 pub mod dataset;
 pub mod demo;
 pub mod map_cmd;
+pub mod regress;
 pub mod render;
 pub mod score;
 pub mod simulate;
@@ -36,6 +38,7 @@ pub fn run(cli: &args::Cli) -> anyhow::Result<Outcome> {
         args::Command::Demo { seed } => demo::run(*seed),
         args::Command::Map(a) => map_cmd::run_map(a),
         args::Command::Simulate { scene, out } => simulate::run(scene, out),
+        args::Command::Regress { dir, json } => regress::run(dir, *json),
         args::Command::Eval(a) => {
             if let Some(t) = a.threads {
                 // Only the first call in a process can size the global pool.

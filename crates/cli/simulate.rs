@@ -97,13 +97,14 @@ fn write_f32_wav(path: &Path, channels: &[Vec<f64>], fs: u32) -> Result<()> {
     w.finalize().with_context(ctx)
 }
 
-/// The occupancy map: walls a cell thick and obstacles occupied, the room free, a margin
-/// unknown; ROS pixel values (0 occupied, 254 free, 205 unknown), row 0 at the top.
-fn map_image(scene: &PreparedScene) -> Vec<u8> {
+/// The occupancy map of a scene: walls a cell thick and obstacles occupied, the room free,
+/// a margin unknown; origin at (-margin, -margin).
+pub fn scene_map(scene: &PreparedScene) -> asm::map::OccupancyMap {
+    use asm::map::{Cell, OccupancyMap};
     let [lx, ly, _] = scene.room.dims();
     let w = ((lx + 2.0 * MAP_MARGIN) / MAP_RES).ceil() as usize;
     let h = ((ly + 2.0 * MAP_MARGIN) / MAP_RES).ceil() as usize;
-    let mut img = format!("P5\n{w} {h}\n255\n").into_bytes();
+    let mut cells = Vec::with_capacity(w * h);
     for j in 0..h {
         for i in 0..w {
             let x = -MAP_MARGIN + (i as f64 + 0.5) * MAP_RES;
@@ -115,12 +116,29 @@ fn map_image(scene: &PreparedScene) -> Vec<u8> {
                 scene.scene.obstacles.iter().any(|o| {
                     (o.min[0]..=o.max[0]).contains(&x) && (o.min[1]..=o.max[1]).contains(&y)
                 });
-            img.push(if !inside {
-                205
+            cells.push(if !inside {
+                Cell::Unknown
             } else if wall || obstacle {
-                0
+                Cell::Occupied
             } else {
-                254
+                Cell::Free
+            });
+        }
+    }
+    OccupancyMap::new(w, h, MAP_RES, [-MAP_MARGIN, -MAP_MARGIN], cells)
+}
+
+/// A map as a ROS PGM (0 occupied, 254 free, 205 unknown), row 0 at the top.
+fn map_image(scene: &PreparedScene) -> Vec<u8> {
+    use asm::map::Cell;
+    let map = scene_map(scene);
+    let mut img = format!("P5\n{} {}\n255\n", map.width(), map.height()).into_bytes();
+    for j in 0..map.height() {
+        for i in 0..map.width() {
+            img.push(match map.cell(i, j) {
+                Cell::Unknown => 205,
+                Cell::Occupied => 0,
+                Cell::Free => 254,
             });
         }
     }

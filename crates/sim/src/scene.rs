@@ -80,6 +80,21 @@ pub struct Scene {
     /// Box obstacles (they appear in the occupancy map; sound passes them).
     #[serde(default)]
     pub obstacles: Vec<Obstacle>,
+    /// What a regression suite expects of the pipeline on this scene.
+    #[serde(default)]
+    pub expect: Expect,
+}
+
+/// Thresholds a regression suite checks on a scene (all optional).
+#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Expect {
+    /// DoAs per stop, N. Default: the number of sources, at most 4.
+    pub num: Option<usize>,
+    /// Lowest acceptable DoA score (hit within 5 degrees), for every method.
+    pub doa_score_min: Option<f64>,
+    /// Highest acceptable OSPA (m, p = 1, c = 1) of the I-ASM map, for every method.
+    pub ospa_max: Option<f64>,
 }
 
 fn default_fs() -> u32 {
