@@ -19,11 +19,15 @@ pub struct Cli {
 #[derive(Debug, Subcommand)]
 #[allow(clippy::large_enum_variant)]
 pub enum Command {
-    /// Render a built-in scene, localise it with every method, and compare with the truth.
+    /// The whole pipeline on a built-in simulated scene: ten talkers, a robot driving
+    /// between them; prints the map against the truth and draws it.
     Demo {
-        /// Seed of the scene's signals and noise.
-        #[arg(long, default_value_t = 1)]
+        /// Seed of the scene's signals, noise and particle filter.
+        #[arg(long, default_value_t = 4)]
         seed: u64,
+        /// Where to draw the map.
+        #[arg(long, default_value = "iasm-demo.png")]
+        png: PathBuf,
     },
     /// Directions of arrival from multichannel WAV files (or a whole data set).
     Ssl(SslArgs),

@@ -1,106 +1,88 @@
-//! `iasm demo`: a built-in scene, localised end to end, against its truth.
-//!
-//! Four far-field voiced (speech-like) sources around the paper's array, all talking at
-//! once and, like loudspeakers a metre or three from a robot, 10 to 30 degrees below the
-//! array; rendered with exact fractional delays (the `sim` crate) and sensor noise, then
-//! localised by every method.
+//! `iasm demo`: the whole pipeline on a built-in scene. A robot carrying the paper's
+//! array drives between two rows of five talkers (the paper's arrangement II, in a
+//! simulated room); every stop is rendered, localised with MVDR and mapped with I-ASM; the
+//! sources found are printed against the truth, with the OSPA, and the map is drawn.
+
+use std::path::Path;
 
 use anyhow::Result;
-use sim::farfield::{PlaneWave, render};
-use sim::signal::Signal;
-use ssl::{Audio, Localizer, Method, MicArray, SslConfig, wrap_deg};
+use ssl::Method;
 
 use crate::Outcome;
+use crate::regress::{MethodRun, Simulated};
 
-/// The demo scene's sources: azimuth and elevation (degrees) and signal.
-pub const SOURCES: [(f64, f64, Signal); 4] = [
-    (-120.0, -30.0, Signal::Harmonic(105.0)),
-    (-20.0, -10.0, Signal::Harmonic(220.0)),
-    (45.0, -25.0, Signal::Harmonic(140.0)),
-    (150.0, -15.0, Signal::Harmonic(185.0)),
-];
+/// The built-in scene (also a scene of the regression suite).
+pub const SCENE: &str = include_str!("../../fixtures/rooms/rows_ten.toml");
 
-/// One method's result on the demo scene.
-#[derive(Clone, Debug)]
-pub struct DemoRow {
-    /// The method.
-    pub method: Method,
-    /// Found azimuths (degrees), strongest first.
-    pub found: Vec<f64>,
-    /// For each true source, the distance (degrees) to the nearest found azimuth.
-    pub errors: Vec<f64>,
-}
-
-/// Renders the scene with `seed` and localises it with every method.
+/// Renders the built-in scene with `seed` and runs the pipeline with `method`.
 ///
 /// # Errors
-/// Only if the built-in settings were refused, which would be a bug.
-pub fn run_scene(seed: u64) -> Result<Vec<DemoRow>> {
-    let fs = 48_000;
-    let array = MicArray::default();
-    let waves: Vec<PlaneWave> = SOURCES.iter().map(|&s| s.into()).collect();
-    let mics = render(
-        array.positions(),
-        &waves,
-        fs,
-        3 * fs as usize,
-        343.0,
-        Some(20.0),
-        seed,
-    );
-    let audio = Audio::new(
-        fs,
-        mics.into_iter()
-            .map(|c| c.into_iter().map(|v| (0.05 * v) as f32).collect())
-            .collect(),
-    )?;
-    Method::ALL
-        .iter()
-        .map(|&method| {
-            let config = SslConfig {
-                method,
-                num_peaks: SOURCES.len(),
-                ..SslConfig::default()
-            };
-            let doas = Localizer::new(&array, fs, &config)?.locate(&audio)?;
-            let found: Vec<f64> = doas.iter().map(|d| d.azimuth_deg).collect();
-            let errors = SOURCES
-                .iter()
-                .map(|&(az, _, _)| {
-                    found
-                        .iter()
-                        .map(|f| wrap_deg(f - az).abs())
-                        .fold(f64::INFINITY, f64::min)
-                })
-                .collect();
-            Ok(DemoRow {
-                method,
-                found,
-                errors,
-            })
-        })
-        .collect()
+/// Only if the built-in scene were refused, which would be a bug.
+pub fn run_scene(seed: u64, method: Method) -> Result<(Simulated, MethodRun)> {
+    let mut scene = sim::scene::Scene::from_toml(SCENE)?;
+    scene.seed = seed;
+    let prepared = scene.prepare(|name| {
+        ssl::MicArray::preset(name)
+            .ok()
+            .map(|a| a.positions().to_vec())
+    })?;
+    let simulated = Simulated::render(prepared, "demo".into())?;
+    let run = simulated.run(method)?;
+    Ok((simulated, run))
 }
 
-/// Runs `iasm demo` and prints the table.
+/// Runs `iasm demo`: prints the map against the truth and writes the picture to `png`.
 ///
 /// # Errors
-/// As [`run_scene`].
-pub fn run(seed: u64) -> Result<Outcome> {
+/// If the picture cannot be written.
+pub fn run(seed: u64, png: &Path) -> Result<Outcome> {
+    let t0 = std::time::Instant::now();
+    let (sim, run) = run_scene(seed, Method::Mvdr)?;
+    let [lx, ly, lz] = sim.scene.room.dims();
     println!(
-        "iasm demo: {} sources around the paper's 6-microphone array (iasm6), 3 s at 48 kHz, 20 dB SNR, seed {seed}",
-        SOURCES.len()
+        "iasm demo: a robot with the paper's 6-microphone array drives between two rows of five talkers\n\
+         ({lx} x {ly} x {lz} m room, RT60 {} s, {} stops, seed {seed}); rendered, localised (mvdr) and mapped in {:.1} s",
+        sim.scene.scene.room.rt60.unwrap_or_default(),
+        sim.poses.len(),
+        t0.elapsed().as_secs_f64()
     );
-    let truth: Vec<String> = SOURCES.iter().map(|(a, _, _)| format!("{a:7.1}")).collect();
-    println!("{:<10} {}", "truth", truth.join(" "));
-    for row in run_scene(seed)? {
-        let found: Vec<String> = row.found.iter().map(|a| format!("{a:7.1}")).collect();
-        let worst = row.errors.iter().copied().fold(0.0, f64::max);
+    println!(
+        "DoA score {:.3} (first {} DoAs per stop within 5 deg of a true bearing)",
+        run.score.score, sim.n
+    );
+    println!(
+        "{:>3} {:>8} {:>8}   {:>8} {:>8} {:>10}",
+        "#", "x (m)", "y (m)", "true x", "true y", "error (m)"
+    );
+    for (i, s) in run.map.sources.iter().enumerate() {
+        let t = sim
+            .truth
+            .iter()
+            .min_by(|a, b| {
+                (a[0] - s.x)
+                    .hypot(a[1] - s.y)
+                    .total_cmp(&(b[0] - s.x).hypot(b[1] - s.y))
+            })
+            .expect("a scene has sources");
         println!(
-            "{:<10} {}   (largest error {worst:.1} deg)",
-            row.method.name(),
-            found.join(" ")
+            "{:>3} {:>8.3} {:>8.3}   {:>8.2} {:>8.2} {:>10.3}",
+            i + 1,
+            s.x,
+            s.y,
+            t[0],
+            t[1],
+            (t[0] - s.x).hypot(t[1] - s.y)
         );
     }
+    println!(
+        "{} of {} sources found; OSPA {:.3} m (localisation {:.3}, cardinality {:.3})",
+        run.map.sources.len(),
+        sim.truth.len(),
+        run.ospa.total,
+        run.ospa.localization,
+        run.ospa.cardinality
+    );
+    crate::render::write_png(png, &sim.map, &sim.poses, &run.map, Some(&sim.truth))?;
+    println!("map drawn to {}", png.display());
     Ok(Outcome::Success)
 }

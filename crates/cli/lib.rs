@@ -1,6 +1,6 @@
 //! The `iasm` application: the commands behind the binary, callable from tests.
 //!
-//! - [`demo`]: `iasm demo`, a built-in scene localised against its truth.
+//! - [`demo`]: `iasm demo`, the whole pipeline on a built-in simulated scene.
 //! - [`ssl_cmd`]: `iasm ssl`, DoAs from WAV files or a data set, and their score.
 //! - [`map_cmd`]: `iasm map` and `iasm eval`, I-ASM maps and their Monte Carlo OSPA.
 //! - [`render`]: the map picture.
@@ -35,7 +35,7 @@ pub enum Outcome {
 pub fn run(cli: &args::Cli) -> anyhow::Result<Outcome> {
     match &cli.command {
         args::Command::Ssl(a) => ssl_cmd::run(a),
-        args::Command::Demo { seed } => demo::run(*seed),
+        args::Command::Demo { seed, png } => demo::run(*seed, png),
         args::Command::Map(a) => map_cmd::run_map(a),
         args::Command::Simulate { scene, out } => simulate::run(scene, out),
         args::Command::Regress { dir, json } => regress::run(dir, *json),

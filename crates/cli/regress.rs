@@ -5,8 +5,9 @@
 use std::path::Path;
 
 use anyhow::{Context, Result};
-use asm::ospa::ospa;
-use asm::{IasmConfig, Mapper, Pose};
+use asm::map::OccupancyMap;
+use asm::ospa::{Ospa, ospa};
+use asm::{IasmConfig, MapResult, Mapper, Pose};
 use rand::SeedableRng;
 use rand::rngs::StdRng;
 use rayon::prelude::*;
@@ -15,8 +16,9 @@ use ssl::{Audio, Localizer, Method, MicArray, SslConfig};
 
 use crate::Outcome;
 use crate::dataset::list_files;
-use crate::score::score_doas;
+use crate::score::{DoaScore, score_doas};
 use crate::simulate::{load_scene, scene_map};
+use sim::scene::PreparedScene;
 
 /// One scene run with one method.
 #[derive(Clone, Debug, Serialize)]
@@ -84,117 +86,199 @@ impl SuiteReport {
     }
 }
 
+/// A scene rendered at every stop, with what the pipeline needs to run on it.
+pub struct Simulated {
+    /// The scene's name (or its file's stem).
+    pub name: String,
+    /// The checked scene.
+    pub scene: PreparedScene,
+    /// What the array heard at each stop.
+    pub audio: Vec<Audio>,
+    /// The scene's array.
+    pub array: MicArray,
+    /// True source positions (m).
+    pub truth: Vec<[f64; 2]>,
+    /// DoAs per stop, N.
+    pub n: usize,
+    /// Robot poses (rad).
+    pub poses: Vec<Pose>,
+    /// The scene's occupancy map.
+    pub map: OccupancyMap,
+}
+
+/// One method's run on a [`Simulated`] scene.
+pub struct MethodRun {
+    /// DoAs per stop (degrees, array frame).
+    pub doas_deg: Vec<Vec<f64>>,
+    /// Their score.
+    pub score: DoaScore,
+    /// The I-ASM map (seeded by the scene's seed).
+    pub map: MapResult,
+    /// Its OSPA (p = 1, c = 1 m).
+    pub ospa: Ospa,
+}
+
+impl Simulated {
+    /// Reads, checks and renders the scene in `path`.
+    ///
+    /// # Errors
+    /// A scene that cannot be read or simulated, named.
+    pub fn from_file(path: &Path) -> Result<Self> {
+        let scene = load_scene(path)?;
+        let stem = path
+            .file_stem()
+            .unwrap_or_default()
+            .to_string_lossy()
+            .into_owned();
+        Self::render(scene, stem)
+    }
+
+    /// Renders a checked scene (`fallback_name` when it has none).
+    ///
+    /// # Errors
+    /// If the array or the map cannot be built.
+    pub fn render(scene: PreparedScene, fallback_name: String) -> Result<Self> {
+        let name = if scene.scene.name.is_empty() {
+            fallback_name
+        } else {
+            scene.scene.name.clone()
+        };
+        let fs = scene.scene.fs;
+        let audio: Vec<Audio> = (0..scene.stops.len())
+            .into_par_iter()
+            .map(|k| {
+                let ch = scene
+                    .render_stop(k)
+                    .into_iter()
+                    .map(|c| c.into_iter().map(|v| v as f32).collect())
+                    .collect();
+                Audio::new(fs, ch).map_err(anyhow::Error::from)
+            })
+            .collect::<Result<_>>()?;
+        let array = MicArray::new(name.clone(), scene.mics.clone())?;
+        let truth: Vec<[f64; 2]> = scene
+            .scene
+            .sources
+            .iter()
+            .map(|s| [s.pos[0], s.pos[1]])
+            .collect();
+        let n = scene.scene.expect.num.unwrap_or(truth.len().min(4));
+        let poses = scene
+            .stops
+            .iter()
+            .map(|s| Pose {
+                x: s[0],
+                y: s[1],
+                theta: s[2],
+            })
+            .collect();
+        let map = scene_map(&scene);
+        Ok(Self {
+            name,
+            scene,
+            audio,
+            array,
+            truth,
+            n,
+            poses,
+            map,
+        })
+    }
+
+    /// Localises every stop with `method`, scores the DoAs and maps them.
+    ///
+    /// # Errors
+    /// Settings refused, or tables that do not fit (bugs here).
+    pub fn run(&self, method: Method) -> Result<MethodRun> {
+        let fs = self.scene.scene.fs;
+        let loc = Localizer::new(
+            &self.array,
+            fs,
+            &SslConfig {
+                method,
+                num_peaks: self.n,
+                ..SslConfig::default()
+            },
+        )?;
+        let doas_deg: Vec<Vec<f64>> = self
+            .audio
+            .par_iter()
+            .map(|a| {
+                loc.locate(a)
+                    .map(|d| d.iter().map(|x| x.azimuth_deg).collect())
+            })
+            .collect::<Result<_, _>>()
+            .with_context(|| format!("localising scene {}", self.name))?;
+        let table: crate::dataset::Table = doas_deg
+            .iter()
+            .map(|r| r.iter().map(|&a| Some(a)).collect())
+            .collect();
+        let score_poses: Vec<crate::dataset::Pose> = self
+            .poses
+            .iter()
+            .map(|p| crate::dataset::Pose {
+                x: p.x,
+                y: p.y,
+                theta_deg: p.theta.to_degrees(),
+            })
+            .collect();
+        let score = score_doas(&table, &score_poses, &self.truth, self.n, 5.0)?;
+        let rad: Vec<Vec<f64>> = doas_deg
+            .iter()
+            .map(|r| r.iter().map(|a| a.to_radians()).collect())
+            .collect();
+        let mapper = Mapper::new(
+            &self.map,
+            &IasmConfig {
+                num_doas: self.n,
+                ..IasmConfig::default()
+            },
+        )?;
+        let map = mapper.run(
+            &self.poses,
+            &rad,
+            &mut StdRng::seed_from_u64(self.scene.scene.seed),
+        )?;
+        let ospa = ospa(&map.positions(), &self.truth, 1.0, 1.0);
+        Ok(MethodRun {
+            doas_deg,
+            score,
+            map,
+            ospa,
+        })
+    }
+}
+
 /// Simulates one scene and runs the pipeline on it with every method.
 ///
 /// # Errors
 /// A scene that cannot be read or simulated, named.
 pub fn run_scene(path: &Path) -> Result<Vec<SceneResult>> {
-    let scene = load_scene(path)?;
-    let name = if scene.scene.name.is_empty() {
-        path.file_stem()
-            .unwrap_or_default()
-            .to_string_lossy()
-            .into_owned()
-    } else {
-        scene.scene.name.clone()
-    };
-    let fs = scene.scene.fs;
-    let audio: Vec<Audio> = (0..scene.stops.len())
-        .into_par_iter()
-        .map(|k| {
-            let ch = scene
-                .render_stop(k)
-                .into_iter()
-                .map(|c| c.into_iter().map(|v| v as f32).collect())
-                .collect();
-            Audio::new(fs, ch).map_err(anyhow::Error::from)
-        })
-        .collect::<Result<_>>()?;
-    let array = MicArray::new(name.clone(), scene.mics.clone())?;
-    let truth: Vec<[f64; 2]> = scene
-        .scene
-        .sources
-        .iter()
-        .map(|s| [s.pos[0], s.pos[1]])
-        .collect();
-    let n = scene.scene.expect.num.unwrap_or(truth.len().min(4));
-    let poses: Vec<Pose> = scene
-        .stops
-        .iter()
-        .map(|s| Pose {
-            x: s[0],
-            y: s[1],
-            theta: s[2],
-        })
-        .collect();
-    let score_poses: Vec<crate::dataset::Pose> = scene
-        .stops
-        .iter()
-        .map(|s| crate::dataset::Pose {
-            x: s[0],
-            y: s[1],
-            theta_deg: s[2].to_degrees(),
-        })
-        .collect();
-    let map = scene_map(&scene);
-    let mapper = Mapper::new(
-        &map,
-        &IasmConfig {
-            num_doas: n,
-            ..IasmConfig::default()
-        },
-    )?;
+    let sim = Simulated::from_file(path)?;
+    let e = &sim.scene.scene.expect;
     Method::ALL
         .iter()
         .map(|&method| {
-            let loc = Localizer::new(
-                &array,
-                fs,
-                &SslConfig {
-                    method,
-                    num_peaks: n,
-                    ..SslConfig::default()
-                },
-            )?;
-            let doas: Vec<Vec<f64>> = audio
-                .par_iter()
-                .map(|a| {
-                    loc.locate(a)
-                        .map(|d| d.iter().map(|x| x.azimuth_deg).collect())
-                })
-                .collect::<Result<_, _>>()
-                .with_context(|| format!("localising scene {name}"))?;
-            let table: crate::dataset::Table = doas
-                .iter()
-                .map(|r| r.iter().map(|&a| Some(a)).collect())
-                .collect();
-            let score = score_doas(&table, &score_poses, &truth, n, 5.0)?;
-            let rad: Vec<Vec<f64>> = doas
-                .iter()
-                .map(|r| r.iter().map(|a| a.to_radians()).collect())
-                .collect();
-            let result = mapper.run(&poses, &rad, &mut StdRng::seed_from_u64(scene.scene.seed))?;
-            let o = ospa(&result.positions(), &truth, 1.0, 1.0).total;
-            let e = &scene.scene.expect;
+            let r = sim.run(method)?;
             let mut breaches = Vec::new();
             if let Some(min) = e.doa_score_min
-                && score.score < min
+                && r.score.score < min
             {
-                breaches.push(format!("DoA score {:.3} < {min}", score.score));
+                breaches.push(format!("DoA score {:.3} < {min}", r.score.score));
             }
             if let Some(max) = e.ospa_max
-                && o > max
+                && r.ospa.total > max
             {
-                breaches.push(format!("OSPA {o:.3} > {max}"));
+                breaches.push(format!("OSPA {:.3} > {max}", r.ospa.total));
             }
             Ok(SceneResult {
-                scene: name.clone(),
+                scene: sim.name.clone(),
                 method: method.name(),
-                stops: poses.len(),
-                sources: truth.len(),
-                doa_score: score.score,
-                found: result.sources.len(),
-                ospa: o,
+                stops: sim.poses.len(),
+                sources: sim.truth.len(),
+                doa_score: r.score.score,
+                found: r.map.sources.len(),
+                ospa: r.ospa.total,
                 breaches,
             })
         })
