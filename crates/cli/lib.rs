@@ -34,20 +34,28 @@ pub enum Outcome {
 /// Any failure, with the file and the problem in its context chain (exit 2).
 pub fn run(cli: &args::Cli) -> anyhow::Result<Outcome> {
     match &cli.command {
-        args::Command::Ssl(a) => ssl_cmd::run(a),
+        args::Command::Ssl(a) => {
+            set_threads(a.threads);
+            ssl_cmd::run(a)
+        }
         args::Command::Demo { seed, png } => demo::run(*seed, png),
         args::Command::Map(a) => map_cmd::run_map(a),
         args::Command::Simulate { scene, out } => simulate::run(scene, out),
         args::Command::Regress { dir, json } => regress::run(dir, *json),
         args::Command::Eval(a) => {
-            if let Some(t) = a.threads {
-                // Only the first call in a process can size the global pool.
-                let _ = rayon::ThreadPoolBuilder::new()
-                    .num_threads(t)
-                    .build_global();
-            }
+            set_threads(a.threads);
             map_cmd::run_eval(a)
         }
+    }
+}
+
+/// Sizes the worker pool for `--threads N` (all cores when not given). Only the first call
+/// in a process can size rayon's global pool; later ones keep it.
+fn set_threads(threads: Option<usize>) {
+    if let Some(t) = threads {
+        let _ = rayon::ThreadPoolBuilder::new()
+            .num_threads(t)
+            .build_global();
     }
 }
 

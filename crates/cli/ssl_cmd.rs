@@ -147,12 +147,6 @@ pub fn write_doa_csv(path: &Path, table: &Table, header: bool) -> Result<()> {
 pub fn run(args: &SslArgs) -> Result<Outcome> {
     let config = ssl_config(args)?;
     let array = MicArray::from_spec(&args.array)?;
-    if let Some(t) = args.threads {
-        // Only the first call in a process can size the global pool; later ones keep it.
-        let _ = rayon::ThreadPoolBuilder::new()
-            .num_threads(t)
-            .build_global();
-    }
     let Some(dir) = &args.dataset else {
         let rows = localise_files(&args.files, &array, &config)?;
         print_rows(&rows, &config, &array, args.json)?;

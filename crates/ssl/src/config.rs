@@ -218,21 +218,7 @@ impl SslConfig {
     /// # Errors
     /// The first [`ConfigError`] found.
     pub fn validate(&self) -> Result<(), ConfigError> {
-        if !(self.az_step_deg > 0.0 && self.az_step_deg <= 90.0) {
-            return Err(ConfigError::AzimuthStep(self.az_step_deg));
-        }
-        if let Some(e) = self.elevation
-            && !(e.min_deg >= -90.0
-                && e.min_deg <= e.max_deg
-                && e.max_deg <= 90.0
-                && e.step_deg > 0.0)
-        {
-            return Err(ConfigError::Elevation {
-                min: e.min_deg,
-                max: e.max_deg,
-                step: e.step_deg,
-            });
-        }
+        crate::grid::check(self.az_step_deg, self.elevation)?;
         if self.block_frames == 0 {
             return Err(ConfigError::BlockFrames(0));
         }

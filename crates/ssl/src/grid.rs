@@ -24,18 +24,8 @@ impl DirectionGrid {
     /// [`ConfigError::AzimuthStep`] unless `0 < az_step_deg <= 90`,
     /// [`ConfigError::Elevation`] for a malformed elevation range.
     pub fn new(az_step_deg: f64, elevation: ElevationRange) -> Result<Self, ConfigError> {
-        if !(az_step_deg > 0.0 && az_step_deg <= 90.0) {
-            return Err(ConfigError::AzimuthStep(az_step_deg));
-        }
+        check(az_step_deg, Some(elevation))?;
         let e = elevation;
-        if !(e.min_deg >= -90.0 && e.min_deg <= e.max_deg && e.max_deg <= 90.0 && e.step_deg > 0.0)
-        {
-            return Err(ConfigError::Elevation {
-                min: e.min_deg,
-                max: e.max_deg,
-                step: e.step_deg,
-            });
-        }
         let n_az = (360.0 / az_step_deg).round() as usize;
         let step = 360.0 / n_az as f64;
         let az_deg = (0..n_az).map(|i| -180.0 + i as f64 * step).collect();
@@ -85,6 +75,28 @@ impl DirectionGrid {
         );
         [el.cos() * az.cos(), el.cos() * az.sin(), el.sin()]
     }
+}
+
+/// Checks a grid's settings: `0 < az_step_deg <= 90`, and, when given, an elevation range
+/// with `-90 <= min <= max <= 90` and a positive step. Shared by [`DirectionGrid::new`] and
+/// [`crate::SslConfig::validate`], which checks before the elevation is resolved.
+pub(crate) fn check(
+    az_step_deg: f64,
+    elevation: Option<ElevationRange>,
+) -> Result<(), ConfigError> {
+    if !(az_step_deg > 0.0 && az_step_deg <= 90.0) {
+        return Err(ConfigError::AzimuthStep(az_step_deg));
+    }
+    if let Some(e) = elevation
+        && !(e.min_deg >= -90.0 && e.min_deg <= e.max_deg && e.max_deg <= 90.0 && e.step_deg > 0.0)
+    {
+        return Err(ConfigError::Elevation {
+            min: e.min_deg,
+            max: e.max_deg,
+            step: e.step_deg,
+        });
+    }
+    Ok(())
 }
 
 /// Every pair's delay function sampled on a uniform lag grid, with the tables to evaluate

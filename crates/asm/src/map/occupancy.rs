@@ -84,10 +84,7 @@ impl OccupancyMap {
         })?;
         let img_path = match image {
             Some(p) => p.to_owned(),
-            None => Self::image_path(yaml).map_err(|message| MapError::Yaml {
-                path: yaml.to_owned(),
-                message,
-            })?,
+            None => resolve_image(yaml, &meta.image),
         };
         let bytes = std::fs::read(&img_path).map_err(|source| MapError::Io {
             path: img_path.clone(),
@@ -133,13 +130,7 @@ impl OccupancyMap {
     /// A message if the YAML cannot be read or names no image.
     pub fn image_path(yaml: &Path) -> Result<PathBuf, String> {
         let text = std::fs::read_to_string(yaml).map_err(|e| e.to_string())?;
-        let meta = parse_yaml(&text)?;
-        let p = Path::new(&meta.image);
-        Ok(if p.is_absolute() {
-            p.to_owned()
-        } else {
-            yaml.parent().unwrap_or(Path::new(".")).join(p)
-        })
+        Ok(resolve_image(yaml, &parse_yaml(&text)?.image))
     }
 
     /// Width (cells).
@@ -192,6 +183,16 @@ impl OccupancyMap {
                 .filter(move |&i| self.cell(i, j) != Cell::Unknown)
                 .map(move |i| self.cell_center(i, j))
         })
+    }
+}
+
+/// An image name from a map YAML, resolved against the YAML's folder unless absolute.
+fn resolve_image(yaml: &Path, image: &str) -> PathBuf {
+    let p = Path::new(image);
+    if p.is_absolute() {
+        p.to_owned()
+    } else {
+        yaml.parent().unwrap_or(Path::new(".")).join(p)
     }
 }
 
