@@ -38,6 +38,9 @@ pub enum Command {
         /// The data set folder to write.
         #[arg(long, value_name = "DIR")]
         out: PathBuf,
+        /// Worker threads, one stop each (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
     },
     /// The synthetic-room regression suite: simulate, localise and map every scene in a
     /// folder and check its thresholds.

@@ -40,7 +40,14 @@ pub fn run(cli: &args::Cli) -> anyhow::Result<Outcome> {
         }
         args::Command::Demo { seed, png } => demo::run(*seed, png),
         args::Command::Map(a) => map_cmd::run_map(a),
-        args::Command::Simulate { scene, out } => simulate::run(scene, out),
+        args::Command::Simulate {
+            scene,
+            out,
+            threads,
+        } => {
+            set_threads(*threads);
+            simulate::run(scene, out)
+        }
         args::Command::Regress { dir, json } => regress::run(dir, *json),
         args::Command::Eval(a) => {
             set_threads(a.threads);

@@ -21,7 +21,8 @@ const MAP_MARGIN: f64 = 0.5;
 pub fn load_scene(path: &Path) -> Result<PreparedScene> {
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("reading scene {}", path.display()))?;
-    let scene = Scene::from_toml(&text).with_context(|| format!("scene {}", path.display()))?;
+    let mut scene = Scene::from_toml(&text).with_context(|| format!("scene {}", path.display()))?;
+    scene.resolve_paths(path.parent().unwrap_or(Path::new(".")));
     scene
         .prepare(|name| {
             ssl::MicArray::preset(name)

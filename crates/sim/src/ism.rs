@@ -91,10 +91,8 @@ pub fn image_sources(
     out
 }
 
-/// `sinc(x) * hann` at offset `x` (samples) from the centre of the 81-tap filter: the
-/// oracle of [`add_impulse`]'s recurrence.
-#[cfg(test)]
-fn windowed_sinc(x: f64) -> f64 {
+/// `sinc(x) * hann` at offset `x` (samples) from the centre of the 81-tap filter.
+pub fn windowed_sinc(x: f64) -> f64 {
     if x.abs() >= SINC_HALF as f64 + 1.0 {
         return 0.0;
     }
@@ -107,35 +105,61 @@ fn windowed_sinc(x: f64) -> f64 {
     s * w
 }
 
-/// Adds a band-limited impulse of amplitude `amp` at fractional time `t` (samples) to `h`.
+/// Taps an impulse can touch: `floor(t) - SINC_HALF ..= floor(t) + SINC_HALF + 1`.
+const TAPS: usize = 2 * SINC_HALF + 2;
+
+/// Fractional positions tabulated per sample (see [`add_impulse`]).
+pub const LUT_STEPS: usize = 256;
+
+/// `windowed_sinc(j - SINC_HALF - g / LUT_STEPS)` for `g` in `0..=LUT_STEPS`, `j` in
+/// `0..TAPS`: 168 KiB, built once.
+fn lut() -> &'static [[f64; TAPS]] {
+    static LUT: std::sync::OnceLock<Vec<[f64; TAPS]>> = std::sync::OnceLock::new();
+    LUT.get_or_init(|| {
+        (0..=LUT_STEPS)
+            .map(|g| {
+                let frac = g as f64 / LUT_STEPS as f64;
+                std::array::from_fn(|j| windowed_sinc(j as f64 - SINC_HALF as f64 - frac))
+            })
+            .collect()
+    })
+}
+
+/// Adds a band-limited impulse of amplitude `amp` at fractional time `t` (samples, not
+/// negative) to `h`, clipped to `h`'s extent.
 ///
-/// Consecutive taps sit one sample apart, so `sin(pi x)` only changes sign from tap to tap
-/// and the window's cosine advances by a fixed angle: two trigonometric calls per impulse
-/// instead of two per tap (they were 83 % of a room's rendering time).
+/// The filter depends on `t` only through its fractional part, so it is read from a table
+/// of [`LUT_STEPS`] + 1 filters and interpolated linearly between the two nearest: two
+/// multiply-adds per tap, no trigonometry, and a loop the compiler vectorises (it was a
+/// sine and a cosine per tap, 83 % of a room's rendering time, then a rotation recurrence
+/// whose dependency chain still cost 8 cycles a tap). The interpolation error is at most
+/// `max|f''| / (8 LUT_STEPS^2) < 6.3e-6` of `amp` (`|f''| < 3.3` for the windowed sinc,
+/// `pi^2 / 3` at its centre), 50 dB below the float32 resolution of the files it ends up in. pyroomacoustics
+/// does the same with 20 steps per sample.
 pub fn add_impulse(h: &mut [f64], t: f64, amp: f64) {
-    let k0 = (t.floor() as i64 - SINC_HALF as i64).max(0);
-    let k1 = (t.floor() as i64 + SINC_HALF as i64 + 1).min(h.len() as i64 - 1);
-    if k0 > k1 {
+    impulse(h, t, amp);
+}
+
+#[inline(always)]
+fn impulse(h: &mut [f64], t: f64, amp: f64) {
+    let base = t.floor();
+    let start = base as i64 - SINC_HALF as i64; // sample of tap 0
+    let len = h.len() as i64;
+    if start >= len || start + TAPS as i64 <= 0 {
         return;
     }
-    let pi = std::f64::consts::PI;
-    let x0 = k0 as f64 - t;
-    let mut sin_pix = (pi * x0).sin();
-    let step = pi / (SINC_HALF as f64 + 1.0);
-    let (mut c, mut s) = ((step * x0).cos(), (step * x0).sin());
-    let (cs, ss) = (step.cos(), step.sin());
-    for (j, k) in (k0..=k1).enumerate() {
-        let x = x0 + j as f64;
-        if x.abs() < SINC_HALF as f64 + 1.0 {
-            let sinc = if x.abs() < 1e-12 {
-                1.0
-            } else {
-                sin_pix / (pi * x)
-            };
-            h[k as usize] += amp * sinc * (0.5 + 0.5 * c);
-        }
-        sin_pix = -sin_pix;
-        (c, s) = (c * cs - s * ss, s * cs + c * ss);
+    let pos = (t - base) * LUT_STEPS as f64;
+    let g = (pos as usize).min(LUT_STEPS - 1);
+    let w = pos - g as f64;
+    let table = lut();
+    let (r0, r1) = (&table[g], &table[g + 1]);
+    let (a0, a1) = (amp * (1.0 - w), amp * w);
+    let j0 = (-start).max(0) as usize;
+    let j1 = (len - start).min(TAPS as i64) as usize;
+    let first = (start + j0 as i64) as usize;
+    let dst = &mut h[first..first + (j1 - j0)];
+    for ((d, x0), x1) in dst.iter_mut().zip(&r0[j0..j1]).zip(&r1[j0..j1]) {
+        *d += a0 * x0 + a1 * x1;
     }
 }
 
@@ -168,15 +192,52 @@ pub fn rir_unfiltered(
 ) -> Vec<f64> {
     let max_dist = len as f64 / fs * c;
     let mut h = vec![0.0; len];
-    for img in image_sources(room, src, mic, max_dist, max_order) {
-        let d = dist(img.pos, mic).max(1e-3);
-        add_impulse(
-            &mut h,
-            d / c * fs,
-            img.gain / (4.0 * std::f64::consts::PI * d),
-        );
-    }
+    add_images(
+        &mut h,
+        &image_sources(room, src, mic, max_dist, max_order),
+        mic,
+        fs,
+        c,
+    );
     h
+}
+
+/// Adds to `h` the band-limited impulse of every image in `images` that arrives at `mic`
+/// within `h` (arrival `d / c`, amplitude `gain / (4 pi d)`).
+///
+/// This loop is most of a room's rendering time; it is compiled twice, for any x86-64 and
+/// for AVX2 (four taps per instruction, and an inlined `floor`), and the build the CPU
+/// supports is chosen at run time. Both give the same bits (no fused multiply-adds).
+pub fn add_images(h: &mut [f64], images: &[ImageSource], mic: [f64; 3], fs: f64, c: f64) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU supports the feature the function is compiled for.
+        unsafe { add_images_avx2(h, images, mic, fs, c) };
+        return;
+    }
+    add_images_portable(h, images, mic, fs, c);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn add_images_avx2(h: &mut [f64], images: &[ImageSource], mic: [f64; 3], fs: f64, c: f64) {
+    add_images_portable(h, images, mic, fs, c);
+}
+
+#[inline(always)]
+fn add_images_portable(h: &mut [f64], images: &[ImageSource], mic: [f64; 3], fs: f64, c: f64) {
+    let max_dist = h.len() as f64 / fs * c;
+    let max_d2 = max_dist * max_dist;
+    for img in images {
+        let d2 = (img.pos[0] - mic[0]).powi(2)
+            + (img.pos[1] - mic[1]).powi(2)
+            + (img.pos[2] - mic[2]).powi(2);
+        if d2 > max_d2 {
+            continue;
+        }
+        let d = d2.sqrt().max(1e-3);
+        impulse(h, d / c * fs, img.gain / (4.0 * std::f64::consts::PI * d));
+    }
 }
 
 /// Cut-off (Hz) of the high-pass filter applied to every impulse response.
@@ -322,14 +383,29 @@ mod tests {
     }
 
     #[test]
-    fn the_fast_impulse_matches_the_windowed_sinc_tap_by_tap() {
-        for t in [100.0, 100.3, 100.999, 7.5, 3990.2] {
+    fn the_tabulated_impulse_matches_the_windowed_sinc_tap_by_tap() {
+        // Linear interpolation between filters 1/256 sample apart: error at most
+        // max|f''| / (8 * 256^2) < 3.3 / 524288 = 6.3e-6 of the amplitude. Impulses cut by
+        // either end of the response keep their inner taps.
+        let bound = 3.3 / (8.0 * (LUT_STEPS as f64).powi(2));
+        for t in [
+            100.0,
+            100.3,
+            100.999,
+            100.5 + 0.5 / 256.0,
+            7.5,
+            3990.2,
+            4030.0,
+        ] {
             let mut h = vec![0.0; 4000];
             add_impulse(&mut h, t, 0.7);
             for (k, v) in h.iter().enumerate() {
-                assert_abs_diff_eq!(*v, 0.7 * windowed_sinc(k as f64 - t), epsilon = 1e-10);
+                assert_abs_diff_eq!(*v, 0.7 * windowed_sinc(k as f64 - t), epsilon = 0.7 * bound);
             }
         }
+        let mut h = vec![0.0; 10];
+        add_impulse(&mut h, 60.0, 1.0);
+        assert!(h.iter().all(|v| *v == 0.0));
     }
 
     #[test]

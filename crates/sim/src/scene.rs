@@ -18,6 +18,7 @@
 //! pos = [1.5, 3.0, 1.2]
 //! signal = "voiced"     # white_noise | pink_noise | speech_shaped | voiced
 //! f0 = 140.0
+//! # or: wav = "talker.wav" (relative to the scene file; first channel, at the scene's fs)
 //! level_db = 65.0       # dB SPL at 1 m
 //! [trajectory]
 //! waypoints = [[1.0, 1.0], [5.0, 1.0]]
@@ -30,7 +31,7 @@ use rustfft::{FftPlanner, num_complex::Complex64};
 use serde::Deserialize;
 
 use crate::error::SimError;
-use crate::render::{RenderConfig, RoomSource, render};
+use crate::render::{RenderConfig, Renderer, RoomSource};
 use crate::room::Room;
 use crate::signal::{Signal, generate};
 
@@ -137,9 +138,16 @@ pub struct ArraySpec {
 pub struct SourceSpec {
     /// Position (m).
     pub pos: [f64; 3],
-    /// `white_noise`, `pink_noise`, `speech_shaped` or `voiced`. Default: `speech_shaped`.
-    #[serde(default = "default_signal")]
-    pub signal: String,
+    /// `white_noise`, `pink_noise`, `speech_shaped` or `voiced`. Default: `speech_shaped`
+    /// (unless `wav` is given).
+    #[serde(default)]
+    pub signal: Option<String>,
+    /// A recording to play instead of a generated signal: its first channel, at the scene's
+    /// sample rate, repeated if shorter than the clip and cut if longer, scaled to
+    /// `level_db` like the generated signals. A relative path is relative to the scene file
+    /// once [`Scene::resolve_paths`] has run (the CLI does).
+    #[serde(default)]
+    pub wav: Option<std::path::PathBuf>,
     /// Fundamental (Hz) of a voiced source. Default: 140.
     #[serde(default = "default_f0")]
     pub f0: f64,
@@ -148,9 +156,6 @@ pub struct SourceSpec {
     pub level_db: f64,
 }
 
-fn default_signal() -> String {
-    "speech_shaped".into()
-}
 fn default_f0() -> f64 {
     140.0
 }
@@ -193,6 +198,8 @@ pub struct PreparedScene {
     pub stops: Vec<[f64; 3]>,
     /// Each source's signal (pressure at 1 m, Pa).
     pub signals: Vec<Vec<f64>>,
+    /// Built on the first stop rendered, shared by the others.
+    renderer: std::sync::OnceLock<Renderer>,
 }
 
 impl Scene {
@@ -202,6 +209,17 @@ impl Scene {
     /// The TOML parser's message (unknown keys are refused, and named).
     pub fn from_toml(text: &str) -> Result<Self, SimError> {
         toml::from_str(text).map_err(|e| invalid("scene", e.message()))
+    }
+
+    /// Makes every relative `wav` path relative to `base` (the scene file's folder).
+    pub fn resolve_paths(&mut self, base: &std::path::Path) {
+        for s in &mut self.sources {
+            if let Some(p) = &mut s.wav
+                && p.is_relative()
+            {
+                *p = base.join(&*p);
+            }
+        }
     }
 
     /// Checks the scene and precomputes the room, stops and signals. `preset` resolves
@@ -279,15 +297,21 @@ impl Scene {
             .iter()
             .enumerate()
             .map(|(i, s)| {
-                let unit = match s.signal.as_str() {
-                    "white_noise" => generate(Signal::Noise, n, self.fs, &mut rng),
-                    "voiced" => generate(Signal::Harmonic(s.f0), n, self.fs, &mut rng),
-                    "pink_noise" => shaped_noise(n, self.fs, &mut rng, |f| 1.0 / f.max(20.0).sqrt()),
-                    // Long-term speech spectrum: flat to 500 Hz, then -6 dB per octave.
-                    "speech_shaped" => shaped_noise(n, self.fs, &mut rng, |f| if f < 100.0 { f / 100.0 } else { (500.0 / f.max(500.0)).max(0.0) }),
-                    other => {
-                        return Err(invalid(format!("sources[{i}].signal"), format!("unknown signal {other:?} (white_noise, pink_noise, speech_shaped, voiced)")));
+                let unit = match (&s.wav, s.signal.as_deref()) {
+                    (Some(_), Some(_)) => {
+                        return Err(invalid(format!("sources[{i}]"), "give signal or wav, not both"));
                     }
+                    (Some(path), None) => wav_signal(path, n, self.fs).map_err(|m| invalid(format!("sources[{i}].wav"), format!("{}: {m}", path.display())))?,
+                    (None, signal) => match signal.unwrap_or("speech_shaped") {
+                        "white_noise" => generate(Signal::Noise, n, self.fs, &mut rng),
+                        "voiced" => generate(Signal::Harmonic(s.f0), n, self.fs, &mut rng),
+                        "pink_noise" => shaped_noise(n, self.fs, &mut rng, |f| 1.0 / f.max(20.0).sqrt()),
+                        // Long-term speech spectrum: flat to 500 Hz, then -6 dB per octave.
+                        "speech_shaped" => shaped_noise(n, self.fs, &mut rng, |f| if f < 100.0 { f / 100.0 } else { (500.0 / f.max(500.0)).max(0.0) }),
+                        other => {
+                            return Err(invalid(format!("sources[{i}].signal"), format!("unknown signal {other:?} (white_noise, pink_noise, speech_shaped, voiced)")));
+                        }
+                    },
                 };
                 // 94 dB SPL is 1 Pa RMS.
                 let rms = 10f64.powf((s.level_db - 94.0) / 20.0);
@@ -300,6 +324,7 @@ impl Scene {
             mics,
             stops,
             signals,
+            renderer: std::sync::OnceLock::new(),
         })
     }
 
@@ -357,6 +382,45 @@ pub fn mic_world(stop: [f64; 3], height: f64, p: [f64; 3]) -> [f64; 3] {
     ]
 }
 
+/// `n` samples of the first channel of the WAV file at `path`, which must be sampled at
+/// `fs`, repeated as needed, scaled to unit mean power.
+fn wav_signal(path: &std::path::Path, n: usize, fs: u32) -> Result<Vec<f64>, String> {
+    let mut r = hound::WavReader::open(path).map_err(|e| e.to_string())?;
+    let spec = r.spec();
+    if spec.sample_rate != fs {
+        return Err(format!(
+            "sampled at {} Hz, the scene at {fs} Hz (resample the file)",
+            spec.sample_rate
+        ));
+    }
+    let ch = usize::from(spec.channels.max(1));
+    let first: Vec<f64> = match spec.sample_format {
+        hound::SampleFormat::Float => r
+            .samples::<f32>()
+            .step_by(ch)
+            .map(|v| v.map(f64::from))
+            .collect::<Result<_, _>>(),
+        hound::SampleFormat::Int => {
+            let scale = 2f64.powi(i32::from(spec.bits_per_sample) - 1);
+            r.samples::<i32>()
+                .step_by(ch)
+                .map(|v| v.map(|v| f64::from(v) / scale))
+                .collect::<Result<_, _>>()
+        }
+    }
+    .map_err(|e| e.to_string())?;
+    if first.is_empty() {
+        return Err("has no samples".into());
+    }
+    let x: Vec<f64> = first.iter().copied().cycle().take(n).collect();
+    let p = x.iter().map(|v| v * v).sum::<f64>() / n.max(1) as f64;
+    if !(p > 0.0 && p.is_finite()) {
+        return Err("is silent (or not finite) over the clip".into());
+    }
+    let g = p.sqrt().recip();
+    Ok(x.into_iter().map(|v| v * g).collect())
+}
+
 /// Unit-power noise with amplitude spectrum `shape(f)`.
 fn shaped_noise(n: usize, fs: u32, rng: &mut StdRng, shape: impl Fn(f64) -> f64) -> Vec<f64> {
     let mut b: Vec<Complex64> = (0..n)
@@ -382,6 +446,32 @@ impl PreparedScene {
         self.scene.clip_samples()
     }
 
+    /// The scene's sources ready to render (built once, on first use).
+    pub fn renderer(&self) -> &Renderer {
+        self.renderer.get_or_init(|| {
+            let sc = &self.scene;
+            let sources: Vec<RoomSource> = sc
+                .sources
+                .iter()
+                .zip(&self.signals)
+                .map(|(s, x)| RoomSource {
+                    pos: s.pos,
+                    signal: x.clone(),
+                })
+                .collect();
+            let rir_s = sc
+                .rir_s
+                .unwrap_or_else(|| sc.room.rt60.unwrap_or(0.3).min(0.5));
+            let cfg = RenderConfig {
+                fs: f64::from(sc.fs),
+                speed_of_sound: sc.speed_of_sound,
+                rir_len: (rir_s * f64::from(sc.fs)) as usize,
+                max_order: sc.max_order,
+            };
+            Renderer::new(&self.room, &sources, self.clip_samples(), &cfg)
+        })
+    }
+
     /// What the array hears at stop `k` (channel-major, Pa), with sensor noise seeded by the
     /// scene's seed and `k` (so stops can be rendered in any order, in parallel).
     ///
@@ -394,25 +484,7 @@ impl PreparedScene {
             .iter()
             .map(|&p| mic_world(self.stops[k], sc.array.height, p))
             .collect();
-        let sources: Vec<RoomSource> = sc
-            .sources
-            .iter()
-            .zip(&self.signals)
-            .map(|(s, x)| RoomSource {
-                pos: s.pos,
-                signal: x.clone(),
-            })
-            .collect();
-        let rir_s = sc
-            .rir_s
-            .unwrap_or_else(|| sc.room.rt60.unwrap_or(0.3).min(0.5));
-        let cfg = RenderConfig {
-            fs: f64::from(sc.fs),
-            speed_of_sound: sc.speed_of_sound,
-            rir_len: (rir_s * f64::from(sc.fs)) as usize,
-            max_order: sc.max_order,
-        };
-        let mut out = render(&self.room, &sources, &mics, self.clip_samples(), &cfg);
+        let mut out = self.renderer().render(&mics);
         if let Some(snr) = sc.snr_db {
             let p = out.iter().flatten().map(|v| v * v).sum::<f64>()
                 / (out.len() * out[0].len()) as f64;
@@ -453,6 +525,65 @@ spacing = 0.5
 
     fn two_mics(_: &str) -> Option<Vec<[f64; 3]>> {
         None
+    }
+
+    /// Writes a 16-bit WAV (two channels: a 500 Hz sine at half scale, then silence).
+    fn write_wav(path: &std::path::Path, fs: u32, n: usize) {
+        let spec = hound::WavSpec {
+            channels: 2,
+            sample_rate: fs,
+            bits_per_sample: 16,
+            sample_format: hound::SampleFormat::Int,
+        };
+        let mut w = hound::WavWriter::create(path, spec).unwrap();
+        for t in 0..n {
+            let v = 0.5 * (std::f64::consts::TAU * 500.0 * t as f64 / f64::from(fs)).sin();
+            w.write_sample((v * 32768.0).round() as i16).unwrap();
+            w.write_sample(0i16).unwrap();
+        }
+        w.finalize().unwrap();
+    }
+
+    #[test]
+    fn a_wav_source_plays_its_first_channel_looped_at_its_level() {
+        // 0.05 s of a sine (exactly 25 periods at 8 kHz) fills the 0.2 s clip four times;
+        // at 70 dB SPL its RMS is 10^((70 - 94) / 20) Pa, so its peak is sqrt(2) times that.
+        let dir = tempfile::tempdir().unwrap();
+        write_wav(&dir.path().join("tone.wav"), 8000, 400);
+        let text = SCENE.replace(
+            "pos = [1.5, 3.0, 1.2]",
+            "pos = [1.5, 3.0, 1.2]\nwav = \"tone.wav\"\nlevel_db = 70.0",
+        );
+        let mut scene = Scene::from_toml(&text).unwrap();
+        scene.resolve_paths(dir.path());
+        let p = scene.prepare(two_mics).unwrap();
+        let x = &p.signals[0];
+        assert_eq!(x.len(), 1600);
+        let peak = 10f64.powf(-24.0 / 20.0) * std::f64::consts::SQRT_2;
+        for (t, v) in x.iter().enumerate() {
+            let want = peak * (std::f64::consts::TAU * 500.0 * t as f64 / 8000.0).sin();
+            approx::assert_abs_diff_eq!(*v, want, epsilon = 1e-3 * peak);
+        }
+    }
+
+    #[test]
+    fn a_bad_wav_source_names_the_field_and_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        write_wav(&dir.path().join("fast.wav"), 16000, 400);
+        for (line, want) in [
+            ("wav = \"missing.wav\"", "missing.wav"),
+            ("wav = \"fast.wav\"", "16000 Hz, the scene at 8000 Hz"),
+            ("wav = \"fast.wav\"\nsignal = \"voiced\"", "not both"),
+        ] {
+            let text = SCENE.replace(
+                "pos = [1.5, 3.0, 1.2]",
+                &format!("pos = [1.5, 3.0, 1.2]\n{line}"),
+            );
+            let mut scene = Scene::from_toml(&text).unwrap();
+            scene.resolve_paths(dir.path());
+            let e = scene.prepare(two_mics).unwrap_err().to_string();
+            assert!(e.contains("sources[0]") && e.contains(want), "{e}");
+        }
     }
 
     #[test]
