@@ -94,6 +94,13 @@ fn bad_scenes_are_clear_errors() {
             SMALL.replace("absorption = [0.6, 0.6, 0.6, 0.6, 0.6, 0.6]", "rt60 = 0.01"),
             vec!["room.rt60", "shorter than"],
         ),
+        (
+            SMALL.replace(
+                "pos = [1.0, 3.0, 1.0]",
+                "pos = [1.0, 3.0, 1.0]\nwav = \"talk.wav\"",
+            ),
+            vec!["sources[0].wav", "talk.wav"],
+        ),
     ] {
         std::fs::write(&scene, edit).unwrap();
         assert_clear_error(
