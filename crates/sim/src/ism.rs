@@ -134,8 +134,8 @@ fn lut() -> &'static [[f64; TAPS]] {
 /// sine and a cosine per tap, 83 % of a room's rendering time, then a rotation recurrence
 /// whose dependency chain still cost 8 cycles a tap). The interpolation error is at most
 /// `max|f''| / (8 LUT_STEPS^2) < 6.3e-6` of `amp` (`|f''| < 3.3` for the windowed sinc,
-/// `pi^2 / 3` at its centre), 50 dB below the float32 resolution of the files it ends up in. pyroomacoustics
-/// does the same with 20 steps per sample.
+/// `pi^2 / 3` at its centre), 50 dB below the float32 resolution of the files it ends up
+/// in. pyroomacoustics does the same with 20 steps per sample.
 pub fn add_impulse(h: &mut [f64], t: f64, amp: f64) {
     impulse(h, t, amp);
 }

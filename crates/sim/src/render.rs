@@ -204,19 +204,16 @@ impl Renderer {
 /// * blocks` spectrum products (at `N` each).
 fn plan_blocks(n: usize, l: usize, sources: usize) -> (usize, usize) {
     let whole = (n + l - 1).next_power_of_two();
-    let mut best = (whole, n.max(whole - l + 1), f64::INFINITY);
-    let mut size = (2 * l).next_power_of_two().min(whole);
-    while size <= whole {
-        let block = size - l + 1;
-        let blocks = n.div_ceil(block) as f64;
-        let nf = size as f64;
-        let cost = (sources as f64 + blocks) * nf * nf.log2() + sources as f64 * blocks * nf * 2.0;
-        if cost < best.2 {
-            best = (size, block, cost);
-        }
-        size *= 2;
-    }
-    (best.0, best.1)
+    let s = sources as f64;
+    let cost = |size: usize| {
+        let (nf, blocks) = (size as f64, n.div_ceil(size - l + 1) as f64);
+        (s + blocks) * nf * nf.log2() + s * blocks * nf * 2.0
+    };
+    let first = (2 * l).next_power_of_two().min(whole);
+    let size = std::iter::successors(Some(first), |&z| (z < whole).then_some(2 * z))
+        .min_by(|a, b| cost(*a).total_cmp(&cost(*b)))
+        .expect("the sizes from `first` to `whole` are not empty");
+    (size, size - l + 1)
 }
 
 #[cfg(test)]

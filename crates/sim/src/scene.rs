@@ -33,7 +33,7 @@ use serde::Deserialize;
 use crate::error::SimError;
 use crate::render::{RenderConfig, Renderer, RoomSource};
 use crate::room::Room;
-use crate::signal::{Signal, generate};
+use crate::signal::{Signal, generate, scale_to_unit_power};
 
 fn invalid(field: impl Into<String>, message: impl Into<String>) -> SimError {
     SimError::Invalid {
@@ -412,13 +412,12 @@ fn wav_signal(path: &std::path::Path, n: usize, fs: u32) -> Result<Vec<f64>, Str
     if first.is_empty() {
         return Err("has no samples".into());
     }
-    let x: Vec<f64> = first.iter().copied().cycle().take(n).collect();
-    let p = x.iter().map(|v| v * v).sum::<f64>() / n.max(1) as f64;
+    let mut x: Vec<f64> = first.iter().copied().cycle().take(n).collect();
+    let p = scale_to_unit_power(&mut x);
     if !(p > 0.0 && p.is_finite()) {
         return Err("is silent (or not finite) over the clip".into());
     }
-    let g = p.sqrt().recip();
-    Ok(x.into_iter().map(|v| v * g).collect())
+    Ok(x)
 }
 
 /// Unit-power noise with amplitude spectrum `shape(f)`.
@@ -579,9 +578,7 @@ spacing = 0.5
                 "pos = [1.5, 3.0, 1.2]",
                 &format!("pos = [1.5, 3.0, 1.2]\n{line}"),
             );
-            let mut scene = Scene::from_toml(&text).unwrap();
-            scene.resolve_paths(dir.path());
-            let e = scene.prepare(two_mics).unwrap_err().to_string();
+            let e = refusal(&text, dir.path());
             assert!(e.contains("sources[0]") && e.contains(want), "{e}");
         }
     }
@@ -635,46 +632,44 @@ spacing = 0.5
         approx::assert_abs_diff_eq!(w[2], 0.7, epsilon = 1e-12);
     }
 
+    /// The message with which a scene (paths relative to `base`) is refused.
+    fn refusal(text: &str, base: &std::path::Path) -> String {
+        let mut scene = Scene::from_toml(text).unwrap();
+        scene.resolve_paths(base);
+        scene.prepare(two_mics).unwrap_err().to_string()
+    }
+
     #[test]
     fn bad_scenes_name_the_field() {
         let e = Scene::from_toml(&SCENE.replace("seed = 3", "seed = 3\ncolour = 1"))
             .unwrap_err()
             .to_string();
         assert!(e.contains("colour"), "{e}");
-        let e = Scene::from_toml(&SCENE.replace("pos = [1.5, 3.0, 1.2]", "pos = [1.5, 9.0, 1.2]"))
-            .unwrap()
-            .prepare(two_mics)
-            .unwrap_err()
-            .to_string();
-        assert!(
-            e.contains("sources[0].pos") && e.contains("outside the room"),
-            "{e}"
-        );
-        let e = Scene::from_toml(&SCENE.replace(
-            "[0.5, 0.5, 0.5, 0.5, 0.5, 0.5]",
-            "[0.5, 0.5, 1.5, 0.5, 0.5, 0.5]",
-        ))
-        .unwrap()
-        .prepare(two_mics)
-        .unwrap_err()
-        .to_string();
-        assert!(e.contains("absorption[2]"), "{e}");
-        let e = Scene::from_toml(
-            &SCENE.replace("absorption = [0.5, 0.5, 0.5, 0.5, 0.5, 0.5]", "rt60 = 0.05"),
-        )
-        .unwrap()
-        .prepare(two_mics)
-        .unwrap_err()
-        .to_string();
-        assert!(e.contains("room.rt60"), "{e}");
-        let e = Scene::from_toml(&SCENE.replace("height = 1.0", "height = 3.5"))
-            .unwrap()
-            .prepare(two_mics)
-            .unwrap_err()
-            .to_string();
-        assert!(
-            e.contains("trajectory stop 0") && e.contains("outside the room"),
-            "{e}"
-        );
+        let here = std::path::Path::new(".");
+        for (from, to, want) in [
+            (
+                "pos = [1.5, 3.0, 1.2]",
+                "pos = [1.5, 9.0, 1.2]",
+                &["sources[0].pos", "outside the room"][..],
+            ),
+            (
+                "[0.5, 0.5, 0.5, 0.5, 0.5, 0.5]",
+                "[0.5, 0.5, 1.5, 0.5, 0.5, 0.5]",
+                &["absorption[2]"],
+            ),
+            (
+                "absorption = [0.5, 0.5, 0.5, 0.5, 0.5, 0.5]",
+                "rt60 = 0.05",
+                &["room.rt60"],
+            ),
+            (
+                "height = 1.0",
+                "height = 3.5",
+                &["trajectory stop 0", "outside the room"],
+            ),
+        ] {
+            let e = refusal(&SCENE.replace(from, to), here);
+            assert!(want.iter().all(|w| e.contains(w)), "{e}");
+        }
     }
 }

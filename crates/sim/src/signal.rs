@@ -36,12 +36,19 @@ pub fn generate(signal: Signal, n: usize, fs: u32, rng: &mut StdRng) -> Vec<f64>
                 .collect()
         }
     };
-    let p = x.iter().map(|v| v * v).sum::<f64>() / n.max(1) as f64;
-    if p > 0.0 {
+    scale_to_unit_power(&mut x);
+    x
+}
+
+/// Scales `x` to unit mean power, unless it is silent or not finite; returns its mean power
+/// before scaling.
+pub fn scale_to_unit_power(x: &mut [f64]) -> f64 {
+    let p = x.iter().map(|v| v * v).sum::<f64>() / x.len().max(1) as f64;
+    if p > 0.0 && p.is_finite() {
         let g = p.sqrt().recip();
         x.iter_mut().for_each(|v| *v *= g);
     }
-    x
+    p
 }
 
 #[cfg(test)]
