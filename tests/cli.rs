@@ -215,7 +215,8 @@ fn the_shipped_array_file_is_the_iasm6_preset() {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
     let file = ssl::MicArray::from_file(&root.join("fixtures/arrays/iasm6.toml")).unwrap();
     assert_eq!(file, ssl::MicArray::preset("iasm6").unwrap());
-    let text = std::fs::read_to_string(root.join("fixtures/ssl-mbss-like.toml")).unwrap();
-    let c: ssl::SslConfig = toml::from_str(&text).unwrap();
-    assert_eq!((c.frame_len, c.block_frames), (Some(4096), 1));
+    let s =
+        iasm::settings::Settings::load(Some(&root.join("fixtures/ssl-mbss-like.toml"))).unwrap();
+    assert_eq!((s.ssl.frame_len, s.ssl.block_frames), (Some(4096), 1));
+    assert_eq!((s.ssl.num_peaks, s.iasm.num_doas), (4, 4));
 }

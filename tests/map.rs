@@ -64,21 +64,7 @@ fn map_from_raw_audio_finds_the_sources() {
     // Each stop hears the two sources as plane waves from their bearings.
     let dir = tempdir();
     let root = path(&dir, "ds");
-    let truth = [[2.0, 2.5], [4.5, -2.0]];
-    let poses = drive();
-    mapping_dataset(&root, &truth, &poses);
-    std::fs::create_dir_all(root.join("audio")).unwrap();
-    for (k, &(x, y, th)) in poses.iter().enumerate() {
-        let az: Vec<f64> = truth
-            .iter()
-            .map(|s| ssl::wrap_deg((s[1] - y).atan2(s[0] - x).to_degrees() - th))
-            .collect();
-        write_wav(
-            &root.join(format!("audio/sub{}.wav", k + 1)),
-            &plane_wave_recording(&iasm6(), &az, SEED + k as u64),
-            FS,
-        );
-    }
+    audio_dataset(&root, &AUDIO_TRUTH);
     let v = json(&iasm(&[
         "map",
         "--dataset",

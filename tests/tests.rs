@@ -3,5 +3,6 @@
 mod cli;
 mod map;
 mod regression;
+mod settings;
 mod simulate;
 mod util;

@@ -143,3 +143,25 @@ pub fn drive() -> Vec<(f64, f64, f64)> {
         .map(|k| (0.3 * k as f64, 0.0, 9.0 * k as f64 - 90.0))
         .collect()
 }
+
+/// Two sources for [`audio_dataset`].
+pub const AUDIO_TRUTH: [[f64; 2]; 2] = [[2.0, 2.5], [4.5, -2.0]];
+
+/// [`mapping_dataset`] along [`drive`], plus `audio/subK.wav`: each stop hears the sources
+/// as plane waves from their bearings on the `iasm6` array.
+pub fn audio_dataset(root: &Path, truth: &[[f64; 2]]) {
+    let poses = drive();
+    mapping_dataset(root, truth, &poses);
+    std::fs::create_dir_all(root.join("audio")).unwrap();
+    for (k, &(x, y, th)) in poses.iter().enumerate() {
+        let az: Vec<f64> = truth
+            .iter()
+            .map(|s| ssl::wrap_deg((s[1] - y).atan2(s[0] - x).to_degrees() - th))
+            .collect();
+        write_wav(
+            &root.join(format!("audio/sub{}.wav", k + 1)),
+            &plane_wave_recording(&iasm6(), &az, SEED + k as u64),
+            FS,
+        );
+    }
+}

@@ -1,9 +1,16 @@
-//! Command-line arguments (clap derive). Turning them into validated settings happens in
-//! the command modules, so that the library stays callable without a command line.
+//! Command-line arguments (clap derive), and their conversion into the pipeline's
+//! validated values ([`Settings`], [`SurveyInputs`]): ripgrep's two stages, so that the
+//! library stays callable without a command line.
 
 use std::path::PathBuf;
 
-use clap::{Args, Parser, Subcommand};
+use anyhow::Result;
+use asm::Variant;
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use ssl::{Method, Pooling};
+
+use crate::pipeline::SurveyInputs;
+use crate::settings::Settings;
 
 /// iasm: from a robot's multichannel recordings to a map of the sound sources around it.
 #[derive(Debug, Parser)]
@@ -58,6 +65,83 @@ pub enum Command {
     Eval(EvalArgs),
 }
 
+/// The settings every command reads the same way: one file, then the flags that were given.
+#[derive(Debug, Clone, Default, Args)]
+pub struct SettingsArgs {
+    /// A settings file (TOML): `[ssl]` (the `ssl::SslConfig` fields), `[iasm]` (the
+    /// `asm::IasmConfig` fields) and `array`. Flags given here override it.
+    #[arg(long, value_name = "FILE")]
+    pub config: Option<PathBuf>,
+    /// Microphone array: a preset (iasm6, respeaker4, respeaker6, uma8) or a TOML/JSON
+    /// file [default: iasm6, or the settings file's].
+    #[arg(long)]
+    pub array: Option<String>,
+    /// Angular-spectrum method: gcc-phat or mvdr [default: mvdr, or the settings file's].
+    #[arg(long)]
+    pub method: Option<Method>,
+    /// N, the DoAs per stop, strongest first, for the SSL and the mapper alike
+    /// [default: 4, or the settings file's].
+    #[arg(long, value_name = "N")]
+    pub num: Option<usize>,
+    /// Lower edge of the analysis band (Hz).
+    #[arg(long)]
+    pub fmin: Option<f64>,
+    /// Upper edge of the analysis band (Hz).
+    #[arg(long)]
+    pub fmax: Option<f64>,
+    /// Frames per pooling block.
+    #[arg(long)]
+    pub block_frames: Option<usize>,
+    /// Block pooling: max or mean.
+    #[arg(long)]
+    pub pooling: Option<Pooling>,
+}
+
+impl SettingsArgs {
+    /// The settings file (or the defaults) with the given flags applied, validated.
+    ///
+    /// # Errors
+    /// An unreadable or refused file, or a refused value.
+    pub fn settings(&self) -> Result<Settings> {
+        let mut s = Settings::load(self.config.as_deref())?;
+        if let Some(a) = &self.array {
+            s.array = Some(a.clone());
+        }
+        if let Some(m) = self.method {
+            s.ssl.method = m;
+        }
+        if let Some(n) = self.num {
+            s.set_num(n);
+        }
+        if let Some(v) = self.fmin {
+            s.ssl.fmin_hz = v;
+        }
+        if let Some(v) = self.fmax {
+            s.ssl.fmax_hz = v;
+        }
+        if let Some(v) = self.block_frames {
+            s.ssl.block_frames = v;
+        }
+        if let Some(v) = self.pooling {
+            s.ssl.pooling = v;
+        }
+        s.validate()?;
+        Ok(s)
+    }
+}
+
+/// The unit of theta in a pose table.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ValueEnum)]
+pub enum AngleUnit {
+    /// Degrees.
+    #[default]
+    #[value(alias = "degrees")]
+    Deg,
+    /// Radians.
+    #[value(alias = "radians")]
+    Rad,
+}
+
 /// Where the mapping inputs come from (shared by `map` and `eval`).
 #[derive(Debug, Clone, Args)]
 pub struct InputArgs {
@@ -70,25 +154,16 @@ pub struct InputArgs {
     /// Pose table: x, y, theta per stop, CSV or .xlsx (overrides the data set's).
     #[arg(long, value_name = "FILE")]
     pub poses: Option<PathBuf>,
-    /// Unit of theta in the pose table: deg or rad.
-    #[arg(long, default_value = "deg")]
-    pub theta_unit: String,
+    /// Unit of theta in the pose table.
+    #[arg(long, value_enum, default_value_t = AngleUnit::Deg)]
+    pub theta_unit: AngleUnit,
     /// DoA table: up to N azimuths per stop (degrees, array frame), CSV or .xlsx.
     #[arg(long, value_name = "TABLE", conflicts_with = "audio")]
     pub doas: Option<PathBuf>,
-    /// Folder of WAV recordings, one per stop, localised with --method (default: the
-    /// data set's audio/ when no --doas is given).
+    /// Folder of WAV recordings, one per stop, localised with the SSL settings (default:
+    /// the data set's audio/ when no --doas is given).
     #[arg(long, value_name = "DIR")]
     pub audio: Option<PathBuf>,
-    /// SSL method for raw audio: gcc-phat or mvdr.
-    #[arg(long, default_value = "mvdr")]
-    pub method: String,
-    /// Microphone array for raw audio: a preset or a TOML/JSON file.
-    #[arg(long, default_value = "iasm6")]
-    pub array: String,
-    /// DoAs per stop, N.
-    #[arg(long, default_value_t = 4, value_name = "N")]
-    pub num: usize,
     /// Ground-truth source positions (overrides the data set's src_gt*).
     #[arg(long, value_name = "FILE")]
     pub truth: Option<PathBuf>,
@@ -96,9 +171,34 @@ pub struct InputArgs {
     /// paper; see `asm::IasmConfig::refine`).
     #[arg(long)]
     pub refine: bool,
-    /// A TOML file of I-ASM parameters (the `asm::IasmConfig` fields).
-    #[arg(long = "iasm-config", value_name = "FILE")]
-    pub iasm_config: Option<PathBuf>,
+    /// The settings.
+    #[command(flatten)]
+    pub settings: SettingsArgs,
+}
+
+impl InputArgs {
+    /// The settings, with `--refine` when given.
+    ///
+    /// # Errors
+    /// As [`SettingsArgs::settings`].
+    pub fn settings(&self) -> Result<Settings> {
+        let mut s = self.settings.settings()?;
+        s.iasm.refine |= self.refine;
+        Ok(s)
+    }
+
+    /// Where the survey comes from.
+    pub fn survey_inputs(&self) -> SurveyInputs {
+        SurveyInputs {
+            dataset: self.dataset.clone(),
+            map: self.map.clone(),
+            poses: self.poses.clone(),
+            theta_in_radians: self.theta_unit == AngleUnit::Rad,
+            doas: self.doas.clone(),
+            audio: self.audio.clone(),
+            truth: self.truth.clone(),
+        }
+    }
 }
 
 /// How `map` and `eval` report: the format and the OSPA metric's parameters.
@@ -121,9 +221,10 @@ pub struct MapArgs {
     /// The inputs.
     #[command(flatten)]
     pub input: InputArgs,
-    /// Variant: ca (full I-ASM), ws (weighted sum) or wdp (no distance penalty).
-    #[arg(long, default_value = "ca")]
-    pub variant: String,
+    /// Variant: ca (full I-ASM), ws (weighted sum) or wdp (no distance penalty)
+    /// [default: ca, or the settings file's].
+    #[arg(long)]
+    pub variant: Option<Variant>,
     /// Seed of the particle filter.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -176,30 +277,9 @@ pub struct SslArgs {
     /// A data set folder: localises every `DIR/audio/*.wav` in natural name order.
     #[arg(long, value_name = "DIR")]
     pub dataset: Option<PathBuf>,
-    /// Microphone array: a preset (iasm6, respeaker4, respeaker6, uma8) or a TOML/JSON file.
-    #[arg(long, default_value = "iasm6")]
-    pub array: String,
-    /// Angular-spectrum method: gcc-phat or mvdr [default: mvdr, or the config file's].
-    #[arg(long)]
-    pub method: Option<String>,
-    /// Number of DoAs per recording, strongest first [default: 4, or the config file's].
-    #[arg(long, value_name = "N")]
-    pub num: Option<usize>,
-    /// A TOML file of SSL settings (the `ssl::SslConfig` fields); flags override it.
-    #[arg(long, value_name = "FILE")]
-    pub config: Option<PathBuf>,
-    /// Lower edge of the analysis band (Hz).
-    #[arg(long)]
-    pub fmin: Option<f64>,
-    /// Upper edge of the analysis band (Hz).
-    #[arg(long)]
-    pub fmax: Option<f64>,
-    /// Frames per pooling block.
-    #[arg(long)]
-    pub block_frames: Option<usize>,
-    /// Block pooling: max or mean.
-    #[arg(long)]
-    pub pooling: Option<String>,
+    /// The settings.
+    #[command(flatten)]
+    pub settings: SettingsArgs,
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,

@@ -8,6 +8,8 @@ use std::cmp::Ordering;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail, ensure};
+use asm::Pose;
+use asm::map::OccupancyMap;
 
 /// Compares file names the way a person counts: `sub2` before `sub10`.
 pub fn natural_cmp(a: &str, b: &str) -> Ordering {
@@ -156,17 +158,6 @@ fn read_workbook(path: &Path) -> Result<Vec<Vec<String>>> {
         .collect())
 }
 
-/// A robot pose: position (m) and heading (degrees), world frame.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
-pub struct Pose {
-    /// x (m).
-    pub x: f64,
-    /// y (m).
-    pub y: f64,
-    /// Heading (degrees, counter-clockwise from the world x axis).
-    pub theta_deg: f64,
-}
-
 /// Reads a pose table: x, y, theta per row; theta in degrees unless `theta_in_radians`.
 ///
 /// # Errors
@@ -191,14 +182,11 @@ pub fn read_poses(path: &Path, theta_in_radians: bool) -> Result<Vec<Pose>> {
                 })
             };
             let theta = get(2, "theta")?;
-            Ok(Pose {
-                x: get(0, "x")?,
-                y: get(1, "y")?,
-                theta_deg: if theta_in_radians {
-                    theta.to_degrees()
-                } else {
-                    theta
-                },
+            let (x, y) = (get(0, "x")?, get(1, "y")?);
+            Ok(if theta_in_radians {
+                Pose::new(x, y, theta)
+            } else {
+                Pose::from_degrees(x, y, theta)
             })
         })
         .collect()
@@ -239,6 +227,45 @@ pub fn read_sources(path: &Path) -> Result<Vec<[f64; 2]>> {
         path.display()
     );
     Ok(out)
+}
+
+/// The first file in `dir` with extension `ext`, in natural name order.
+///
+/// # Errors
+/// If `dir` cannot be read or holds no such file.
+pub fn first_with_ext(dir: &Path, ext: &str) -> Result<PathBuf> {
+    list_files(dir, ext)?
+        .into_iter()
+        .next()
+        .with_context(|| format!("no .{ext} file in {}", dir.display()))
+}
+
+/// Reads a ROS map; when the image the YAML names is missing and the YAML's folder holds
+/// exactly one PGM, reads that one instead and says so on stderr.
+///
+/// # Errors
+/// If the map cannot be read.
+pub fn load_map(yaml: &Path) -> Result<OccupancyMap> {
+    let named = OccupancyMap::image_path(yaml)?;
+    let image = if named.exists() {
+        None
+    } else {
+        let dir = yaml.parent().unwrap_or(Path::new("."));
+        let pgms = list_files(dir, "pgm")?;
+        match pgms.as_slice() {
+            [only] => {
+                eprintln!(
+                    "warning: {} names the image {}, which does not exist; using {}, the only PGM beside it",
+                    yaml.display(),
+                    named.display(),
+                    only.display()
+                );
+                Some(only.clone())
+            }
+            _ => None,
+        }
+    };
+    Ok(OccupancyMap::load_with_image(yaml, image.as_deref())?)
 }
 
 /// A data set folder in the published layout.

@@ -1,23 +1,30 @@
-//! The `iasm` application: the commands behind the binary, callable from tests.
+//! The `iasm` application: the pipeline that joins the libraries, and the commands behind
+//! the binary, callable from tests.
 //!
-//! - [`demo`]: `iasm demo`, the whole pipeline on a built-in simulated scene.
-//! - [`ssl_cmd`]: `iasm ssl`, DoAs from WAV files or a data set, and their score.
-//! - [`map_cmd`]: `iasm map` and `iasm eval`, I-ASM maps and their Monte Carlo OSPA.
-//! - [`render`]: the map picture.
-//! - [`simulate`]: `iasm simulate`, a scene file rendered into a data set.
-//! - [`regress`]: `iasm regress`, the synthetic-room regression suite.
-//! - [`dataset`]: the published data-set layout, tables and natural file order.
+//! The library modules, which the commands use and never the other way round:
+//!
+//! - [`pipeline`]: the one place where recordings become DoAs and DoAs become a map
+//!   ([`pipeline::Survey`], [`pipeline::Simulated`], [`pipeline::evaluate`]).
+//! - [`settings`]: one [`settings::Settings`] (SSL, I-ASM, array) from one TOML file.
+//! - [`dataset`]: the published data-set layout, tables, poses, maps, natural file order.
+//! - [`scenes`]: scene files (with the suite's `[expect]`), and writing a rendered scene.
+//! - [`suite`]: the synthetic-room regression suite.
 //! - [`score`]: the DoA score against known sources.
+//! - [`render`]: the map picture.
+//! - [`args`]: the command line, and its conversion into settings and inputs.
+//!
+//! The commands ([`cmd`]): `ssl`, `map`, `eval`, `simulate`, `regress`, `demo`, one module
+//! each; none imports another.
 
 pub mod args;
+pub mod cmd;
 pub mod dataset;
-pub mod demo;
-pub mod map_cmd;
-pub mod regress;
+pub mod pipeline;
 pub mod render;
+pub mod scenes;
 pub mod score;
-pub mod simulate;
-pub mod ssl_cmd;
+pub mod settings;
+pub mod suite;
 
 /// How a command ended when it did not fail outright.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -36,22 +43,22 @@ pub fn run(cli: &args::Cli) -> anyhow::Result<Outcome> {
     match &cli.command {
         args::Command::Ssl(a) => {
             set_threads(a.threads);
-            ssl_cmd::run(a)
+            cmd::ssl::run(a)
         }
-        args::Command::Demo { seed, png } => demo::run(*seed, png),
-        args::Command::Map(a) => map_cmd::run_map(a),
+        args::Command::Demo { seed, png } => cmd::demo::run(*seed, png),
+        args::Command::Map(a) => cmd::map::run(a),
         args::Command::Simulate {
             scene,
             out,
             threads,
         } => {
             set_threads(*threads);
-            simulate::run(scene, out)
+            cmd::simulate::run(scene, out)
         }
-        args::Command::Regress { dir, json } => regress::run(dir, *json),
+        args::Command::Regress { dir, json } => cmd::regress::run(dir, *json),
         args::Command::Eval(a) => {
             set_threads(a.threads);
-            map_cmd::run_eval(a)
+            cmd::eval::run(a)
         }
     }
 }

@@ -8,10 +8,11 @@
 //! of the circle that the sources' tolerance windows cover.
 
 use anyhow::{Result, ensure};
+use asm::Pose;
 use serde::Serialize;
 use ssl::wrap_deg;
 
-use crate::dataset::{Pose, Table};
+use crate::dataset::Table;
 
 /// The score of one DoA table.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -26,7 +27,8 @@ pub struct DoaScore {
     pub mean_hit_error_deg: f64,
 }
 
-/// Scores the first `n` DoAs of every row of `doas` (degrees, array frame).
+/// Scores the first `n` DoAs of every row of `doas` (degrees, array frame) heard at
+/// `poses`, against `sources` (m).
 ///
 /// # Errors
 /// If the table and the poses differ in length, or nothing is to be scored.
@@ -50,7 +52,7 @@ pub fn score_doas(
     let (mut hits, mut err_sum) = (0usize, 0.0);
     for (row, pose) in doas.iter().zip(poses) {
         for az in row.iter().take(n).flatten() {
-            let bearing = wrap_deg(az + pose.theta_deg);
+            let bearing = wrap_deg(az + pose.theta_deg());
             let best = sources
                 .iter()
                 .map(|s| {
@@ -85,11 +87,7 @@ mod tests {
     fn hand_worked_score() {
         // Robot at the origin facing +y (theta 90). A source at (0, 5) is dead ahead:
         // azimuth 0 in the array frame. One at (-5, 0) is at azimuth +90.
-        let poses = [Pose {
-            x: 0.0,
-            y: 0.0,
-            theta_deg: 90.0,
-        }];
+        let poses = [Pose::from_degrees(0.0, 0.0, 90.0)];
         let sources = [[0.0, 5.0], [-5.0, 0.0]];
         let doas = vec![vec![Some(3.0), Some(84.0), None, Some(-170.0)]];
         let s = score_doas(&doas, &poses, &sources, 4, 5.0).unwrap();
@@ -105,11 +103,7 @@ mod tests {
     #[test]
     fn bearings_wrap_across_180() {
         // Facing -x (theta 180); a source behind-left at (-5, -0.1): world bearing ~ -178.9.
-        let poses = [Pose {
-            x: 0.0,
-            y: 0.0,
-            theta_deg: 180.0,
-        }];
+        let poses = [Pose::from_degrees(0.0, 0.0, 180.0)];
         let doas = vec![vec![Some(2.0)]]; // world bearing 182 = -178
         let s = score_doas(&doas, &poses, &[[-5.0, -0.1]], 1, 5.0).unwrap();
         assert_eq!(s.hits, 1);
@@ -117,11 +111,7 @@ mod tests {
 
     #[test]
     fn lengths_must_match() {
-        let poses = [Pose {
-            x: 0.0,
-            y: 0.0,
-            theta_deg: 0.0,
-        }];
+        let poses = [Pose::from_degrees(0.0, 0.0, 0.0)];
         assert!(score_doas(&vec![], &poses, &[[1.0, 0.0]], 4, 5.0).is_err());
     }
 }

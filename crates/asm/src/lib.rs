@@ -6,6 +6,7 @@
 //! - [`map`]: ROS occupancy maps (YAML + PGM), with the ROS pixel-to-world convention.
 //! - [`pf`]: the particle filter, its likelihood and low-variance resampling.
 //! - [`dbscan`]: grid-indexed DBSCAN that is fastest where particle clouds are densest.
+//! - [`assoc`]: the paper's implicit association of DoAs with a new source.
 //! - [`mapper`]: I-ASM itself, the Filtering-Clustering-Implicit-Associating loop.
 //! - [`ospa`]: the OSPA metric with its localisation and cardinality parts.
 //!
@@ -30,6 +31,7 @@
 //! frame, whose `x` axis is the robot's heading. All randomness comes from the caller's
 //! `Rng`: the same seed gives the same map.
 
+pub mod assoc;
 pub mod dbscan;
 pub mod error;
 pub mod map;
@@ -38,38 +40,5 @@ pub mod ospa;
 pub mod pf;
 
 pub use error::{ConfigError, Error, MapError, Result};
-pub use mapper::{IasmConfig, MapResult, Mapper, Pose, Source, Variant};
-
-/// Wraps an angle (rad) to `(-pi, pi]`.
-pub fn wrap_rad(a: f64) -> f64 {
-    let two_pi = std::f64::consts::TAU;
-    let w = a - two_pi * ((a + std::f64::consts::PI) / two_pi).floor();
-    if w <= -std::f64::consts::PI {
-        w + two_pi
-    } else {
-        w
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn wrap_rad_stays_in_range() {
-        use std::f64::consts::PI;
-        for (a, w) in [
-            (0.0, 0.0),
-            (PI, PI),
-            (-PI, PI),
-            (3.0 * PI / 2.0, -PI / 2.0),
-            (-7.0, -7.0 + 2.0 * PI),
-        ] {
-            assert!(
-                (wrap_rad(a) - w).abs() < 1e-12,
-                "{a} -> {} (want {w})",
-                wrap_rad(a)
-            );
-        }
-    }
-}
+pub use geom::{Pose, wrap_rad};
+pub use mapper::{IasmConfig, MapResult, Mapper, Source, Variant};

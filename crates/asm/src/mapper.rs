@@ -13,7 +13,7 @@
 //!    uniform initial cloud has no cluster and its weights would be lost. The largest
 //!    cluster's centroid is the new source (the WS variant takes the weighted mean of all
 //!    particles instead).
-//! 4. **Associate**: at every stop, the DoA nearest the source's bearing, if within
+//! 4. **Associate** ([`crate::assoc`]): at every stop, the DoA nearest the source's bearing, if within
 //!    `gamma = 3 sigma`, is explained by it and removed.
 //!
 //! The paper stops at the first round whose clustering finds nothing. That round is one
@@ -32,7 +32,9 @@
 use rand::Rng;
 use serde::{Deserialize, Serialize};
 
-use crate::dbscan::{DbscanParams, Label};
+use crate::Pose;
+use crate::assoc::Ray;
+use crate::dbscan::{Dbscan, DbscanParams, Label};
 use crate::error::{ConfigError, Error, Result};
 use crate::map::OccupancyMap;
 use crate::pf::{Likelihood, ParticleFilter, covariance, mean};
@@ -66,16 +68,20 @@ impl Variant {
 }
 
 impl std::str::FromStr for Variant {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
+    type Err = ConfigError;
+    fn from_str(s: &str) -> Result<Self, ConfigError> {
         match s.to_ascii_lowercase().as_str() {
             "ca" => Ok(Variant::Ca),
             "ws" => Ok(Variant::Ws),
             "wdp" => Ok(Variant::Wdp),
-            _ => Err(format!(
-                "unknown variant {s:?}; expected one of: ca, ws, wdp"
-            )),
+            _ => Err(ConfigError::UnknownVariant(s.to_owned())),
         }
+    }
+}
+
+impl std::fmt::Display for Variant {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
     }
 }
 
@@ -193,17 +199,6 @@ impl IasmConfig {
     }
 }
 
-/// A robot pose: position (m) and heading (rad), world frame.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Pose {
-    /// x (m).
-    pub x: f64,
-    /// y (m).
-    pub y: f64,
-    /// Heading (rad, counter-clockwise from the world x axis).
-    pub theta: f64,
-}
-
 /// One mapped source.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Source {
@@ -224,7 +219,7 @@ pub struct Source {
     pub cluster: Vec<[f64; 2]>,
     /// The DoAs it explains: robot position (m) and world bearing (rad) (not serialised).
     #[serde(skip)]
-    pub rays: Vec<([f64; 2], f64)>,
+    pub rays: Vec<Ray>,
     /// Whether the position was refined by bearing least squares (see
     /// [`IasmConfig::refine`]).
     pub refined: bool,
@@ -250,12 +245,31 @@ impl MapResult {
     }
 }
 
-/// A validated I-ASM mapper for one occupancy map.
+/// A validated I-ASM mapper for one occupancy map: the parameters checked, the map's known
+/// cells collected and everything derived from the parameters computed once.
 #[derive(Clone, Debug)]
 pub struct Mapper {
     config: IasmConfig,
     cells: Vec<[f64; 2]>,
     m: usize,
+    lik: Likelihood,
+    dbscan: Dbscan,
+    /// Resample when `N_eff` falls below this.
+    resample_below: f64,
+    /// Association range (rad).
+    gamma: f64,
+}
+
+/// What one filtering round ends with.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Round {
+    /// A source, with the DoAs it explains (already removed from the bearings).
+    Found(Source),
+    /// DBSCAN found no cluster in the round's cloud.
+    NoCluster,
+    /// The largest cluster's estimate explains no remaining DoA: the cloud settled where
+    /// DoAs of different sources cross.
+    NothingExplained,
 }
 
 impl Mapper {
@@ -271,10 +285,21 @@ impl Mapper {
         if m == 0 {
             return Err(Error::EmptyMap);
         }
+        let sigma = config.sigma_deg.to_radians();
+        let beta = (config.variant != Variant::Wdp).then_some(config.beta_m);
+        let dbscan = DbscanParams {
+            eps: config.dbscan_eps_m,
+            min_pts: ((config.min_pts_frac * m as f64).round() as usize).max(1),
+        }
+        .check()?;
         Ok(Self {
             config: config.clone(),
             cells,
             m,
+            lik: Likelihood::new(sigma, beta),
+            dbscan,
+            resample_below: (config.resample_frac * m as f64).ceil(),
+            gamma: config.gamma_sigmas * sigma,
         })
     }
 
@@ -289,158 +314,40 @@ impl Mapper {
     }
 
     /// Maps the sources heard from `poses`, given each stop's DoAs (array-frame azimuths,
-    /// rad, strongest first, at most `N`), with randomness from `rng`.
+    /// rad, strongest first, at most `N`), with randomness from `rng`: filtering rounds
+    /// ([`Mapper::round`]) until `retries + 1` fail in a row or `max_rounds` have run, then
+    /// close estimates merged and, with [`IasmConfig::refine`], refined.
     ///
     /// # Errors
     /// [`Error`] if the tables differ in length, a pose is not finite, or a row holds more
     /// than `N` DoAs.
-    pub fn run(&self, poses: &[Pose], doas: &[Vec<f64>], rng: &mut impl Rng) -> Result<MapResult> {
-        if poses.is_empty() {
-            return Err(Error::NoPoses);
-        }
-        if poses.len() != doas.len() {
-            return Err(Error::LengthMismatch {
-                poses: poses.len(),
-                doas: doas.len(),
-            });
-        }
-        if let Some(index) = poses
-            .iter()
-            .position(|p| !(p.x.is_finite() && p.y.is_finite() && p.theta.is_finite()))
-        {
-            return Err(Error::NonFinitePose { index });
-        }
+    pub fn run(
+        &self,
+        poses: &[Pose],
+        doas_rad: &[Vec<f64>],
+        rng: &mut impl Rng,
+    ) -> Result<MapResult> {
+        let mut bearings = self.world_bearings(poses, doas_rad)?;
         let c = &self.config;
-        if let Some(index) = doas.iter().position(|r| r.len() > c.num_doas) {
-            return Err(Error::TooManyDoas {
-                index,
-                got: doas[index].len(),
-                n: c.num_doas,
-            });
-        }
-        let mut bearings: Vec<Vec<f64>> = doas
-            .iter()
-            .zip(poses)
-            .map(|(row, p)| {
-                row.iter()
-                    .filter(|a| a.is_finite())
-                    .map(|a| wrap_rad(a + p.theta))
-                    .collect()
-            })
-            .collect();
-        let sigma = c.sigma_deg.to_radians();
-        let gamma = c.gamma_sigmas * sigma;
-        let beta = (c.variant != Variant::Wdp).then_some(c.beta_m);
-        let lik = Likelihood::new(sigma, beta);
-        let m = self.m;
-        let min_pts = ((c.min_pts_frac * m as f64).round() as usize).max(1);
-        let resample_below = (c.resample_frac * m as f64).ceil();
-        let dbscan = DbscanParams {
-            eps: c.dbscan_eps_m,
-            min_pts,
-        }
-        .check()?;
-        let k_stops = poses.len();
         let mut sources: Vec<Source> = Vec::new();
         let mut rounds = 0;
         let mut failed = 0;
         while rounds < c.max_rounds {
             rounds += 1;
-            // Filtering.
-            let mut pf = ParticleFilter::from_cells(&self.cells, m, rng);
-            let mut resampled = false;
-            for step in 0..c.passes * k_stops {
-                let k = step % k_stops;
-                pf.predict(c.sigma_p_m, rng);
-                pf.update([poses[k].x, poses[k].y], &bearings[k], &lik);
-                if pf.neff() < resample_below {
-                    pf.resample(rng);
-                    resampled = true;
+            match self.round(poses, &mut bearings, rounds, rng) {
+                Round::Found(s) => {
+                    failed = 0;
+                    sources.push(s);
                 }
-                if pf.max_cov_eigenvalue() < c.lambda_thresh_m2 {
-                    break;
-                }
-            }
-            // Clustering. DBSCAN counts particles, not weights: if the adaptive resampling
-            // never ran (few stops), the cloud is still the uniform initial draw and all
-            // the evidence is in its weights, so it is resampled once to turn them into
-            // density. Otherwise the cloud is clustered as the paper does.
-            let weighted_mean = pf.weighted_mean();
-            if !resampled {
-                pf.resample(rng);
-            }
-            let labels = dbscan.cluster(pf.particles());
-            let mut sizes: Vec<usize> = Vec::new();
-            for l in &labels {
-                if let Label::Cluster(k) = *l {
-                    let k = k as usize;
-                    if sizes.len() <= k {
-                        sizes.resize(k + 1, 0);
+                // One retry policy for both failures: each is one random draw's bad luck
+                // until `retries + 1` happen in a row (see the module documentation).
+                Round::NoCluster | Round::NothingExplained => {
+                    failed += 1;
+                    if failed > c.retries {
+                        break;
                     }
-                    sizes[k] += 1;
                 }
             }
-            let Some((largest, _)) = sizes
-                .iter()
-                .enumerate()
-                .max_by_key(|&(i, &s)| (s, std::cmp::Reverse(i)))
-            else {
-                failed += 1;
-                if failed > c.retries {
-                    break;
-                }
-                continue;
-            };
-            let cluster: Vec<[f64; 2]> = pf
-                .particles()
-                .iter()
-                .zip(&labels)
-                .filter(|(_, l)| **l == Label::Cluster(largest as u32))
-                .map(|(p, _)| *p)
-                .collect();
-            let est = match c.variant {
-                Variant::Ws => weighted_mean,
-                Variant::Ca | Variant::Wdp => mean(&cluster),
-            };
-            // Implicit association.
-            let mut taken = 0;
-            let mut rays = Vec::new();
-            for (p, row) in poses.iter().zip(bearings.iter_mut()) {
-                let theta = (est[1] - p.y).atan2(est[0] - p.x);
-                let best = row
-                    .iter()
-                    .enumerate()
-                    .map(|(n, &b)| (n, wrap_rad(theta - b).abs()))
-                    .min_by(|a, b| a.1.total_cmp(&b.1));
-                if let Some((n, d)) = best
-                    && d < gamma
-                {
-                    rays.push(([p.x, p.y], row.remove(n)));
-                    taken += 1;
-                }
-            }
-            if taken == 0 {
-                // The cloud settled where no remaining DoA points (an intersection of
-                // DoAs of different sources): a random event, so retry from a fresh
-                // draw a few times before concluding that nothing is left.
-                failed += 1;
-                if failed > c.retries {
-                    break;
-                }
-                continue;
-            }
-            failed = 0;
-            sources.push(Source {
-                x: est[0],
-                y: est[1],
-                observations: taken,
-                particles: cluster.len(),
-                covariance: covariance(&cluster),
-                round: rounds,
-                cluster,
-                rays,
-                refined: false,
-            });
         }
         merge_close(&mut sources, c.merge_dist_m);
         if c.refine {
@@ -454,10 +361,157 @@ impl Mapper {
         Ok(MapResult {
             sources,
             rounds,
-            particles: m,
+            particles: self.m,
             unexplained: bearings.iter().map(Vec::len).sum(),
         })
     }
+
+    /// Checks the inputs and turns every DoA into a world bearing, `wrap(azimuth + theta)`,
+    /// dropping non-finite DoAs (missing cells of a table).
+    ///
+    /// # Errors
+    /// As [`Mapper::run`].
+    pub fn world_bearings(&self, poses: &[Pose], doas_rad: &[Vec<f64>]) -> Result<Vec<Vec<f64>>> {
+        if poses.is_empty() {
+            return Err(Error::NoPoses);
+        }
+        if poses.len() != doas_rad.len() {
+            return Err(Error::LengthMismatch {
+                poses: poses.len(),
+                doas: doas_rad.len(),
+            });
+        }
+        if let Some(index) = poses.iter().position(|p| !p.is_finite()) {
+            return Err(Error::NonFinitePose { index });
+        }
+        let n = self.config.num_doas;
+        if let Some(index) = doas_rad.iter().position(|r| r.len() > n) {
+            return Err(Error::TooManyDoas {
+                index,
+                got: doas_rad[index].len(),
+                n,
+            });
+        }
+        Ok(doas_rad
+            .iter()
+            .zip(poses)
+            .map(|(row, p)| {
+                row.iter()
+                    .filter(|a| a.is_finite())
+                    .map(|&a| p.world_bearing(a))
+                    .collect()
+            })
+            .collect())
+    }
+
+    /// One round of the paper's loop: [filter](Mapper::filter) a fresh cloud over the
+    /// remaining `bearings`, take the [largest cluster](largest_cluster) as a source and
+    /// [associate](crate::assoc::associate) it, removing the DoAs it explains. `round` is
+    /// the round's number, recorded in the source.
+    ///
+    /// # Panics
+    /// If `poses` and `bearings` differ in length (use [`Mapper::world_bearings`]).
+    pub fn round(
+        &self,
+        poses: &[Pose],
+        bearings: &mut [Vec<f64>],
+        round: usize,
+        rng: &mut impl Rng,
+    ) -> Round {
+        let (mut pf, resampled) = self.filter(poses, bearings, rng);
+        // DBSCAN counts particles, not weights: if the adaptive resampling never ran (few
+        // stops), the cloud is still the uniform initial draw and all the evidence is in
+        // its weights, so it is resampled once to turn them into density. Otherwise the
+        // cloud is clustered as the paper does.
+        let weighted_mean = pf.weighted_mean();
+        if !resampled {
+            pf.resample(rng);
+        }
+        let Some(cluster) = largest_cluster(&self.dbscan, pf.particles()) else {
+            return Round::NoCluster;
+        };
+        let est = match self.config.variant {
+            Variant::Ws => weighted_mean,
+            Variant::Ca | Variant::Wdp => mean(&cluster),
+        };
+        let rays = crate::assoc::associate(est, poses, bearings, self.gamma);
+        if rays.is_empty() {
+            return Round::NothingExplained;
+        }
+        Round::Found(Source {
+            x: est[0],
+            y: est[1],
+            observations: rays.len(),
+            particles: cluster.len(),
+            covariance: covariance(&cluster),
+            round,
+            cluster,
+            rays,
+            refined: false,
+        })
+    }
+
+    /// The filtering step: `M` particles drawn from the map's known cells, then the stops
+    /// visited `passes` times, each time predicting (random walk), weighting with the
+    /// stop's remaining bearings, resampling when `N_eff < ceil(M / C)`, and stopping early
+    /// once the cloud's largest covariance eigenvalue is below `lambda_thresh`. Returns the
+    /// cloud and whether it was ever resampled.
+    ///
+    /// # Panics
+    /// If `poses` and `bearings` differ in length.
+    pub fn filter(
+        &self,
+        poses: &[Pose],
+        bearings: &[Vec<f64>],
+        rng: &mut impl Rng,
+    ) -> (ParticleFilter, bool) {
+        assert_eq!(poses.len(), bearings.len(), "one row of bearings per pose");
+        let c = &self.config;
+        let k_stops = poses.len();
+        let mut pf = ParticleFilter::from_cells(&self.cells, self.m, rng);
+        let mut resampled = false;
+        for step in 0..c.passes * k_stops {
+            let k = step % k_stops;
+            pf.predict(c.sigma_p_m, rng);
+            pf.update(poses[k].position(), &bearings[k], &self.lik);
+            if pf.neff() < self.resample_below {
+                pf.resample(rng);
+                resampled = true;
+            }
+            if pf.max_cov_eigenvalue() < c.lambda_thresh_m2 {
+                break;
+            }
+        }
+        (pf, resampled)
+    }
+}
+
+/// The particles of the largest DBSCAN cluster of `particles` (the first found among equals),
+/// or `None` when every particle is noise.
+pub fn largest_cluster(dbscan: &Dbscan, particles: &[[f64; 2]]) -> Option<Vec<[f64; 2]>> {
+    let labels = dbscan.cluster(particles);
+    let mut sizes: Vec<usize> = Vec::new();
+    for l in &labels {
+        if let Label::Cluster(k) = *l {
+            let k = k as usize;
+            if sizes.len() <= k {
+                sizes.resize(k + 1, 0);
+            }
+            sizes[k] += 1;
+        }
+    }
+    let (largest, _) = sizes
+        .iter()
+        .enumerate()
+        .max_by_key(|&(i, &s)| (s, std::cmp::Reverse(i)))?;
+    Some(
+        particles
+            .iter()
+            .zip(&labels)
+            .filter(|(_, l)| **l == Label::Cluster(largest as u32))
+            .map(|(p, _)| *p)
+            .collect(),
+    )
 }
 
 /// The position that minimises the squared wrapped angles between `rays` (robot position,
@@ -465,12 +519,8 @@ impl Mapper {
 /// dropping the worst ray and refitting while a residual exceeds `2 sigma`. `None` when fewer than
 /// three rays remain, the geometry is degenerate (parallel rays), or the solution leaves
 /// the neighbourhood of `start` (2 m), where the particle estimate is the safer one.
-pub fn refine_by_bearings(
-    start: [f64; 2],
-    rays: &[([f64; 2], f64)],
-    sigma: f64,
-) -> Option<[f64; 2]> {
-    let solve = |rays: &[([f64; 2], f64)], from: [f64; 2]| -> Option<[f64; 2]> {
+pub fn refine_by_bearings(start: [f64; 2], rays: &[Ray], sigma: f64) -> Option<[f64; 2]> {
+    let solve = |rays: &[Ray], from: [f64; 2]| -> Option<[f64; 2]> {
         if rays.len() < 3 {
             return None;
         }
@@ -506,8 +556,7 @@ pub fn refine_by_bearings(
     let mut kept = rays.to_vec();
     let mut s = solve(&kept, start)?;
     loop {
-        let resid =
-            |&(r, phi): &([f64; 2], f64)| wrap_rad((s[1] - r[1]).atan2(s[0] - r[0]) - phi).abs();
+        let resid = |&(r, phi): &Ray| wrap_rad((s[1] - r[1]).atan2(s[0] - r[0]) - phi).abs();
         let (worst, e) = kept
             .iter()
             .enumerate()
@@ -615,6 +664,52 @@ mod tests {
             .run(&poses, &doas, &mut StdRng::seed_from_u64(SEED))
             .unwrap();
         assert!(r.sources.is_empty());
+        // Every round fails; the mapping ends after `retries + 1` of them in a row.
+        assert_eq!(r.rounds, IasmConfig::default().retries + 1);
+    }
+
+    #[test]
+    fn a_round_finds_one_source_and_removes_the_doas_it_explains() {
+        let truth = [[1.5, 1.5], [4.0, -1.2]];
+        let (map, poses, doas) = scene(&truth, 12);
+        let mapper = Mapper::new(&map, &IasmConfig::default()).unwrap();
+        let mut bearings = mapper.world_bearings(&poses, &doas).unwrap();
+        let mut rng = StdRng::seed_from_u64(SEED);
+        let Round::Found(s) = mapper.round(&poses, &mut bearings, 1, &mut rng) else {
+            panic!("seed {SEED}: the first round found nothing");
+        };
+        // One source, within a cloud's width of a true one, explaining one DoA per stop.
+        let d = truth
+            .iter()
+            .map(|t| (t[0] - s.x).hypot(t[1] - s.y))
+            .fold(f64::INFINITY, f64::min);
+        assert!(
+            d < 0.3,
+            "seed {SEED}: ({}, {}) is {d} m from the truth",
+            s.x,
+            s.y
+        );
+        assert_eq!((s.observations, s.rays.len(), s.round), (12, 12, 1));
+        assert!(bearings.iter().all(|row| row.len() == 1));
+    }
+
+    #[test]
+    fn the_largest_cluster_wins() {
+        // 30 points around (0, 0), 50 around (5, 5), one stray point.
+        let mut pts: Vec<[f64; 2]> = (0..30).map(|i| [0.001 * i as f64, 0.0]).collect();
+        pts.extend((0..50).map(|i| [5.0, 5.0 + 0.001 * i as f64]));
+        pts.push([20.0, 20.0]);
+        let dbscan = DbscanParams {
+            eps: 0.1,
+            min_pts: 5,
+        }
+        .check()
+        .unwrap();
+        let c = largest_cluster(&dbscan, &pts).unwrap();
+        assert_eq!(c.len(), 50);
+        assert!(c.iter().all(|p| p[0] == 5.0));
+        // All noise: no cluster.
+        assert_eq!(largest_cluster(&dbscan, &pts[80..]), None);
     }
 
     #[test]

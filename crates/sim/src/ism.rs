@@ -14,6 +14,7 @@
 //!    images within `d_max` (the response's length times `c`) of the room.
 //! 2. For each microphone, add each image's windowed sinc at `d / c * fs`.
 
+use crate::error::SimError;
 use crate::room::Room;
 
 /// Half-width of the fractional-delay filter (taps on each side of the centre).
@@ -329,6 +330,66 @@ pub fn ism_t30(room: &Room, c: f64, length_s: f64) -> Option<f64> {
         }
     }
     decay_time(&energy, rate, 30.0)
+}
+
+/// The constructor that calibrates a room against the rendered decay lives here, beside
+/// the image-source method it runs, so that [`Room`] itself stays plain geometry.
+impl Room {
+    /// A room whose walls all absorb alike, with reverberation time `rt60` (s) as the
+    /// image-source method renders it at speed of sound `c`.
+    ///
+    /// Sabine's inversion `alpha = 0.161 V / (S RT60)` is the start. A shoebox's specular
+    /// images decay more slowly than Sabine's diffuse field, though (paths along the long
+    /// axis meet walls less often and dominate the late decay: +4 % at 0.3 s, +23 % at
+    /// 0.8 s in a 6 x 4 x 3 m room), so the absorption is then raised by bisection until the
+    /// rendered decay ([`ism_t30`]) lasts `rt60`.
+    ///
+    /// # Errors
+    /// [`SimError::Invalid`] if `rt60` is not positive, or is shorter than the room can
+    /// have even with fully absorbing walls.
+    pub fn with_rt60(dims: [f64; 3], rt60: f64, c: f64) -> Result<Self, SimError> {
+        let room = Self::new(dims, [0.0; 6])?;
+        if !(rt60.is_finite() && rt60 > 0.0) {
+            return Err(SimError::Invalid {
+                field: "room.rt60".into(),
+                message: format!("{rt60} s is not a positive time"),
+            });
+        }
+        let too_short = || SimError::Invalid {
+            field: "room.rt60".into(),
+            message: format!(
+                "{rt60} s is shorter than this room can have ({:.3} s by Sabine with fully absorbing walls)",
+                0.161 * room.volume() / room.surface()
+            ),
+        };
+        let sabine = 0.161 * room.volume() / (room.surface() * rt60);
+        if sabine >= 1.0 {
+            return Err(too_short());
+        }
+        // `a` stays within [sabine, 0.99], a valid absorption of these (checked) dims.
+        let t30 = |a: f64| {
+            Self::new(dims, [a; 6])
+                .ok()
+                .and_then(|r| ism_t30(&r, c, 1.2 * rt60))
+        };
+        let (mut lo, mut hi) = (sabine, 0.99);
+        if t30(lo).is_none_or(|t| t <= rt60) {
+            return Self::new(dims, [sabine; 6]);
+        }
+        if t30(hi).is_some_and(|t| t > rt60) {
+            return Err(too_short());
+        }
+        // T30 falls as absorption rises: keep lo too live, hi too dead.
+        while hi - lo > 1e-3 {
+            let mid = 0.5 * (lo + hi);
+            if t30(mid).is_some_and(|t| t > rt60) {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        Self::new(dims, [0.5 * (lo + hi); 6])
+    }
 }
 
 #[cfg(test)]

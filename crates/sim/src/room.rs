@@ -40,66 +40,6 @@ impl Room {
         Ok(Self { dims, absorption })
     }
 
-    /// A room whose walls all absorb alike, with reverberation time `rt60` (s) as the
-    /// image-source method renders it at speed of sound `c`.
-    ///
-    /// Sabine's inversion `alpha = 0.161 V / (S RT60)` is the start. A shoebox's specular
-    /// images decay more slowly than Sabine's diffuse field, though (paths along the long
-    /// axis meet walls less often and dominate the late decay: +4 % at 0.3 s, +23 % at
-    /// 0.8 s in a 6 x 4 x 3 m room), so the absorption is then raised by bisection until the
-    /// rendered decay ([`crate::ism::ism_t30`]) lasts `rt60`.
-    ///
-    /// # Errors
-    /// [`SimError::Invalid`] if `rt60` is not positive, or is shorter than the room can
-    /// have even with fully absorbing walls.
-    pub fn with_rt60(dims: [f64; 3], rt60: f64, c: f64) -> Result<Self, SimError> {
-        let room = Self::new(dims, [0.0; 6])?;
-        if !(rt60.is_finite() && rt60 > 0.0) {
-            return Err(SimError::Invalid {
-                field: "room.rt60".into(),
-                message: format!("{rt60} s is not a positive time"),
-            });
-        }
-        let too_short = || SimError::Invalid {
-            field: "room.rt60".into(),
-            message: format!(
-                "{rt60} s is shorter than this room can have ({:.3} s by Sabine with fully absorbing walls)",
-                0.161 * room.volume() / room.surface()
-            ),
-        };
-        let sabine = 0.161 * room.volume() / (room.surface() * rt60);
-        if sabine >= 1.0 {
-            return Err(too_short());
-        }
-        let t30 = |a: f64| {
-            crate::ism::ism_t30(
-                &Self {
-                    dims,
-                    absorption: [a; 6],
-                },
-                c,
-                1.2 * rt60,
-            )
-        };
-        let (mut lo, mut hi) = (sabine, 0.99);
-        if t30(lo).is_none_or(|t| t <= rt60) {
-            return Self::new(dims, [sabine; 6]);
-        }
-        if t30(hi).is_some_and(|t| t > rt60) {
-            return Err(too_short());
-        }
-        // T30 falls as absorption rises: keep lo too live, hi too dead.
-        while hi - lo > 1e-3 {
-            let mid = 0.5 * (lo + hi);
-            if t30(mid).is_some_and(|t| t > rt60) {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
-        Self::new(dims, [0.5 * (lo + hi); 6])
-    }
-
     /// Dimensions (m).
     pub fn dims(&self) -> [f64; 3] {
         self.dims

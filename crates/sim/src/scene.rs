@@ -25,15 +25,15 @@
 //! spacing = 0.5         # or poses = [[x, y, theta_deg], ...]
 //! ```
 
+use geom::Pose;
 use rand::{Rng, SeedableRng, rngs::StdRng};
 use rand_distr::StandardNormal;
-use rustfft::{FftPlanner, num_complex::Complex64};
 use serde::Deserialize;
 
 use crate::error::SimError;
 use crate::render::{RenderConfig, Renderer, RoomSource};
 use crate::room::Room;
-use crate::signal::{Signal, generate, scale_to_unit_power};
+use crate::signal::{SignalKind, generate, scale_to_unit_power};
 
 fn invalid(field: impl Into<String>, message: impl Into<String>) -> SimError {
     SimError::Invalid {
@@ -81,21 +81,6 @@ pub struct Scene {
     /// Box obstacles (they appear in the occupancy map; sound passes them).
     #[serde(default)]
     pub obstacles: Vec<Obstacle>,
-    /// What a regression suite expects of the pipeline on this scene.
-    #[serde(default)]
-    pub expect: Expect,
-}
-
-/// Thresholds a regression suite checks on a scene (all optional).
-#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Expect {
-    /// DoAs per stop, N. Default: the number of sources, at most 4.
-    pub num: Option<usize>,
-    /// Lowest acceptable DoA score (hit within 5 degrees), for every method.
-    pub doa_score_min: Option<f64>,
-    /// Highest acceptable OSPA (m, p = 1, c = 1) of the I-ASM map, for every method.
-    pub ospa_max: Option<f64>,
 }
 
 fn default_fs() -> u32 {
@@ -141,7 +126,7 @@ pub struct SourceSpec {
     /// `white_noise`, `pink_noise`, `speech_shaped` or `voiced`. Default: `speech_shaped`
     /// (unless `wav` is given).
     #[serde(default)]
-    pub signal: Option<String>,
+    pub signal: Option<SignalKind>,
     /// A recording to play instead of a generated signal: its first channel, at the scene's
     /// sample rate, repeated if shorter than the clip and cut if longer, scaled to
     /// `level_db` like the generated signals. A relative path is relative to the scene file
@@ -194,8 +179,8 @@ pub struct PreparedScene {
     pub room: Room,
     /// Microphone positions in the array frame (m).
     pub mics: Vec<[f64; 3]>,
-    /// Stops: x, y (m), heading (rad).
-    pub stops: Vec<[f64; 3]>,
+    /// The robot's stops.
+    pub stops: Vec<Pose>,
     /// Each source's signal (pressure at 1 m, Pa).
     pub signals: Vec<Vec<f64>>,
     /// Built on the first stop rendered, shared by the others.
@@ -206,9 +191,10 @@ impl Scene {
     /// Parses a scene.
     ///
     /// # Errors
-    /// The TOML parser's message (unknown keys are refused, and named).
+    /// [`SimError::Parse`] with the TOML parser's message (unknown keys are refused, and
+    /// named).
     pub fn from_toml(text: &str) -> Result<Self, SimError> {
-        toml::from_str(text).map_err(|e| invalid("scene", e.message()))
+        toml::from_str(text).map_err(|e| SimError::Parse(e.message().to_owned()))
     }
 
     /// Makes every relative `wav` path relative to `base` (the scene file's folder).
@@ -252,7 +238,9 @@ impl Scene {
             (Some(t), None) => Room::with_rt60(r.dims, t, self.speed_of_sound)?,
             (None, Some(a)) => Room::new(r.dims, a)?,
             (None, None) => return Err(invalid("room", "give rt60 or absorption")),
-            (Some(_), Some(_)) => return Err(invalid("room", "give rt60 or absorption, not both")),
+            (Some(_), Some(_)) => {
+                return Err(invalid("room", "give rt60 or absorption, not both"));
+            }
         };
         let mics = match (&self.array.preset, &self.array.positions) {
             (Some(p), None) => {
@@ -297,21 +285,22 @@ impl Scene {
             .iter()
             .enumerate()
             .map(|(i, s)| {
-                let unit = match (&s.wav, s.signal.as_deref()) {
+                let unit = match (&s.wav, s.signal) {
                     (Some(_), Some(_)) => {
-                        return Err(invalid(format!("sources[{i}]"), "give signal or wav, not both"));
+                        let field = format!("sources[{i}]");
+                        return Err(invalid(field, "give signal or wav, not both"));
                     }
-                    (Some(path), None) => wav_signal(path, n, self.fs).map_err(|m| invalid(format!("sources[{i}].wav"), format!("{}: {m}", path.display())))?,
-                    (None, signal) => match signal.unwrap_or("speech_shaped") {
-                        "white_noise" => generate(Signal::Noise, n, self.fs, &mut rng),
-                        "voiced" => generate(Signal::Harmonic(s.f0), n, self.fs, &mut rng),
-                        "pink_noise" => shaped_noise(n, self.fs, &mut rng, |f| 1.0 / f.max(20.0).sqrt()),
-                        // Long-term speech spectrum: flat to 500 Hz, then -6 dB per octave.
-                        "speech_shaped" => shaped_noise(n, self.fs, &mut rng, |f| if f < 100.0 { f / 100.0 } else { (500.0 / f.max(500.0)).max(0.0) }),
-                        other => {
-                            return Err(invalid(format!("sources[{i}].signal"), format!("unknown signal {other:?} (white_noise, pink_noise, speech_shaped, voiced)")));
-                        }
-                    },
+                    (Some(path), None) => {
+                        wav_signal(path, n, self.fs).map_err(|message| SimError::Wav {
+                            field: format!("sources[{i}].wav"),
+                            path: path.clone(),
+                            message,
+                        })?
+                    }
+                    (None, kind) => {
+                        let signal = kind.unwrap_or_default().signal(s.f0);
+                        generate(signal, n, self.fs, &mut rng)
+                    }
                 };
                 // 94 dB SPL is 1 Pa RMS.
                 let rms = 10f64.powf((s.level_db - 94.0) / 20.0);
@@ -332,12 +321,13 @@ impl Scene {
         (self.clip_s * f64::from(self.fs)).round() as usize
     }
 
-    fn stops(&self) -> Result<Vec<[f64; 3]>, SimError> {
+    fn stops(&self) -> Result<Vec<Pose>, SimError> {
         let t = &self.trajectory;
         match (&t.poses, &t.waypoints) {
-            (Some(p), None) if !p.is_empty() => {
-                Ok(p.iter().map(|q| [q[0], q[1], q[2].to_radians()]).collect())
-            }
+            (Some(p), None) if !p.is_empty() => Ok(p
+                .iter()
+                .map(|q| Pose::from_degrees(q[0], q[1], q[2]))
+                .collect()),
             (None, Some(w)) if w.len() >= 2 => {
                 let spacing = t
                     .spacing
@@ -357,7 +347,8 @@ impl Scene {
                     let mut s = carry;
                     while s <= len + 1e-9 {
                         let f = if len > 0.0 { s / len } else { 0.0 };
-                        out.push([a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1]), heading]);
+                        let (x, y) = (a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1]));
+                        out.push(Pose::new(x, y, heading));
                         s += spacing;
                     }
                     carry = s - len;
@@ -372,12 +363,13 @@ impl Scene {
     }
 }
 
-/// World position of array-frame point `p` with the robot at `stop` (x, y, heading).
-pub fn mic_world(stop: [f64; 3], height: f64, p: [f64; 3]) -> [f64; 3] {
-    let (s, c) = stop[2].sin_cos();
+/// World position of array-frame point `p` with the robot at `stop` and the array frame's
+/// origin `height` above the floor.
+pub fn mic_world(stop: Pose, height: f64, p: [f64; 3]) -> [f64; 3] {
+    let (s, c) = stop.theta.sin_cos();
     [
-        stop[0] + c * p[0] - s * p[1],
-        stop[1] + s * p[0] + c * p[1],
+        stop.x + c * p[0] - s * p[1],
+        stop.y + s * p[0] + c * p[1],
         height + p[2],
     ]
 }
@@ -418,25 +410,6 @@ fn wav_signal(path: &std::path::Path, n: usize, fs: u32) -> Result<Vec<f64>, Str
         return Err("is silent (or not finite) over the clip".into());
     }
     Ok(x)
-}
-
-/// Unit-power noise with amplitude spectrum `shape(f)`.
-fn shaped_noise(n: usize, fs: u32, rng: &mut StdRng, shape: impl Fn(f64) -> f64) -> Vec<f64> {
-    let mut b: Vec<Complex64> = (0..n)
-        .map(|_| Complex64::new(rng.sample(StandardNormal), 0.0))
-        .collect();
-    let mut planner = FftPlanner::<f64>::new();
-    planner.plan_fft_forward(n).process(&mut b);
-    for (k, v) in b.iter_mut().enumerate() {
-        let f = k.min(n - k) as f64 * f64::from(fs) / n as f64;
-        *v *= shape(f);
-    }
-    planner.plan_fft_inverse(n).process(&mut b);
-    let x: Vec<f64> = b.iter().map(|v| v.re).collect();
-    let p = (x.iter().map(|v| v * v).sum::<f64>() / n as f64)
-        .sqrt()
-        .max(1e-300);
-    x.into_iter().map(|v| v / p).collect()
 }
 
 impl PreparedScene {
@@ -586,7 +559,7 @@ spacing = 0.5
     #[test]
     fn waypoints_are_walked_at_the_spacing_with_their_heading() {
         let p = Scene::from_toml(SCENE).unwrap().prepare(two_mics).unwrap();
-        let xs: Vec<[f64; 2]> = p.stops.iter().map(|s| [s[0], s[1]]).collect();
+        let xs: Vec<[f64; 2]> = p.stops.iter().map(Pose::position).collect();
         assert_eq!(
             xs,
             vec![
@@ -599,8 +572,8 @@ spacing = 0.5
                 [3.0, 2.0]
             ]
         );
-        assert_eq!(p.stops[0][2], 0.0);
-        approx::assert_abs_diff_eq!(p.stops[6][2], std::f64::consts::FRAC_PI_2);
+        assert_eq!(p.stops[0].theta, 0.0);
+        approx::assert_abs_diff_eq!(p.stops[6].theta, std::f64::consts::FRAC_PI_2);
     }
 
     #[test]
@@ -623,7 +596,7 @@ spacing = 0.5
     fn the_array_turns_with_the_robot() {
         // Heading 90 degrees: the array's +x microphone points along world +y.
         let w = mic_world(
-            [1.0, 2.0, std::f64::consts::FRAC_PI_2],
+            Pose::new(1.0, 2.0, std::f64::consts::FRAC_PI_2),
             0.5,
             [0.1, 0.0, 0.2],
         );

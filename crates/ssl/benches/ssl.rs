@@ -133,6 +133,7 @@ fn block_spectrum(c: &mut Criterion) {
                 (config.fmin_hz / spacing).ceil() as usize..(config.fmax_hz / spacing) as usize + 1;
             let spec = loc.stft().analyze(&audio, bins).unwrap();
             let mut out = vec![0.0f32; loc.grid().len()];
+            let mut scratch = ssl::Scratch::default();
             g.bench_function(
                 BenchmarkId::new(method.name(), format!("{}cells", loc.grid().len())),
                 |b| {
@@ -141,6 +142,7 @@ fn block_spectrum(c: &mut Criterion) {
                             black_box(&spec),
                             0..config.block_frames,
                             &mut out,
+                            &mut scratch,
                         )
                     })
                 },

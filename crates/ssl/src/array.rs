@@ -102,7 +102,12 @@ impl MicArray {
                 p.extend(circle(0.043, 6));
                 p
             }
-            _ => return Err(ArrayError::UnknownPreset(name.to_owned())),
+            _ => {
+                return Err(ArrayError::UnknownPreset {
+                    name: name.to_owned(),
+                    presets: &PRESETS,
+                });
+            }
         };
         Self::new(name, positions)
     }

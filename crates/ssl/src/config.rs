@@ -6,6 +6,7 @@ use std::str::FromStr;
 use serde::{Deserialize, Serialize};
 
 use crate::error::ConfigError;
+use crate::grid::ElevationRange;
 
 /// The angular-spectrum method, chosen at run time by name.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -68,61 +69,6 @@ impl FromStr for Pooling {
             "max" => Ok(Pooling::Max),
             "mean" | "sum" => Ok(Pooling::Mean),
             _ => Err(ConfigError::UnknownPooling(s.to_owned())),
-        }
-    }
-}
-
-/// The elevation range searched, in degrees.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct ElevationRange {
-    /// Lowest elevation (degrees, `>= -90`). Default: 0.
-    pub min_deg: f64,
-    /// Highest elevation (degrees, `<= 90`). Default: 0.
-    pub max_deg: f64,
-    /// Step (degrees, `> 0`). Default: 10.
-    pub step_deg: f64,
-}
-
-impl Default for ElevationRange {
-    /// The horizontal plane only.
-    fn default() -> Self {
-        Self {
-            min_deg: 0.0,
-            max_deg: 0.0,
-            step_deg: 10.0,
-        }
-    }
-}
-
-impl ElevationRange {
-    /// The horizontal plane only.
-    pub const PLANE: ElevationRange = ElevationRange {
-        min_deg: 0.0,
-        max_deg: 0.0,
-        step_deg: 10.0,
-    };
-
-    /// -60 to 60 degrees in 10-degree steps: sources seen from a robot are rarely more than
-    /// 60 degrees off its horizon, and a robot array's vertical aperture (a tenth of a metre)
-    /// resolves elevation no finer than tens of degrees at speech frequencies.
-    pub const ROBOT: ElevationRange = ElevationRange {
-        min_deg: -60.0,
-        max_deg: 60.0,
-        step_deg: 10.0,
-    };
-
-    /// The automatic choice for `array`: [`ElevationRange::ROBOT`] when its microphones are
-    /// not all at one height (a 3-D array resolves elevation, and a horizontal-only search
-    /// turns a source's elevation into an azimuth error), else [`ElevationRange::PLANE`] (a
-    /// planar array's delays all scale by `cos(elevation)` alike: azimuth stays unbiased).
-    pub fn auto(array: &crate::MicArray) -> Self {
-        let z = array.positions().iter().map(|p| p[2]);
-        let span = z.clone().fold(f64::NEG_INFINITY, f64::max) - z.fold(f64::INFINITY, f64::min);
-        if span > 1e-3 {
-            Self::ROBOT
-        } else {
-            Self::PLANE
         }
     }
 }

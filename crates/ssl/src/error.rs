@@ -101,8 +101,13 @@ pub enum ArrayError {
         b: usize,
     },
     /// A preset name that is not built in.
-    #[error("unknown array {0:?}: not a preset ({presets}) nor an existing file", presets = crate::array::PRESETS.join(", "))]
-    UnknownPreset(String),
+    #[error("unknown array {name:?}: not a preset ({list}) nor an existing file", list = presets.join(", "))]
+    UnknownPreset {
+        /// The name given.
+        name: String,
+        /// The presets there are.
+        presets: &'static [&'static str],
+    },
     /// The array file could not be read.
     #[error("failed to read array file {path}")]
     Io {

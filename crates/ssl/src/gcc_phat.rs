@@ -19,11 +19,10 @@
 use std::ops::Range;
 use std::sync::Arc;
 
-use realfft::num_complex::Complex32;
-
-use crate::SpectrumEstimator;
 use crate::grid::{PairLags, padded};
+use crate::localizer::zeroed;
 use crate::stft::Spectrogram;
+use crate::{Scratch, SpectrumEstimator};
 
 /// The GCC-PHAT estimator for one array, grid, band and sample rate.
 #[derive(Clone, Debug)]
@@ -42,7 +41,13 @@ impl SpectrumEstimator for GccPhat {
         "gcc-phat"
     }
 
-    fn estimate_into(&self, stft: &Spectrogram, frames: Range<usize>, out: &mut [f32]) {
+    fn estimate_into(
+        &self,
+        stft: &Spectrogram,
+        frames: Range<usize>,
+        out: &mut [f32],
+        scratch: &mut Scratch,
+    ) {
         let l = &*self.lags;
         let nb = stft.bins().len();
         assert_eq!(
@@ -54,7 +59,8 @@ impl SpectrumEstimator for GccPhat {
         // PHAT factorises: X_i X_j^* / |X_i X_j^*| = (X_i / |X_i|) (X_j / |X_j|)^*, so each
         // channel's bins are normalised once per frame instead of once per pair.
         let n_ch = stft.num_channels();
-        let mut unit = vec![Complex32::default(); frames.len() * n_ch * nb];
+        let Scratch { unit, pairs, .. } = scratch;
+        let unit = zeroed(unit, frames.len() * n_ch * nb);
         for (k, f) in frames.clone().enumerate() {
             for c in 0..n_ch {
                 let dst = &mut unit[(k * n_ch + c) * nb..(k * n_ch + c + 1) * nb];
@@ -81,6 +87,8 @@ impl SpectrumEstimator for GccPhat {
                 }
             }
         };
-        l.pairwise_spectrum(out, norm, coefficients, |gr, gi, _, c, s| gr * c - gi * s);
+        l.pairwise_spectrum(out, norm, pairs, coefficients, |gr, gi, _, c, s| {
+            gr * c - gi * s
+        });
     }
 }

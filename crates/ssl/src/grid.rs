@@ -3,8 +3,64 @@
 use std::ops::Range;
 
 use crate::array::MicArray;
-use crate::config::ElevationRange;
 use crate::error::ConfigError;
+use crate::localizer::zeroed;
+use serde::{Deserialize, Serialize};
+
+/// The elevation range searched, in degrees.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ElevationRange {
+    /// Lowest elevation (degrees, `>= -90`). Default: 0.
+    pub min_deg: f64,
+    /// Highest elevation (degrees, `<= 90`). Default: 0.
+    pub max_deg: f64,
+    /// Step (degrees, `> 0`). Default: 10.
+    pub step_deg: f64,
+}
+
+impl Default for ElevationRange {
+    /// The horizontal plane only.
+    fn default() -> Self {
+        Self {
+            min_deg: 0.0,
+            max_deg: 0.0,
+            step_deg: 10.0,
+        }
+    }
+}
+
+impl ElevationRange {
+    /// The horizontal plane only.
+    pub const PLANE: ElevationRange = ElevationRange {
+        min_deg: 0.0,
+        max_deg: 0.0,
+        step_deg: 10.0,
+    };
+
+    /// -60 to 60 degrees in 10-degree steps: sources seen from a robot are rarely more than
+    /// 60 degrees off its horizon, and a robot array's vertical aperture (a tenth of a metre)
+    /// resolves elevation no finer than tens of degrees at speech frequencies.
+    pub const ROBOT: ElevationRange = ElevationRange {
+        min_deg: -60.0,
+        max_deg: 60.0,
+        step_deg: 10.0,
+    };
+
+    /// The automatic choice for `array`: [`ElevationRange::ROBOT`] when its microphones are
+    /// not all at one height (a 3-D array resolves elevation, and a horizontal-only search
+    /// turns a source's elevation into an azimuth error), else [`ElevationRange::PLANE`] (a
+    /// planar array's delays all scale by `cos(elevation)` alike: azimuth stays unbiased).
+    pub fn auto(array: &MicArray) -> Self {
+        let z = array.positions().iter().map(|p| p[2]);
+        let span = z.clone().fold(f64::NEG_INFINITY, f64::max) - z.fold(f64::INFINITY, f64::min);
+        if span > 1e-3 {
+            Self::ROBOT
+        } else {
+            Self::PLANE
+        }
+    }
+}
 
 /// Candidate directions: every azimuth step around the circle at each searched elevation.
 ///
@@ -209,6 +265,7 @@ impl PairLags {
         &self,
         out: &mut [f32],
         scale: f32,
+        scratch: &mut PairScratch,
         mut coefficients: F,
         kernel: K,
     ) where
@@ -216,16 +273,26 @@ impl PairLags {
         K: Fn(f32, f32, f32, f32, f32) -> f32 + Copy,
     {
         out.fill(0.0);
-        let zeros = vec![0.0f32; self.n_bins];
-        let (mut x, mut y, mut z) = (zeros.clone(), zeros.clone(), zeros);
-        let (mut lagfn, mut segments) = (Vec::new(), Vec::new());
+        let PairScratch {
+            x,
+            y,
+            z,
+            lagfn,
+            segments,
+        } = scratch;
+        // The padded tail must stay 0 (the kernels give 0 there): start from zeros.
+        let (x, y, z) = (
+            zeroed(x, self.n_bins),
+            zeroed(y, self.n_bins),
+            zeroed(z, self.n_bins),
+        );
         for (p, &pair) in self.pairs.iter().enumerate() {
-            coefficients(p, pair, &mut x, &mut y, &mut z);
+            coefficients(p, pair, x, y, z);
             let (cos, sin) = self.rows(p);
             lagfn.resize(2 * self.half[p] + 1, 0.0);
-            lag_sums(&x, &y, &z, cos, sin, &mut lagfn, kernel);
+            lag_sums(x, y, z, cos, sin, lagfn, kernel);
             lagfn.iter_mut().for_each(|v| *v *= scale);
-            self.accumulate(p, &lagfn, &mut segments, out);
+            self.accumulate(p, lagfn, segments, out);
         }
     }
 
@@ -243,6 +310,16 @@ impl PairLags {
             *o += v + f * slope;
         }
     }
+}
+
+/// Working memory of [`PairLags::pairwise_spectrum`] (part of [`crate::Scratch`]).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct PairScratch {
+    x: Vec<f32>,
+    y: Vec<f32>,
+    z: Vec<f32>,
+    lagfn: Vec<f32>,
+    segments: Vec<[f32; 2]>,
 }
 
 /// Bins are padded to a multiple of this, so the lag sums run on whole SIMD lanes.
@@ -371,6 +448,74 @@ mod tests {
         };
         assert!(DirectionGrid::new(5.0, bad).is_err());
         assert!(DirectionGrid::new(0.0, ElevationRange::default()).is_err());
+    }
+
+    /// Seeded pseudo-random values in [-1, 1) (a splitmix-style hash: no RNG dependency).
+    fn junk(n: usize, seed: u64) -> Vec<f32> {
+        (0..n as u64)
+            .map(|i| {
+                let mut z = (i + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ seed;
+                z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+                z ^= z >> 31;
+                (z >> 40) as f32 / (1u64 << 23) as f32 - 1.0
+            })
+            .collect()
+    }
+
+    /// The MVDR kernel, the most demanding of the two (a division per term).
+    fn kernel(x: f32, y: f32, z: f32, c: f32, s: f32) -> f32 {
+        z / (1.1 - (x * c - y * s))
+    }
+
+    #[test]
+    fn lag_sums_match_a_naive_f64_sum() {
+        let (nb, rows) = (3 * LANES, 7);
+        let (x, y, z) = (junk(nb, 1), junk(nb, 2), junk(nb, 3));
+        let x: Vec<f32> = x.iter().map(|v| 0.4 * v).collect();
+        let (cos, sin) = (junk(rows * nb, 4), junk(rows * nb, 5));
+        let mut out = vec![f32::NAN; rows]; // junk first: every value must be written
+        lag_sums(&x, &y, &z, &cos, &sin, &mut out, kernel);
+        for (r, &o) in out.iter().enumerate() {
+            let want: f64 = (0..nb)
+                .map(|b| {
+                    let k = r * nb + b;
+                    f64::from(z[b])
+                        / (1.1
+                            - (f64::from(x[b]) * f64::from(cos[k])
+                                - f64::from(y[b]) * f64::from(sin[k])))
+                })
+                .sum();
+            assert!(
+                (f64::from(o) - want).abs() < 1e-5 * want.abs().max(1.0),
+                "row {r}: {o} vs {want}"
+            );
+        }
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn the_avx2_lag_sums_equal_the_portable_ones() {
+        if !(is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")) {
+            eprintln!("no AVX2+FMA here: only the portable kernel runs");
+            return;
+        }
+        for (nb, rows, seed) in [(LANES, 1, 10), (5 * LANES, 13, 20), (44 * LANES, 61, 30)] {
+            let (x, y, z) = (junk(nb, seed), junk(nb, seed + 1), junk(nb, seed + 2));
+            let x: Vec<f32> = x.iter().map(|v| 0.4 * v).collect();
+            let (cos, sin) = (junk(rows * nb, seed + 3), junk(rows * nb, seed + 4));
+            let mut portable = vec![f32::NAN; rows];
+            let mut avx2 = vec![-f32::NAN; rows];
+            lag_sums_portable(&x, &y, &z, &cos, &sin, &mut portable, kernel);
+            // SAFETY: the features were detected above.
+            unsafe { lag_sums_avx2(&x, &y, &z, &cos, &sin, &mut avx2, kernel) };
+            // Same operations in the same order (no fused multiply-add is formed without
+            // fast-math): the same bits.
+            assert_eq!(
+                portable.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+                avx2.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+                "{nb} bins, {rows} rows"
+            );
+        }
     }
 
     #[test]

@@ -50,9 +50,9 @@ pub mod stft;
 
 pub use array::MicArray;
 pub use audio::{Audio, read_wav};
-pub use config::{ElevationRange, Method, Pooling, SslConfig};
+pub use config::{Method, Pooling, SslConfig};
 pub use error::{ArrayError, ConfigError, Error, Result};
-pub use grid::DirectionGrid;
-pub use localizer::{Localizer, SpectrumEstimator};
+pub use grid::{DirectionGrid, ElevationRange};
+pub use localizer::{Localizer, Scratch, SpectrumEstimator};
 pub use spectrum::{AngularSpectrum, Doa, wrap_deg};
 pub use stft::{Spectrogram, Stft};

@@ -3,12 +3,14 @@
 use std::ops::Range;
 use std::sync::Arc;
 
+use realfft::num_complex::Complex32;
+
 use crate::array::MicArray;
 use crate::audio::Audio;
 use crate::config::{Method, Pooling, SslConfig};
 use crate::error::{ConfigError, Error, Result};
 use crate::gcc_phat::GccPhat;
-use crate::grid::{DirectionGrid, PairLags};
+use crate::grid::{DirectionGrid, PairLags, PairScratch};
 use crate::mvdr::Mvdr;
 use crate::spectrum::{AngularSpectrum, Doa};
 use crate::stft::{Spectrogram, Stft};
@@ -19,12 +21,51 @@ pub trait SpectrumEstimator: Send + Sync {
     fn name(&self) -> &'static str;
 
     /// Writes the angular spectrum of frames `frames` of `stft` into `out`, one value per
-    /// direction of the grid the estimator was built for.
+    /// direction of the grid the estimator was built for. `scratch` is working memory that
+    /// the caller keeps between calls (RustFFT's `process_with_scratch`): the estimators
+    /// run once per block of frames, dozens of times per recording, and allocate nothing
+    /// once it has grown to size. Its contents on entry do not matter.
     ///
     /// # Panics
     /// If `out` does not hold one value per direction, `frames` is out of range, or `stft`
     /// was not made with the band and channel count the estimator was built for.
-    fn estimate_into(&self, stft: &Spectrogram, frames: Range<usize>, out: &mut [f32]);
+    fn estimate_into(
+        &self,
+        stft: &Spectrogram,
+        frames: Range<usize>,
+        out: &mut [f32],
+        scratch: &mut Scratch,
+    );
+}
+
+/// Working memory of the spectrum estimators, grown on first use and reused after: one
+/// per thread, passed to [`SpectrumEstimator::estimate_into`] or
+/// [`Localizer::locate_with_scratch`]. Any estimator may use any scratch.
+#[derive(Clone, Debug, Default)]
+pub struct Scratch {
+    /// Per frame and channel, each bin's unit phasor (GCC-PHAT).
+    pub(crate) unit: Vec<Complex32>,
+    /// Per channel, bin powers summed over the block, then smoothed (MVDR).
+    pub(crate) power: Vec<f32>,
+    /// One channel's unsmoothed powers (MVDR).
+    pub(crate) power_sum: Vec<f32>,
+    /// One pair's cross-spectrum, summed then smoothed (MVDR).
+    pub(crate) cross: Vec<Complex32>,
+    pub(crate) cross_smooth: Vec<Complex32>,
+    /// Prefix sums of the box smoother (MVDR).
+    pub(crate) prefix_real: Vec<f32>,
+    pub(crate) prefix_complex: Vec<Complex32>,
+    /// The pairwise lag-function machinery ([`crate::grid`]).
+    pub(crate) pairs: PairScratch,
+    /// One block's spectrum (the localizer).
+    pub(crate) block: Vec<f32>,
+}
+
+/// Zero-filled `v` of length `n`, reusing its memory.
+pub(crate) fn zeroed<T: Copy + Default>(v: &mut Vec<T>, n: usize) -> &mut [T] {
+    v.clear();
+    v.resize(n, T::default());
+    v
 }
 
 /// A validated, precomputed SSL front end for one array and sample rate.
@@ -157,6 +198,18 @@ impl Localizer {
     /// # Errors
     /// [`Error::ChannelMismatch`], [`Error::SampleRateMismatch`] or [`Error::TooShort`].
     pub fn spectrum(&self, audio: &Audio) -> Result<AngularSpectrum> {
+        self.spectrum_with_scratch(audio, &mut Scratch::default())
+    }
+
+    /// [`Localizer::spectrum`] with working memory the caller keeps between recordings.
+    ///
+    /// # Errors
+    /// As [`Localizer::spectrum`].
+    pub fn spectrum_with_scratch(
+        &self,
+        audio: &Audio,
+        scratch: &mut Scratch,
+    ) -> Result<AngularSpectrum> {
         if audio.num_channels() != self.array.len() {
             return Err(Error::ChannelMismatch {
                 expected: self.array.len(),
@@ -173,11 +226,13 @@ impl Localizer {
         let nf = spec.num_frames();
         let n_blocks = (nf / self.config.block_frames).max(1);
         let mut pooled = vec![0.0f32; self.grid.len()];
-        let mut block = vec![0.0f32; self.grid.len()];
+        let mut block = std::mem::take(&mut scratch.block);
+        block.resize(self.grid.len(), 0.0);
         for b in 0..n_blocks {
             // Blocks split the frames as evenly as possible and cover all of them.
             let frames = b * nf / n_blocks..(b + 1) * nf / n_blocks;
-            self.estimator.estimate_into(&spec, frames, &mut block);
+            self.estimator
+                .estimate_into(&spec, frames, &mut block, scratch);
             match self.config.pooling {
                 Pooling::Max if b == 0 => pooled.copy_from_slice(&block),
                 Pooling::Max => pooled
@@ -190,6 +245,7 @@ impl Localizer {
                     .for_each(|(p, &v)| *p += v / n_blocks as f32),
             }
         }
+        scratch.block = block;
         Ok(AngularSpectrum::new(self.grid.clone(), pooled))
     }
 
@@ -198,8 +254,16 @@ impl Localizer {
     /// # Errors
     /// As [`Localizer::spectrum`].
     pub fn locate(&self, audio: &Audio) -> Result<Vec<Doa>> {
+        self.locate_with_scratch(audio, &mut Scratch::default())
+    }
+
+    /// [`Localizer::locate`] with working memory the caller keeps between recordings.
+    ///
+    /// # Errors
+    /// As [`Localizer::spectrum`].
+    pub fn locate_with_scratch(&self, audio: &Audio, scratch: &mut Scratch) -> Result<Vec<Doa>> {
         Ok(self
-            .spectrum(audio)?
+            .spectrum_with_scratch(audio, scratch)?
             .peaks(self.config.num_peaks, self.config.min_sep_deg))
     }
 }

@@ -27,9 +27,10 @@ use std::sync::Arc;
 
 use realfft::num_complex::Complex32;
 
-use crate::SpectrumEstimator;
 use crate::grid::{PairLags, padded};
+use crate::localizer::zeroed;
 use crate::stft::Spectrogram;
+use crate::{Scratch, SpectrumEstimator};
 
 /// The pairwise MVDR estimator for one array, grid, band and sample rate.
 #[derive(Clone, Debug)]
@@ -49,15 +50,17 @@ impl Mvdr {
     }
 }
 
-/// Box-sums `v` over `±w` neighbours (clipped at the edges) into `out`.
+/// Box-sums `v` over `±w` neighbours (clipped at the edges) into `out`; `prefix` is
+/// scratch.
 fn box_smooth<T: Copy + Default + std::ops::AddAssign + std::ops::Sub<Output = T>>(
     v: &[T],
     w: usize,
     out: &mut [T],
+    prefix: &mut Vec<T>,
 ) {
     // Prefix sums: out[b] = S[min(b + w + 1, n)] - S[b.saturating_sub(w)].
     let n = v.len();
-    let mut prefix = Vec::with_capacity(n + 1);
+    prefix.clear();
     let mut acc = T::default();
     prefix.push(acc);
     for &x in v {
@@ -74,7 +77,13 @@ impl SpectrumEstimator for Mvdr {
         "mvdr"
     }
 
-    fn estimate_into(&self, stft: &Spectrogram, frames: Range<usize>, out: &mut [f32]) {
+    fn estimate_into(
+        &self,
+        stft: &Spectrogram,
+        frames: Range<usize>,
+        out: &mut [f32],
+        scratch: &mut Scratch,
+    ) {
         let l = &*self.lags;
         let nb = stft.bins().len();
         assert_eq!(
@@ -83,21 +92,32 @@ impl SpectrumEstimator for Mvdr {
             "spectrogram band differs from the plan"
         );
         let n_ch = stft.num_channels();
+        let Scratch {
+            power,
+            power_sum,
+            cross,
+            cross_smooth: smooth,
+            prefix_real,
+            prefix_complex,
+            pairs,
+            ..
+        } = scratch;
         // Channel powers, summed over frames then smoothed over bins.
-        let mut power = vec![vec![0.0f32; nb]; n_ch];
-        let mut tmp = vec![0.0f32; nb];
-        for (c, pw) in power.iter_mut().enumerate() {
+        let power = zeroed(power, n_ch * nb);
+        let tmp = zeroed(power_sum, nb);
+        for (c, pw) in power.chunks_exact_mut(nb).enumerate() {
             for f in frames.clone() {
                 for (acc, x) in tmp.iter_mut().zip(stft.frame(f, c)) {
                     *acc += x.norm_sqr();
                 }
             }
-            box_smooth(&tmp, self.smoothing, pw);
+            box_smooth(tmp, self.smoothing, pw, prefix_real);
             tmp.fill(0.0);
         }
+        let power = &*power;
         let a = 1.0 + self.loading;
-        let mut cross = vec![Complex32::default(); nb];
-        let mut smooth = vec![Complex32::default(); nb];
+        let cross = zeroed(cross, nb);
+        let smooth = zeroed(smooth, nb);
         // Bins past the band keep num = 0 and so add nothing.
         let coefficients = |_, (i, j), gr: &mut [f32], gi: &mut [f32], num: &mut [f32]| {
             cross.fill(Complex32::default());
@@ -107,9 +127,10 @@ impl SpectrumEstimator for Mvdr {
                     cross[b] += xi[b] * xj[b].conj();
                 }
             }
-            box_smooth(&cross, self.smoothing, &mut smooth);
+            box_smooth(cross, self.smoothing, smooth, prefix_complex);
+            let (pi, pj) = (&power[i * nb..(i + 1) * nb], &power[j * nb..(j + 1) * nb]);
             for b in 0..nb {
-                let d = (power[i][b] * power[j][b]).sqrt();
+                let d = (pi[b] * pj[b]).sqrt();
                 let g = if d > f32::MIN_POSITIVE {
                     smooth[b] / d
                 } else {
@@ -121,7 +142,7 @@ impl SpectrumEstimator for Mvdr {
             }
         };
         let norm = 1.0 / (nb * l.pairs.len()) as f32;
-        l.pairwise_spectrum(out, norm, coefficients, |gr, gi, num, c, s| {
+        l.pairwise_spectrum(out, norm, pairs, coefficients, |gr, gi, num, c, s| {
             num / (a - (gr * c - gi * s))
         });
     }
@@ -135,7 +156,7 @@ mod tests {
     fn box_smoothing_matches_a_direct_sum() {
         let v: Vec<f32> = (0..10).map(|i| (i * i % 7) as f32).collect();
         let mut out = vec![0.0; 10];
-        box_smooth(&v, 2, &mut out);
+        box_smooth(&v, 2, &mut out, &mut Vec::new());
         for b in 0..10usize {
             let want: f32 = v[b.saturating_sub(2)..(b + 3).min(10)].iter().sum();
             assert_eq!(out[b], want, "bin {b}");

@@ -115,7 +115,7 @@ impl AngularSpectrum {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::config::ElevationRange;
+    use crate::grid::ElevationRange;
 
     fn spectrum_with_bumps(bumps: &[(f64, f32)]) -> AngularSpectrum {
         let g = DirectionGrid::new(1.0, ElevationRange::default()).unwrap();

@@ -127,10 +127,17 @@ impl OccupancyMap {
     /// The image a map YAML names, resolved against the YAML's folder.
     ///
     /// # Errors
-    /// A message if the YAML cannot be read or names no image.
-    pub fn image_path(yaml: &Path) -> Result<PathBuf, String> {
-        let text = std::fs::read_to_string(yaml).map_err(|e| e.to_string())?;
-        Ok(resolve_image(yaml, &parse_yaml(&text)?.image))
+    /// [`MapError::Io`] if the YAML cannot be read, [`MapError::Yaml`] if it is malformed.
+    pub fn image_path(yaml: &Path) -> Result<PathBuf, MapError> {
+        let text = std::fs::read_to_string(yaml).map_err(|source| MapError::Io {
+            path: yaml.to_owned(),
+            source,
+        })?;
+        let meta = parse_yaml(&text).map_err(|message| MapError::Yaml {
+            path: yaml.to_owned(),
+            message,
+        })?;
+        Ok(resolve_image(yaml, &meta.image))
     }
 
     /// Width (cells).

@@ -1,121 +1,21 @@
 //! `iasm ssl`: ranked DoAs per recording, a DoA table for a data set, and its score.
 
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use rayon::prelude::*;
 use serde::Serialize;
-use ssl::{Doa, Localizer, MicArray, SslConfig};
+use ssl::{MicArray, SslConfig};
 
 use crate::Outcome;
 use crate::args::SslArgs;
 use crate::dataset::{Dataset, Table, read_poses, read_sources, read_table};
+use crate::pipeline::{FileDoas, doa_table, localise_files};
 use crate::score::{DoaScore, score_doas};
 
 /// Version of the JSON this command prints.
 pub const SCHEMA_VERSION: u32 = 1;
-
-/// Builds the SSL settings from an optional TOML file and the command-line overrides.
-///
-/// # Errors
-/// If the file cannot be read or parsed, or a value is refused.
-pub fn ssl_config(args: &SslArgs) -> Result<SslConfig> {
-    let mut c = match &args.config {
-        Some(p) => {
-            let text = std::fs::read_to_string(p)
-                .with_context(|| format!("reading SSL settings {}", p.display()))?;
-            toml::from_str::<SslConfig>(&text)
-                .map_err(|e| anyhow::anyhow!("{}: {}", p.display(), e.message()))?
-        }
-        None => SslConfig::default(),
-    };
-    if let Some(m) = &args.method {
-        c.method = m.parse()?;
-    }
-    if let Some(n) = args.num {
-        c.num_peaks = n;
-    }
-    if let Some(v) = args.fmin {
-        c.fmin_hz = v;
-    }
-    if let Some(v) = args.fmax {
-        c.fmax_hz = v;
-    }
-    if let Some(v) = args.block_frames {
-        c.block_frames = v;
-    }
-    if let Some(v) = &args.pooling {
-        c.pooling = v.parse()?;
-    }
-    c.validate()?;
-    Ok(c)
-}
-
-/// The DoAs of one recording.
-#[derive(Clone, Debug, Serialize)]
-pub struct FileDoas {
-    /// The WAV file.
-    pub file: PathBuf,
-    /// Strongest first.
-    pub doas: Vec<Doa>,
-}
-
-/// Localises every file with one localizer per sample rate, in parallel, keeping order.
-///
-/// # Errors
-/// The first file that cannot be read or localised, named.
-pub fn localise_files(
-    files: &[PathBuf],
-    array: &MicArray,
-    config: &SslConfig,
-) -> Result<Vec<FileDoas>> {
-    let bar = crate::progress(files.len() as u64, "localising");
-    let cache: std::sync::Mutex<Vec<std::sync::Arc<Localizer>>> = Default::default();
-    let out = files
-        .par_iter()
-        .map(|f| {
-            let audio = ssl::read_wav(f)?;
-            let loc = {
-                let mut c = cache.lock().expect("no panics while locked");
-                match c.iter().find(|l| l.sample_rate() == audio.sample_rate()) {
-                    Some(l) => l.clone(),
-                    None => {
-                        let l = std::sync::Arc::new(Localizer::new(
-                            array,
-                            audio.sample_rate(),
-                            config,
-                        )?);
-                        c.push(l.clone());
-                        l
-                    }
-                }
-            };
-            let doas = loc
-                .locate(&audio)
-                .with_context(|| format!("localising {}", f.display()))?;
-            bar.inc(1);
-            Ok(FileDoas {
-                file: f.clone(),
-                doas,
-            })
-        })
-        .collect::<Result<Vec<_>>>();
-    bar.finish_and_clear();
-    out
-}
-
-/// A DoA table from per-file DoAs: azimuths (degrees), `n` columns.
-pub fn doa_table(rows: &[FileDoas], n: usize) -> Table {
-    rows.iter()
-        .map(|r| {
-            (0..n)
-                .map(|i| r.doas.get(i).map(|d| d.azimuth_deg))
-                .collect()
-        })
-        .collect()
-}
 
 /// Writes a DoA table as CSV, empty cells where a DoA is missing.
 ///
@@ -145,8 +45,9 @@ pub fn write_doa_csv(path: &Path, table: &Table, header: bool) -> Result<()> {
 /// # Errors
 /// Bad settings, unreadable or mismatched files.
 pub fn run(args: &SslArgs) -> Result<Outcome> {
-    let config = ssl_config(args)?;
-    let array = MicArray::from_spec(&args.array)?;
+    let settings = args.settings.settings()?;
+    let array = settings.mic_array()?;
+    let config = settings.ssl;
     let Some(dir) = &args.dataset else {
         let rows = localise_files(&args.files, &array, &config)?;
         print_rows(&rows, &config, &array, args.json)?;
@@ -170,7 +71,7 @@ pub fn run(args: &SslArgs) -> Result<Outcome> {
         elapsed,
         1e3 * elapsed / rows.len() as f64
     );
-    let table = doa_table(&rows, config.num_peaks);
+    let table = doa_table(rows.iter().map(|r| &r.doas[..]), config.num_peaks);
     if let Some(out) = &args.out {
         write_doa_csv(out, &table, args.header)?;
         eprintln!("wrote {}", out.display());

@@ -1,35 +1,79 @@
-//! `iasm simulate`: renders a scene file into a data set in the published layout, so that
-//! `iasm ssl`, `iasm map` and `iasm eval` read it as they read real recordings.
+//! Scene files: reading them (the simulator's scene plus the regression suite's
+//! `[expect]` table), and writing a rendered scene as a data set in the published layout,
+//! so that `iasm ssl`, `iasm map` and `iasm eval` read it as they read real recordings.
 
 use std::path::Path;
 
 use anyhow::{Context, Result};
 use rayon::prelude::*;
+use serde::Deserialize;
 use sim::scene::{PreparedScene, Scene};
-
-use crate::Outcome;
 
 /// Map resolution of simulated data sets (m per cell), as GMapping's in the paper.
 const MAP_RES: f64 = 0.05;
 /// Unknown margin around the room in the map (m).
 const MAP_MARGIN: f64 = 0.5;
 
-/// Reads and checks a scene file, resolving array presets with the `ssl` crate.
+/// What the regression suite expects of the pipeline on a scene: the scene file's optional
+/// `[expect]` table. The simulator never sees it: a scene is a room, sources and a path,
+/// and the thresholds are the suite's business.
+#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Expect {
+    /// DoAs per stop, N. Default: the number of sources, at most 4.
+    pub num: Option<usize>,
+    /// Lowest acceptable DoA score (hit within 5 degrees), for every method.
+    pub doa_score_min: Option<f64>,
+    /// Highest acceptable OSPA (m, p = 1, c = 1) of the I-ASM map, for every method.
+    pub ospa_max: Option<f64>,
+}
+
+/// Parses a scene file's text into the scene and its `[expect]` table.
+///
+/// # Errors
+/// Malformed TOML, or a scene or `[expect]` table the simulator or the suite refuses.
+pub fn parse_scene(text: &str) -> Result<(Scene, Expect)> {
+    let mut table: toml::Table =
+        toml::from_str(text).map_err(|e| anyhow::anyhow!("{}", e.message()))?;
+    let expect = match table.remove("expect") {
+        Some(v) => v
+            .try_into()
+            .map_err(|e: toml::de::Error| anyhow::anyhow!("expect: {}", e.message()))?,
+        None => Expect::default(),
+    };
+    let scene: Scene = table
+        .try_into()
+        .map_err(|e: toml::de::Error| sim::SimError::Parse(e.message().to_owned()))?;
+    Ok((scene, expect))
+}
+
+/// The positions of a built-in array, for scenes that name a preset.
+pub fn preset_positions(name: &str) -> Option<Vec<[f64; 3]>> {
+    ssl::MicArray::preset(name)
+        .ok()
+        .map(|a| a.positions().to_vec())
+}
+
+/// Checks a parsed scene, resolving array presets with the `ssl` crate.
+///
+/// # Errors
+/// A scene the simulator refuses (the message names the field).
+pub fn prepare(scene: Scene) -> Result<PreparedScene> {
+    Ok(scene.prepare(preset_positions)?)
+}
+
+/// Reads and checks a scene file, resolving array presets with the `ssl` crate and
+/// recordings relative to the file.
 ///
 /// # Errors
 /// If the file cannot be read, or the scene is refused (the message names the field).
-pub fn load_scene(path: &Path) -> Result<PreparedScene> {
+pub fn load_scene(path: &Path) -> Result<(PreparedScene, Expect)> {
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("reading scene {}", path.display()))?;
-    let mut scene = Scene::from_toml(&text).with_context(|| format!("scene {}", path.display()))?;
+    let ctx = || format!("scene {}", path.display());
+    let (mut scene, expect) = parse_scene(&text).with_context(ctx)?;
     scene.resolve_paths(path.parent().unwrap_or(Path::new(".")));
-    scene
-        .prepare(|name| {
-            ssl::MicArray::preset(name)
-                .ok()
-                .map(|a| a.positions().to_vec())
-        })
-        .with_context(|| format!("scene {}", path.display()))
+    Ok((prepare(scene).with_context(ctx)?, expect))
 }
 
 /// Renders every stop of `scene` into `out` (created if needed): `audio/subNN.wav` (32-bit
@@ -55,12 +99,7 @@ pub fn write_dataset(scene: &PreparedScene, out: &Path) -> Result<()> {
     bar.finish_and_clear();
     let mut poses = String::from("x,y,theta_deg\n");
     for s in &scene.stops {
-        poses.push_str(&format!(
-            "{:.4},{:.4},{:.4}\n",
-            s[0],
-            s[1],
-            s[2].to_degrees()
-        ));
+        poses.push_str(&format!("{:.4},{:.4},{:.4}\n", s.x, s.y, s.theta_deg()));
     }
     write(&out.join("pose/poses.csv"), poses.as_bytes())?;
     let mut gt = String::from("x,y,z\n");
@@ -144,26 +183,4 @@ fn map_image(scene: &PreparedScene) -> Vec<u8> {
         }
     }
     img
-}
-
-/// Runs `iasm simulate`.
-///
-/// # Errors
-/// A refused scene or an unwritable output folder.
-pub fn run(scene_path: &Path, out: &Path) -> Result<Outcome> {
-    let t0 = std::time::Instant::now();
-    let scene = load_scene(scene_path)?;
-    write_dataset(&scene, out)?;
-    println!(
-        "{}: {} stops x {} microphones x {:.2} s at {} Hz, {} sources, written to {} ({:.1} s)",
-        scene_path.display(),
-        scene.stops.len(),
-        scene.mics.len(),
-        scene.scene.clip_s,
-        scene.scene.fs,
-        scene.scene.sources.len(),
-        out.display(),
-        t0.elapsed().as_secs_f64()
-    );
-    Ok(Outcome::Success)
 }

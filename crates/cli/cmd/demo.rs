@@ -9,25 +9,24 @@ use anyhow::Result;
 use ssl::Method;
 
 use crate::Outcome;
-use crate::regress::{MethodRun, Simulated};
+use crate::pipeline::{SceneRun, Simulated, scene_settings};
+use crate::scenes::{parse_scene, prepare};
 
 /// The built-in scene (also a scene of the regression suite).
-pub const SCENE: &str = include_str!("../../fixtures/rooms/rows_ten.toml");
+pub const SCENE: &str = include_str!("../../../fixtures/rooms/rows_ten.toml");
+
+/// DoAs per stop: a user who does not know the room sets 4 for a room of many talkers.
+const N: usize = 4;
 
 /// Renders the built-in scene with `seed` and runs the pipeline with `method`.
 ///
 /// # Errors
 /// Only if the built-in scene were refused, which would be a bug.
-pub fn run_scene(seed: u64, method: Method) -> Result<(Simulated, MethodRun)> {
-    let mut scene = sim::scene::Scene::from_toml(SCENE)?;
+pub fn run_scene(seed: u64, method: Method) -> Result<(Simulated, SceneRun)> {
+    let (mut scene, _) = parse_scene(SCENE)?;
     scene.seed = seed;
-    let prepared = scene.prepare(|name| {
-        ssl::MicArray::preset(name)
-            .ok()
-            .map(|a| a.positions().to_vec())
-    })?;
-    let simulated = Simulated::render(prepared, "demo".into())?;
-    let run = simulated.run(method)?;
+    let simulated = Simulated::render(prepare(scene)?, "demo".into())?;
+    let run = simulated.run(&scene_settings(method, N), seed)?;
     Ok((simulated, run))
 }
 
@@ -43,12 +42,12 @@ pub fn run(seed: u64, png: &Path) -> Result<Outcome> {
         "iasm demo: a robot with the paper's 6-microphone array drives between two rows of five talkers\n\
          ({lx} x {ly} x {lz} m room, RT60 {} s, {} stops, seed {seed}); rendered, localised (mvdr) and mapped in {:.1} s",
         sim.scene.scene.room.rt60.unwrap_or_default(),
-        sim.poses.len(),
+        sim.poses().len(),
         t0.elapsed().as_secs_f64()
     );
     println!(
         "DoA score {:.3} (first {} DoAs per stop within 5 deg of a true bearing)",
-        run.score.score, sim.n
+        run.score.score, N
     );
     println!(
         "{:>3} {:>8} {:>8}   {:>8} {:>8} {:>10}",
@@ -82,7 +81,7 @@ pub fn run(seed: u64, png: &Path) -> Result<Outcome> {
         run.ospa.localization,
         run.ospa.cardinality
     );
-    crate::render::write_png(png, &sim.map, &sim.poses, &run.map, Some(&sim.truth))?;
+    crate::render::write_png(png, &sim.map, sim.poses(), &run.map, Some(&sim.truth))?;
     println!("map drawn to {}", png.display());
     Ok(Outcome::Success)
 }

@@ -1,0 +1,106 @@
+//! Implicit association (step 4 of the paper's Algorithm 1): which DoAs a new source
+//! explains.
+//!
+//! I-ASM never labels DoAs before mapping. Once a filtering round has placed a source, the
+//! paper's rule decides which DoAs it accounts for: **at every stop, the one remaining DoA
+//! whose world bearing is nearest the bearing from that stop to the source is explained by
+//! it, if the two differ by less than `gamma`** (three DoA standard deviations). Explained
+//! DoAs are removed, so the next round's particle filter sees only what is still
+//! unexplained. At most one DoA per stop is taken: an array hears a point source from one
+//! direction.
+//!
+//! Angle differences are wrapped to `(-pi, pi]`, so a DoA at +179 degrees explains a source
+//! at -179 degrees (the authors' code compares unwrapped angles and misses that case).
+
+use crate::Pose;
+use crate::wrap_rad;
+
+/// A DoA explained by a source: the robot's position (m) and the DoA's world bearing (rad).
+pub type Ray = ([f64; 2], f64);
+
+/// Removes from `bearings` (per stop, world frame, rad) every DoA that a source at
+/// `source` explains under the paper's rule (see the module docs), and returns them as
+/// rays, in stop order.
+///
+/// # Panics
+/// If `poses` and `bearings` differ in length (the mapper checks its inputs first).
+pub fn associate(
+    source: [f64; 2],
+    poses: &[Pose],
+    bearings: &mut [Vec<f64>],
+    gamma: f64,
+) -> Vec<Ray> {
+    assert_eq!(poses.len(), bearings.len(), "one row of bearings per pose");
+    let mut rays = Vec::new();
+    for (p, row) in poses.iter().zip(bearings.iter_mut()) {
+        let theta = p.bearing_to(source);
+        let best = row
+            .iter()
+            .enumerate()
+            .map(|(n, &b)| (n, wrap_rad(theta - b).abs()))
+            .min_by(|a, b| a.1.total_cmp(&b.1));
+        if let Some((n, d)) = best
+            && d < gamma
+        {
+            rays.push((p.position(), row.remove(n)));
+        }
+    }
+    rays
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const GAMMA: f64 = 15.0 * std::f64::consts::PI / 180.0;
+
+    fn deg(d: f64) -> f64 {
+        d.to_radians()
+    }
+
+    #[test]
+    fn the_nearest_doa_within_gamma_is_taken_at_each_stop() {
+        // Source at (2, 2). From the origin its bearing is 45 deg; from (4, 0) it is 135 deg.
+        let poses = [Pose::new(0.0, 0.0, 0.0), Pose::new(4.0, 0.0, 1.0)];
+        let mut b = vec![
+            vec![deg(-90.0), deg(50.0), deg(40.5)],
+            vec![deg(140.0), deg(0.0)],
+        ];
+        let rays = associate([2.0, 2.0], &poses, &mut b, GAMMA);
+        assert_eq!(
+            rays,
+            vec![([0.0, 0.0], deg(40.5)), ([4.0, 0.0], deg(140.0))]
+        );
+        // The others stay for the next round, in their order.
+        assert_eq!(b, vec![vec![deg(-90.0), deg(50.0)], vec![deg(0.0)]]);
+    }
+
+    #[test]
+    fn one_doa_per_stop_at_most() {
+        // Two DoAs both within gamma of the source: only the nearer one is explained.
+        let poses = [Pose::new(0.0, 0.0, 0.0)];
+        let mut b = vec![vec![deg(3.0), deg(-1.0)]];
+        let rays = associate([5.0, 0.0], &poses, &mut b, GAMMA);
+        assert_eq!(rays, vec![([0.0, 0.0], deg(-1.0))]);
+        assert_eq!(b, vec![vec![deg(3.0)]]);
+    }
+
+    #[test]
+    fn a_doa_at_or_beyond_gamma_is_not_explained() {
+        let poses = [Pose::new(0.0, 0.0, 0.0)];
+        let mut b = [vec![GAMMA], vec![]];
+        assert!(associate([5.0, 0.0], &poses, &mut b[..1], GAMMA).is_empty());
+        assert_eq!(b[0], vec![GAMMA]);
+        // A stop with no DoA left explains nothing.
+        assert!(associate([5.0, 0.0], &poses, &mut b[1..], GAMMA).is_empty());
+    }
+
+    #[test]
+    fn differences_wrap_across_180_degrees() {
+        // Source behind the robot at bearing -179 deg; the DoA says +179 deg: 2 deg apart.
+        let poses = [Pose::new(0.0, 0.0, 0.0)];
+        let src = [(-179f64).to_radians().cos(), (-179f64).to_radians().sin()];
+        let mut b = vec![vec![deg(179.0)]];
+        assert_eq!(associate(src, &poses, &mut b, GAMMA).len(), 1);
+    }
+}

@@ -1,0 +1,155 @@
+//! `iasm map`: I-ASM from DoA tables or raw audio to a map of sources, as a table, JSON,
+//! CSV and a picture.
+
+use std::path::Path;
+
+use anyhow::{Context, Result};
+use asm::ospa::Ospa;
+use asm::{IasmConfig, MapResult};
+use serde::Serialize;
+use ssl::SslConfig;
+
+use crate::Outcome;
+use crate::args::MapArgs;
+use crate::pipeline::Survey;
+use crate::settings::DEFAULT_ARRAY;
+
+/// Version of the JSON `iasm map` writes.
+pub const SCHEMA_VERSION: u32 = 1;
+
+/// One run's report.
+#[derive(Serialize)]
+struct MapReport<'a> {
+    schema_version: u32,
+    doas: &'a str,
+    seed: u64,
+    params: &'a IasmConfig,
+    /// The SSL settings and array, when the DoAs came from the recordings.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    ssl: Option<&'a SslConfig>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    array: Option<&'a str>,
+    rounds: usize,
+    particles: usize,
+    unexplained_doas: usize,
+    sources: &'a [asm::Source],
+    ospa: Option<OspaReport>,
+}
+
+#[derive(Clone, Copy, Serialize)]
+struct OspaReport {
+    p: f64,
+    c: f64,
+    #[serde(flatten)]
+    value: Ospa,
+}
+
+/// Runs `iasm map`.
+///
+/// # Errors
+/// Bad survey or settings, or files that cannot be written.
+pub fn run(a: &MapArgs) -> Result<Outcome> {
+    let mut settings = a.input.settings()?;
+    if let Some(v) = a.variant {
+        settings.iasm.variant = v;
+    }
+    let survey = Survey::load(&a.input.survey_inputs(), &settings)?;
+    let config = &settings.iasm;
+    let localised = a.input.doas.is_none();
+    let t0 = std::time::Instant::now();
+    let result = survey.map(config, a.seed)?;
+    let dt = t0.elapsed().as_secs_f64();
+    let o = survey
+        .ospa(&result, a.report.ospa_c, a.report.ospa_p)
+        .map(|value| OspaReport {
+            p: a.report.ospa_p,
+            c: a.report.ospa_c,
+            value,
+        });
+    let report = MapReport {
+        schema_version: SCHEMA_VERSION,
+        doas: &survey.doa_source,
+        seed: a.seed,
+        params: config,
+        ssl: localised.then_some(&settings.ssl),
+        array: localised.then(|| settings.array.as_deref().unwrap_or(DEFAULT_ARRAY)),
+        rounds: result.rounds,
+        particles: result.particles,
+        unexplained_doas: result.unexplained,
+        sources: &result.sources,
+        ospa: o,
+    };
+    if let Some(out) = &a.out {
+        std::fs::write(out, serde_json::to_string_pretty(&report)?)
+            .with_context(|| format!("writing {}", out.display()))?;
+    }
+    if let Some(csv) = &a.csv {
+        write_sources_csv(csv, &result)?;
+    }
+    if let Some(png) = &a.png {
+        crate::render::write_png(
+            png,
+            &survey.map,
+            &survey.poses,
+            &result,
+            survey.truth.as_deref(),
+        )?;
+    }
+    if a.report.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+        return Ok(Outcome::Success);
+    }
+    println!(
+        "I-ASM ({}) on {} stops, DoAs from {}: {} sources in {} rounds of {} particles ({:.0} ms, seed {})",
+        config.variant.name(),
+        survey.poses.len(),
+        survey.doa_source,
+        result.sources.len(),
+        result.rounds,
+        result.particles,
+        1e3 * dt,
+        a.seed
+    );
+    println!(
+        "{:>3} {:>8} {:>8} {:>6} {:>9} {:>9} {:>6}",
+        "#", "x (m)", "y (m)", "DoAs", "particles", "2σ (m)", "round"
+    );
+    for (i, s) in result.sources.iter().enumerate() {
+        let two_sigma = 2.0 * asm::pf::max_eigenvalue(s.covariance).sqrt();
+        println!(
+            "{:>3} {:>8.3} {:>8.3} {:>6} {:>9} {:>9.3} {:>6}",
+            i + 1,
+            s.x,
+            s.y,
+            s.observations,
+            s.particles,
+            two_sigma,
+            s.round
+        );
+    }
+    if let Some(o) = o {
+        println!(
+            "OSPA (p = {}, c = {} m): {:.3} m (localisation {:.3}, cardinality {:.3})",
+            o.p, o.c, o.value.total, o.value.localization, o.value.cardinality
+        );
+    }
+    Ok(Outcome::Success)
+}
+
+fn write_sources_csv(path: &Path, r: &MapResult) -> Result<()> {
+    let mut s = String::from("x_m,y_m,observations,particles,cov_xx,cov_xy,cov_yy,round\n");
+    for src in &r.sources {
+        s.push_str(&format!(
+            "{:.4},{:.4},{},{},{:.6},{:.6},{:.6},{}\n",
+            src.x,
+            src.y,
+            src.observations,
+            src.particles,
+            src.covariance[0][0],
+            src.covariance[0][1],
+            src.covariance[1][1],
+            src.round
+        ));
+    }
+    std::fs::write(path, s).with_context(|| format!("writing {}", path.display()))
+}

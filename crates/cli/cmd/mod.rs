@@ -1,0 +1,11 @@
+//! The commands: each a thin user of the library modules ([`crate::pipeline`],
+//! [`crate::settings`], [`crate::dataset`], [`crate::scenes`], [`crate::suite`],
+//! [`crate::score`], [`crate::render`]) that parses nothing and prints its report. No
+//! command imports another.
+
+pub mod demo;
+pub mod eval;
+pub mod map;
+pub mod regress;
+pub mod simulate;
+pub mod ssl;

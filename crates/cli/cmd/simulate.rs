@@ -1,0 +1,30 @@
+//! `iasm simulate`: renders a scene file into a data set in the published layout.
+
+use std::path::Path;
+
+use anyhow::Result;
+
+use crate::Outcome;
+use crate::scenes::{load_scene, write_dataset};
+
+/// Runs `iasm simulate`.
+///
+/// # Errors
+/// A refused scene or an unwritable output folder.
+pub fn run(scene_path: &Path, out: &Path) -> Result<Outcome> {
+    let t0 = std::time::Instant::now();
+    let (scene, _) = load_scene(scene_path)?;
+    write_dataset(&scene, out)?;
+    println!(
+        "{}: {} stops x {} microphones x {:.2} s at {} Hz, {} sources, written to {} ({:.1} s)",
+        scene_path.display(),
+        scene.stops.len(),
+        scene.mics.len(),
+        scene.scene.clip_s,
+        scene.scene.fs,
+        scene.scene.sources.len(),
+        out.display(),
+        t0.elapsed().as_secs_f64()
+    );
+    Ok(Outcome::Success)
+}

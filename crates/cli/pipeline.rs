@@ -1,0 +1,449 @@
+//! The one place where recordings become DoAs and DoAs become a map.
+//!
+//! Every command that goes from recordings to a map goes through here, so that a setting
+//! means the same thing in `map`, `eval`, `regress` and `demo`:
+//!
+//! ```text
+//!  SurveyInputs ──► Survey::load ──► Survey { map, poses, doas_deg, truth } ──► Survey::map
+//!  (files)          (localise_files                                              evaluate
+//!                    when no DoA table)
+//!  Simulated (a rendered scene) ──► Simulated::survey ──► the same Survey
+//! ```
+//!
+//! A [`Survey`] is what one robot run gives the mapper: the occupancy map, a pose per stop,
+//! the DoAs heard at each stop (a table in degrees, array frame, strongest first, as the
+//! published tables and `iasm ssl` write it), and the true sources when known. The DoA
+//! source (a table or the SSL) does not matter past this point.
+
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
+
+use anyhow::{Context, Result, bail, ensure};
+use asm::map::OccupancyMap;
+use asm::ospa::{Ospa, ospa};
+use asm::{IasmConfig, MapResult, Mapper, Pose, Variant};
+use rand::SeedableRng;
+use rand::rngs::StdRng;
+use rayon::prelude::*;
+use serde::Serialize;
+use sim::scene::PreparedScene;
+use ssl::{Audio, Doa, Localizer, MicArray, Scratch, SslConfig};
+
+use crate::dataset::{Dataset, Table, first_with_ext, list_files, load_map, read_poses};
+use crate::dataset::{read_sources, read_table};
+use crate::score::{DoaScore, score_doas};
+use crate::settings::Settings;
+
+/// The DoAs of one recording.
+#[derive(Clone, Debug, Serialize)]
+pub struct FileDoas {
+    /// The WAV file.
+    pub file: PathBuf,
+    /// Strongest first.
+    pub doas: Vec<Doa>,
+}
+
+/// Localises every file with one localizer per sample rate, in parallel, keeping order.
+///
+/// # Errors
+/// The first file that cannot be read or localised, named.
+pub fn localise_files(
+    files: &[PathBuf],
+    array: &MicArray,
+    config: &SslConfig,
+) -> Result<Vec<FileDoas>> {
+    let bar = crate::progress(files.len() as u64, "localising");
+    let cache: Mutex<Vec<Arc<Localizer>>> = Mutex::default();
+    let out = files
+        .par_iter()
+        .map_init(Scratch::default, |scratch, f| {
+            let audio = ssl::read_wav(f)?;
+            let loc = {
+                let mut c = cache.lock().expect("no panics while locked");
+                match c.iter().find(|l| l.sample_rate() == audio.sample_rate()) {
+                    Some(l) => l.clone(),
+                    None => {
+                        let l = Arc::new(Localizer::new(array, audio.sample_rate(), config)?);
+                        c.push(l.clone());
+                        l
+                    }
+                }
+            };
+            let doas = loc
+                .locate_with_scratch(&audio, scratch)
+                .with_context(|| format!("localising {}", f.display()))?;
+            bar.inc(1);
+            Ok(FileDoas {
+                file: f.clone(),
+                doas,
+            })
+        })
+        .collect::<Result<Vec<_>>>();
+    bar.finish_and_clear();
+    out
+}
+
+/// A DoA table from ranked DoAs per recording: azimuths (degrees), `n` columns, `None`
+/// where fewer were found.
+pub fn doa_table<'a>(rows: impl IntoIterator<Item = &'a [Doa]>, n: usize) -> Table {
+    rows.into_iter()
+        .map(|r| (0..n).map(|i| r.get(i).map(|d| d.azimuth_deg)).collect())
+        .collect()
+}
+
+/// Where a survey's parts come from: a data set folder, and files that override its parts.
+#[derive(Clone, Debug, Default)]
+pub struct SurveyInputs {
+    /// A data set folder in the published layout.
+    pub dataset: Option<PathBuf>,
+    /// A ROS occupancy map YAML.
+    pub map: Option<PathBuf>,
+    /// A pose table (x, y, theta per stop).
+    pub poses: Option<PathBuf>,
+    /// Whether the pose table's theta is in radians (else degrees).
+    pub theta_in_radians: bool,
+    /// A DoA table (degrees, array frame); when absent the recordings are localised.
+    pub doas: Option<PathBuf>,
+    /// A folder of recordings, one per stop (default: the data set's `audio/`).
+    pub audio: Option<PathBuf>,
+    /// Ground-truth source positions.
+    pub truth: Option<PathBuf>,
+}
+
+/// What one robot run gives the mapper.
+#[derive(Clone, Debug)]
+pub struct Survey {
+    /// The occupancy map.
+    pub map: OccupancyMap,
+    /// One pose per stop.
+    pub poses: Vec<Pose>,
+    /// The DoAs heard at each stop: azimuths in degrees, array frame, strongest first;
+    /// `None` for an empty cell.
+    pub doas_deg: Table,
+    /// The true source positions (m), when known.
+    pub truth: Option<Vec<[f64; 2]>>,
+    /// Where the DoAs came from: a table's path, or `ssl:<method>`.
+    pub doa_source: String,
+}
+
+impl Survey {
+    /// Reads and checks a survey: the map, the poses, the truth, and the DoAs from a table
+    /// or, when none is given, by localising the recordings with `settings`.
+    ///
+    /// # Errors
+    /// Missing or unreadable inputs, or tables that do not match one to one, named.
+    pub fn load(inputs: &SurveyInputs, settings: &Settings) -> Result<Self> {
+        let ds = inputs.dataset.as_deref().map(Dataset::open).transpose()?;
+        let map_path = match (&inputs.map, &ds) {
+            (Some(p), _) => p.clone(),
+            (None, Some(d)) => first_with_ext(&d.root.join("map"), "yaml")?,
+            (None, None) => bail!("give --dataset DIR or --map map.yaml"),
+        };
+        let map = load_map(&map_path)?;
+        let pose_path = match (&inputs.poses, &ds) {
+            (Some(p), _) => p.clone(),
+            (None, Some(d)) => d
+                .poses
+                .clone()
+                .with_context(|| format!("{}: no pose table in pose/", d.root.display()))?,
+            (None, None) => bail!("give --dataset DIR or --poses FILE"),
+        };
+        let poses = read_poses(&pose_path, inputs.theta_in_radians)?;
+        let truth_path = inputs
+            .truth
+            .clone()
+            .or_else(|| ds.as_ref().and_then(|d| d.sources.clone()));
+        let truth = truth_path.as_deref().map(read_sources).transpose()?;
+        let (doas_deg, doa_source) = if let Some(t) = &inputs.doas {
+            (read_table(t)?, t.display().to_string())
+        } else {
+            let files = match (&inputs.audio, &ds) {
+                (Some(dir), _) => list_files(dir, "wav")?,
+                (None, Some(d)) => d.audio.clone(),
+                (None, None) => bail!("give --doas TABLE, --audio DIR or --dataset DIR"),
+            };
+            ensure!(!files.is_empty(), "no WAV file to localise");
+            ensure!(
+                files.len() == poses.len(),
+                "{} recordings but {} poses in {}: they must match one to one",
+                files.len(),
+                poses.len(),
+                pose_path.display()
+            );
+            let rows = localise_files(&files, &settings.mic_array()?, &settings.ssl)?;
+            (
+                doa_table(rows.iter().map(|r| &r.doas[..]), settings.ssl.num_peaks),
+                format!("ssl:{}", settings.ssl.method),
+            )
+        };
+        ensure!(
+            doas_deg.len() == poses.len(),
+            "{} rows of DoAs ({doa_source}) but {} poses ({}): they must match one to one",
+            doas_deg.len(),
+            poses.len(),
+            pose_path.display()
+        );
+        Ok(Self {
+            map,
+            poses,
+            doas_deg,
+            truth,
+            doa_source,
+        })
+    }
+
+    /// The DoAs as the mapper takes them: radians, empty cells dropped.
+    pub fn doas_rad(&self) -> Vec<Vec<f64>> {
+        self.doas_deg
+            .iter()
+            .map(|row| row.iter().flatten().map(|a| a.to_radians()).collect())
+            .collect()
+    }
+
+    /// One I-ASM map with `config`, seeded by `seed`.
+    ///
+    /// # Errors
+    /// As [`Mapper::new`] and [`Mapper::run`].
+    pub fn map(&self, config: &IasmConfig, seed: u64) -> Result<MapResult> {
+        let mapper = Mapper::new(&self.map, config)?;
+        Ok(mapper.run(
+            &self.poses,
+            &self.doas_rad(),
+            &mut StdRng::seed_from_u64(seed),
+        )?)
+    }
+
+    /// The OSPA of `result` against the truth (cutoff `c` m, order `p`), when it is known.
+    pub fn ospa(&self, result: &MapResult, c: f64, p: f64) -> Option<Ospa> {
+        self.truth
+            .as_ref()
+            .map(|t| ospa(&result.positions(), t, c, p))
+    }
+
+    /// The DoA score of the first `n` DoAs per stop (hit within `tol_deg`), when the truth
+    /// is known.
+    ///
+    /// # Errors
+    /// As [`score_doas`].
+    pub fn score(&self, n: usize, tol_deg: f64) -> Result<Option<DoaScore>> {
+        self.truth
+            .as_ref()
+            .map(|t| score_doas(&self.doas_deg, &self.poses, t, n, tol_deg))
+            .transpose()
+    }
+}
+
+/// One variant's Monte Carlo summary.
+#[derive(Clone, Debug, Serialize)]
+pub struct VariantStats {
+    /// The variant.
+    pub variant: Variant,
+    /// Mean OSPA (m).
+    pub mean: f64,
+    /// Median OSPA (m).
+    pub median: f64,
+    /// Mean localisation part (m).
+    pub mean_localization: f64,
+    /// Mean cardinality part (m).
+    pub mean_cardinality: f64,
+    /// Mean number of sources found.
+    pub mean_sources: f64,
+    /// Every run's OSPA (m), by seed.
+    pub runs: Vec<f64>,
+}
+
+/// The paper's Monte Carlo evaluation: `runs` seeded maps (seeds `seed0..seed0 + runs`) of
+/// each variant, in parallel, scored with OSPA (cutoff `c` m, order `p`).
+///
+/// # Errors
+/// A survey without truth, or as [`Mapper::new`] and [`Mapper::run`].
+pub fn evaluate(
+    survey: &Survey,
+    base: &IasmConfig,
+    variants: &[Variant],
+    runs: usize,
+    seed0: u64,
+    c: f64,
+    p: f64,
+) -> Result<Vec<VariantStats>> {
+    let truth = survey
+        .truth
+        .as_ref()
+        .context("the evaluation needs ground truth (src_gt* or --truth)")?;
+    let doas_rad = survey.doas_rad();
+    let bar = crate::progress((variants.len() * runs) as u64, "mapping");
+    let out = variants
+        .iter()
+        .map(|&v| {
+            let config = IasmConfig {
+                variant: v,
+                ..base.clone()
+            };
+            let mapper = Mapper::new(&survey.map, &config)?;
+            let res: Vec<(Ospa, usize)> = (0..runs as u64)
+                .into_par_iter()
+                .map(|s| {
+                    let mut rng = StdRng::seed_from_u64(seed0 + s);
+                    let r = mapper.run(&survey.poses, &doas_rad, &mut rng)?;
+                    bar.inc(1);
+                    Ok((ospa(&r.positions(), truth, c, p), r.sources.len()))
+                })
+                .collect::<Result<_>>()?;
+            Ok(summarise(v, &res))
+        })
+        .collect::<Result<Vec<_>>>();
+    bar.finish_and_clear();
+    out
+}
+
+fn summarise(variant: Variant, res: &[(Ospa, usize)]) -> VariantStats {
+    let n = res.len() as f64;
+    let runs: Vec<f64> = res.iter().map(|r| r.0.total).collect();
+    let mut sorted = runs.clone();
+    sorted.sort_by(f64::total_cmp);
+    let mid = sorted.len() / 2;
+    let median = if sorted.len() % 2 == 1 {
+        sorted[mid]
+    } else {
+        0.5 * (sorted[mid - 1] + sorted[mid])
+    };
+    VariantStats {
+        variant,
+        mean: sorted.iter().sum::<f64>() / n,
+        median,
+        mean_localization: res.iter().map(|r| r.0.localization).sum::<f64>() / n,
+        mean_cardinality: res.iter().map(|r| r.0.cardinality).sum::<f64>() / n,
+        mean_sources: res.iter().map(|r| r.1 as f64).sum::<f64>() / n,
+        runs,
+    }
+}
+
+/// A scene rendered at every stop: recordings with known truth, ready for the pipeline.
+pub struct Simulated {
+    /// The scene's name (or its file's stem).
+    pub name: String,
+    /// The checked scene.
+    pub scene: PreparedScene,
+    /// What the array heard at each stop.
+    pub audio: Vec<Audio>,
+    /// The scene's array.
+    pub array: MicArray,
+    /// True source positions (m).
+    pub truth: Vec<[f64; 2]>,
+    /// The scene's occupancy map.
+    pub map: OccupancyMap,
+}
+
+/// One run of the pipeline on a [`Simulated`] scene.
+pub struct SceneRun {
+    /// The DoAs, with the scene's poses, map and truth.
+    pub survey: Survey,
+    /// The DoA score of the first N DoAs per stop (hit within 5 degrees).
+    pub score: DoaScore,
+    /// The I-ASM map.
+    pub map: MapResult,
+    /// Its OSPA (p = 1, c = 1 m).
+    pub ospa: Ospa,
+}
+
+impl Simulated {
+    /// Renders a checked scene (`fallback_name` when it has none), every stop in parallel.
+    ///
+    /// # Errors
+    /// If the scene's array cannot be built.
+    pub fn render(scene: PreparedScene, fallback_name: String) -> Result<Self> {
+        let name = if scene.scene.name.is_empty() {
+            fallback_name
+        } else {
+            scene.scene.name.clone()
+        };
+        let fs = scene.scene.fs;
+        let audio: Vec<Audio> = (0..scene.stops.len())
+            .into_par_iter()
+            .map(|k| {
+                let ch = scene
+                    .render_stop(k)
+                    .into_iter()
+                    .map(|c| c.into_iter().map(|v| v as f32).collect())
+                    .collect();
+                Audio::new(fs, ch).map_err(anyhow::Error::from)
+            })
+            .collect::<Result<_>>()?;
+        let array = MicArray::new(name.clone(), scene.mics.clone())?;
+        let truth = scene
+            .scene
+            .sources
+            .iter()
+            .map(|s| [s.pos[0], s.pos[1]])
+            .collect();
+        let map = crate::scenes::scene_map(&scene);
+        Ok(Self {
+            name,
+            scene,
+            audio,
+            array,
+            truth,
+            map,
+        })
+    }
+
+    /// The robot's stops.
+    pub fn poses(&self) -> &[Pose] {
+        &self.scene.stops
+    }
+
+    /// Localises every stop with `ssl` (the scene's own array, whatever `ssl` says).
+    ///
+    /// # Errors
+    /// Settings refused for this array and rate.
+    pub fn survey(&self, ssl: &SslConfig) -> Result<Survey> {
+        let loc = Localizer::new(&self.array, self.scene.scene.fs, ssl)?;
+        let rows: Vec<Vec<Doa>> = self
+            .audio
+            .par_iter()
+            .map_init(Scratch::default, |scratch, a| {
+                loc.locate_with_scratch(a, scratch)
+            })
+            .collect::<Result<_, _>>()
+            .with_context(|| format!("localising scene {}", self.name))?;
+        Ok(Survey {
+            map: self.map.clone(),
+            poses: self.scene.stops.clone(),
+            doas_deg: doa_table(rows.iter().map(|r| &r[..]), ssl.num_peaks),
+            truth: Some(self.truth.clone()),
+            doa_source: format!("ssl:{}", ssl.method),
+        })
+    }
+
+    /// The whole pipeline with `settings`: localise, score (first `settings.ssl.num_peaks`
+    /// DoAs, 5 degrees), map with `seed`, OSPA (p = 1, c = 1 m).
+    ///
+    /// # Errors
+    /// Settings refused.
+    pub fn run(&self, settings: &Settings, seed: u64) -> Result<SceneRun> {
+        let survey = self.survey(&settings.ssl)?;
+        let score = score_doas(
+            &survey.doas_deg,
+            &survey.poses,
+            &self.truth,
+            settings.ssl.num_peaks,
+            5.0,
+        )?;
+        let map = survey.map(&settings.iasm, seed)?;
+        let ospa = ospa(&map.positions(), &self.truth, 1.0, 1.0);
+        Ok(SceneRun {
+            survey,
+            score,
+            map,
+            ospa,
+        })
+    }
+}
+
+/// The settings the suite and the demo run a scene with: the defaults, `method` and N.
+pub fn scene_settings(method: ssl::Method, n: usize) -> Settings {
+    let mut s = Settings::default();
+    s.ssl.method = method;
+    s.set_num(n);
+    s
+}

@@ -1,0 +1,155 @@
+//! One settings file for every command (issue 8): `[ssl]` and `[iasm]` tables reach the
+//! pipeline whole, and flags override only what they name.
+
+use crate::util::*;
+
+fn json(o: &std::process::Output) -> serde_json::Value {
+    assert!(o.status.success(), "{}", show(o));
+    serde_json::from_slice(&o.stdout).expect("JSON on stdout")
+}
+
+/// Every `[ssl]` and `[iasm]` field away from its default (but still a sensible setting).
+const EVERY_FIELD: &str = r#"
+[ssl]
+method = "gcc-phat"
+frame_len = 2048
+hop = 512
+fmin_hz = 300.0
+fmax_hz = 7000.0
+az_step_deg = 2.0
+elevation = { min_deg = -30.0, max_deg = 30.0, step_deg = 15.0 }
+block_frames = 3
+pooling = "mean"
+num_peaks = 2
+min_sep_deg = 15.0
+speed_of_sound = 340.0
+mvdr_loading = 0.2
+mvdr_freq_smoothing = 1
+
+[iasm]
+density_d = 8.0
+sigma_p_m = 0.02
+sigma_deg = 4.0
+beta_m = 3.0
+lambda_thresh_m2 = 0.05
+dbscan_eps_m = 0.12
+min_pts_frac = 0.12
+resample_frac = 0.2
+gamma_sigmas = 2.5
+passes = 3
+merge_dist_m = 0.4
+max_rounds = 30
+retries = 1
+variant = "wdp"
+refine = true
+"#;
+
+// See: issue 8
+#[test]
+fn r8_map_honours_every_field_of_the_settings_file() {
+    let dir = tempdir();
+    let root = path(&dir, "ds");
+    audio_dataset(&root, &AUDIO_TRUTH);
+    let cfg = path(&dir, "c.toml");
+    std::fs::write(&cfg, EVERY_FIELD).unwrap();
+    let v = json(&iasm(&[
+        "map",
+        "--dataset",
+        arg(&root),
+        "--method",
+        "mvdr",
+        "--config",
+        arg(&cfg),
+        "--json",
+    ]));
+    // What the file says, as the pipeline received it; `--method` overrides the file.
+    let mut want: toml::Table = toml::from_str(EVERY_FIELD).unwrap();
+    want["ssl"]["method"] = toml::Value::String("mvdr".into());
+    // N is one number: the file's num_peaks is the mapper's num_doas too.
+    want["iasm"]
+        .as_table_mut()
+        .unwrap()
+        .insert("num_doas".into(), toml::Value::Integer(2));
+    let want = serde_json::to_value(&want).unwrap();
+    assert_eq!(v["ssl"], want["ssl"], "{v}");
+    assert_eq!(v["params"], want["iasm"], "{v}");
+    assert_eq!(v["array"], "iasm6");
+    // The settings were used, not only echoed: refinement ran, and the two sources were
+    // found from DoAs localised with them.
+    let sources = v["sources"].as_array().unwrap();
+    assert_eq!(sources.len(), 2, "{v}");
+    assert!(sources.iter().all(|s| s["refined"] == true), "{v}");
+    assert!(v["ospa"]["total"].as_f64().unwrap() < 0.2, "{v}");
+}
+
+// See: issue 8
+#[test]
+fn r8_the_settings_files_band_reaches_the_localizer() {
+    let dir = tempdir();
+    let root = path(&dir, "ds");
+    audio_dataset(&root, &AUDIO_TRUTH);
+    let cfg = path(&dir, "c.toml");
+    // 48 kHz recordings: a band starting at 30 kHz lies above Nyquist.
+    std::fs::write(&cfg, "[ssl]\nfmin_hz = 30000.0\nfmax_hz = 40000.0\n").unwrap();
+    let o = iasm(&["map", "--dataset", arg(&root), "--config", arg(&cfg)]);
+    assert_clear_error(&o, &["30000"]);
+    // `--fmin`/`--fmax` override the file.
+    let o = iasm(&[
+        "map",
+        "--dataset",
+        arg(&root),
+        "--config",
+        arg(&cfg),
+        "--fmin",
+        "200",
+        "--fmax",
+        "8000",
+        "--num",
+        "2",
+        "--json",
+    ]);
+    let v = json(&o);
+    assert_eq!(v["ssl"]["fmin_hz"], 200.0);
+    assert_eq!(v["sources"].as_array().unwrap().len(), 2, "{v}");
+}
+
+// See: issue 8
+#[test]
+fn r8_a_settings_files_n_stands_unless_num_is_given() {
+    // Three sources, a table of three DoAs per stop; the file says N = 2.
+    let dir = tempdir();
+    let root = path(&dir, "ds");
+    mapping_dataset(&root, &[[1.5, 1.5], [4.0, -1.2], [5.5, 2.0]], &drive());
+    let cfg = path(&dir, "c.toml");
+    std::fs::write(&cfg, "[iasm]\nnum_doas = 2\n").unwrap();
+    let doas = root.join("doas.csv");
+    let base = [
+        "map",
+        "--dataset",
+        arg(&root),
+        "--doas",
+        arg(&doas),
+        "--config",
+        arg(&cfg),
+    ];
+    // N = 2 stood: a table of three columns is refused as wider than N.
+    assert_clear_error(&iasm(&base), &["3 azimuths", "N = 2"]);
+    // --num overrides it.
+    let mut args = base.to_vec();
+    args.extend(["--num", "3", "--json"]);
+    let v = json(&iasm(&args));
+    assert_eq!(v["params"]["num_doas"], 3);
+    assert_eq!(v["sources"].as_array().unwrap().len(), 3, "{v}");
+}
+
+// See: issue 8
+#[test]
+fn r8_two_different_ns_in_one_file_are_a_clear_error() {
+    let dir = tempdir();
+    let cfg = path(&dir, "c.toml");
+    std::fs::write(&cfg, "[ssl]\nnum_peaks = 3\n[iasm]\nnum_doas = 4\n").unwrap();
+    let wav = path(&dir, "a.wav");
+    write_wav(&wav, &plane_wave_recording(&iasm6(), &[30.0], SEED), FS);
+    let o = iasm(&["ssl", arg(&wav), "--config", arg(&cfg)]);
+    assert_clear_error(&o, &["c.toml", "num_peaks = 3", "num_doas = 4"]);
+}
