@@ -106,6 +106,32 @@ fn eval_reports_every_variant() {
     let ca = &v["variants"][0];
     assert_eq!(ca["runs"].as_array().unwrap().len(), 4);
     assert!(ca["mean"].as_f64().unwrap() < 0.15, "{v}");
+    // The spread over seeds: the worst run is one of the runs and no better than the
+    // mean; the share of runs with the right count agrees with the per-run counts.
+    let runs: Vec<f64> = ca["runs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r.as_f64().unwrap())
+        .collect();
+    let worst = ca["worst"].as_f64().unwrap();
+    assert!(
+        runs.contains(&worst) && worst >= ca["mean"].as_f64().unwrap(),
+        "{v}"
+    );
+    assert_eq!(
+        runs[(ca["worst_seed"].as_u64().unwrap()) as usize],
+        worst,
+        "{v}"
+    );
+    let counts: Vec<u64> = ca["sources"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c.as_u64().unwrap())
+        .collect();
+    let right = counts.iter().filter(|&&c| c == 3).count() as f64 / 4.0;
+    assert_eq!(ca["right_count"].as_f64().unwrap(), right, "{v}");
     // An impossible bound fails with status 1.
     let o = iasm(&[
         "eval",

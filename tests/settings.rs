@@ -22,6 +22,7 @@ block_frames = 3
 pooling = "mean"
 num_peaks = 2
 min_sep_deg = 15.0
+min_relative = 0.2
 speed_of_sound = 340.0
 mvdr_loading = 0.2
 mvdr_freq_smoothing = 1
@@ -41,7 +42,8 @@ merge_dist_m = 0.4
 max_rounds = 30
 retries = 1
 variant = "wdp"
-refine = true
+refine = false
+min_observations = 4
 "#;
 
 // See: issue 8
@@ -74,11 +76,17 @@ fn r8_map_honours_every_field_of_the_settings_file() {
     assert_eq!(v["ssl"], want["ssl"], "{v}");
     assert_eq!(v["params"], want["iasm"], "{v}");
     assert_eq!(v["array"], "iasm6");
-    // The settings were used, not only echoed: refinement ran, and the two sources were
-    // found from DoAs localised with them.
+    // The settings were used, not only echoed: no source was refined, each explains at
+    // least 4 stops, and the two sources were found from DoAs localised with them.
     let sources = v["sources"].as_array().unwrap();
     assert_eq!(sources.len(), 2, "{v}");
-    assert!(sources.iter().all(|s| s["refined"] == true), "{v}");
+    assert!(sources.iter().all(|s| s["refined"] == false), "{v}");
+    assert!(
+        sources
+            .iter()
+            .all(|s| s["observations"].as_u64().unwrap() >= 4),
+        "{v}"
+    );
     assert!(v["ospa"]["total"].as_f64().unwrap() < 0.2, "{v}");
 }
 

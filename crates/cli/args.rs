@@ -5,7 +5,7 @@
 use std::path::PathBuf;
 
 use anyhow::Result;
-use asm::Variant;
+use asm::{Profile, Variant};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use ssl::{Method, Pooling};
 
@@ -55,6 +55,9 @@ pub enum Command {
         /// Folder of scene files.
         #[arg(default_value = "fixtures/rooms")]
         dir: PathBuf,
+        /// A settings file (as for `map`); each method and each scene's N replace its own.
+        #[arg(long, value_name = "FILE")]
+        config: Option<PathBuf>,
         /// Print JSON instead of a table.
         #[arg(long)]
         json: bool,
@@ -95,6 +98,11 @@ pub struct SettingsArgs {
     /// Block pooling: max or mean.
     #[arg(long)]
     pub pooling: Option<Pooling>,
+    /// I-ASM profile: paper (the paper's algorithm exactly, Table I) or robust (bearing
+    /// refinement, three observing stops per source) [default: robust, or the settings
+    /// file's].
+    #[arg(long)]
+    pub profile: Option<Profile>,
 }
 
 impl SettingsArgs {
@@ -103,7 +111,7 @@ impl SettingsArgs {
     /// # Errors
     /// An unreadable or refused file, or a refused value.
     pub fn settings(&self) -> Result<Settings> {
-        let mut s = Settings::load(self.config.as_deref())?;
+        let mut s = Settings::load_with(self.config.as_deref(), self.profile)?;
         if let Some(a) = &self.array {
             s.array = Some(a.clone());
         }

@@ -55,7 +55,11 @@ pub fn run(cli: &args::Cli) -> anyhow::Result<Outcome> {
             set_threads(*threads);
             cmd::simulate::run(scene, out)
         }
-        args::Command::Regress { dir, json } => cmd::regress::run(dir, *json),
+        args::Command::Regress { dir, config, json } => {
+            let settings = settings::Settings::load(config.as_deref())?;
+            settings.validate()?;
+            cmd::regress::run(dir, &settings, *json)
+        }
         args::Command::Eval(a) => {
             set_threads(a.threads);
             cmd::eval::run(a)

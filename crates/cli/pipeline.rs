@@ -248,8 +248,16 @@ pub struct VariantStats {
     pub mean_cardinality: f64,
     /// Mean number of sources found.
     pub mean_sources: f64,
+    /// The share of runs that found exactly as many sources as the truth holds.
+    pub right_count: f64,
+    /// The worst run's OSPA (m).
+    pub worst: f64,
+    /// The seed of the worst run.
+    pub worst_seed: u64,
     /// Every run's OSPA (m), by seed.
     pub runs: Vec<f64>,
+    /// Every run's number of sources, by seed.
+    pub sources: Vec<usize>,
 }
 
 /// The paper's Monte Carlo evaluation: `runs` seeded maps (seeds `seed0..seed0 + runs`) of
@@ -289,14 +297,14 @@ pub fn evaluate(
                     Ok((ospa(&r.positions(), truth, c, p), r.sources.len()))
                 })
                 .collect::<Result<_>>()?;
-            Ok(summarise(v, &res))
+            Ok(summarise(v, &res, truth.len(), seed0))
         })
         .collect::<Result<Vec<_>>>();
     bar.finish_and_clear();
     out
 }
 
-fn summarise(variant: Variant, res: &[(Ospa, usize)]) -> VariantStats {
+fn summarise(variant: Variant, res: &[(Ospa, usize)], truth: usize, seed0: u64) -> VariantStats {
     let n = res.len() as f64;
     let runs: Vec<f64> = res.iter().map(|r| r.0.total).collect();
     let mut sorted = runs.clone();
@@ -314,7 +322,16 @@ fn summarise(variant: Variant, res: &[(Ospa, usize)]) -> VariantStats {
         mean_localization: res.iter().map(|r| r.0.localization).sum::<f64>() / n,
         mean_cardinality: res.iter().map(|r| r.0.cardinality).sum::<f64>() / n,
         mean_sources: res.iter().map(|r| r.1 as f64).sum::<f64>() / n,
+        right_count: res.iter().filter(|r| r.1 == truth).count() as f64 / n,
+        worst: sorted.last().copied().unwrap_or(f64::NAN),
+        worst_seed: seed0
+            + runs
+                .iter()
+                .enumerate()
+                .max_by(|a, b| a.1.total_cmp(b.1))
+                .map_or(0, |(i, _)| i as u64),
         runs,
+        sources: res.iter().map(|r| r.1).collect(),
     }
 }
 
@@ -415,8 +432,10 @@ impl Simulated {
         })
     }
 
-    /// The whole pipeline with `settings`: localise, score (first `settings.ssl.num_peaks`
-    /// DoAs, 5 degrees), map with `seed`, OSPA (p = 1, c = 1 m).
+    /// The whole pipeline with `settings`: localise, score, map with `seed`, OSPA (p = 1,
+    /// c = 1 m). The score counts the first `min(N, sources)` DoAs of each stop (hit within
+    /// 5 degrees): N is an upper bound a user guesses, and a stop cannot hear more sources
+    /// than there are, so DoAs beyond the true count are neither rewarded nor punished.
     ///
     /// # Errors
     /// Settings refused.
@@ -426,7 +445,7 @@ impl Simulated {
             &survey.doas_deg,
             &survey.poses,
             &self.truth,
-            settings.ssl.num_peaks,
+            settings.ssl.num_peaks.min(self.truth.len()),
             5.0,
         )?;
         let map = survey.map(&settings.iasm, seed)?;
@@ -440,9 +459,9 @@ impl Simulated {
     }
 }
 
-/// The settings the suite and the demo run a scene with: the defaults, `method` and N.
-pub fn scene_settings(method: ssl::Method, n: usize) -> Settings {
-    let mut s = Settings::default();
+/// The settings the suite and the demo run a scene with: `base`, with `method` and N.
+pub fn scene_settings(base: &Settings, method: ssl::Method, n: usize) -> Settings {
+    let mut s = base.clone();
     s.ssl.method = method;
     s.set_num(n);
     s

@@ -20,12 +20,22 @@ const MAP_MARGIN: f64 = 0.5;
 #[derive(Clone, Debug, Default, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Expect {
-    /// DoAs per stop, N. Default: the number of sources, at most 4.
+    /// DoAs per stop, N. Default: as a user would set it ([`crate::suite::user_n`]: 3 for
+    /// up to three sources, 4 beyond).
     pub num: Option<usize>,
-    /// Lowest acceptable DoA score (hit within 5 degrees), for every method.
+    /// Seeds the scene runs with (`seed`, `seed + 1`, ...). Default:
+    /// [`crate::suite::DEFAULT_SEEDS`].
+    pub seeds: Option<usize>,
+    /// Lowest acceptable mean DoA score (hit within 5 degrees), for every method.
     pub doa_score_min: Option<f64>,
-    /// Highest acceptable OSPA (m, p = 1, c = 1) of the I-ASM map, for every method.
+    /// Highest acceptable mean OSPA (m, p = 1, c = 1) of the I-ASM maps, for every method.
     pub ospa_max: Option<f64>,
+    /// Highest acceptable OSPA of the worst seed (m).
+    pub ospa_worst_max: Option<f64>,
+    /// Fewest sources any seed's map may find.
+    pub found_min: Option<usize>,
+    /// Most sources any seed's map may find.
+    pub found_max: Option<usize>,
 }
 
 /// Parses a scene file's text into the scene and its `[expect]` table.

@@ -16,6 +16,10 @@
 //! refine = true
 //! ```
 //!
+//! `[iasm] profile = "paper"` starts the I-ASM parameters from the paper's algorithm
+//! exactly (Table I; [`asm::Profile::Paper`]) instead of the default robust profile; keys in
+//! the file override the profile's values either way.
+//!
 //! N, the number of DoAs per stop, is one quantity with two names: the SSL reports
 //! `ssl.num_peaks` DoAs and the mapper accepts `iasm.num_doas`. A file that sets one sets
 //! both; a file that sets both to different values is refused; `--num` sets both.
@@ -23,7 +27,7 @@
 use std::path::Path;
 
 use anyhow::{Context, Result, bail};
-use asm::IasmConfig;
+use asm::{IasmConfig, Profile};
 use serde::{Deserialize, Serialize};
 use ssl::{MicArray, SslConfig};
 
@@ -43,23 +47,46 @@ pub struct Settings {
 }
 
 impl Settings {
-    /// Parses a settings file's text (see the module docs for the rules on N).
+    /// Parses a settings file's text (see the module docs for the rules on N and on
+    /// profiles).
     ///
     /// # Errors
     /// Malformed TOML, unknown keys, or two different values of N.
     pub fn from_toml(text: &str) -> Result<Self> {
-        let raw: toml::Table =
-            toml::from_str(text).map_err(|e| anyhow::anyhow!("{}", e.message()))?;
-        let mut s: Settings = raw
-            .clone()
-            .try_into()
-            .map_err(|e: toml::de::Error| anyhow::anyhow!("{}", e.message()))?;
-        let has = |table: &str, key: &str| {
+        Self::from_toml_with(text, None)
+    }
+
+    /// [`Settings::from_toml`], with the I-ASM profile `profile` when given (else the
+    /// file's `[iasm] profile`, else [`Profile::Robust`]); the file's own `[iasm]` keys
+    /// override the profile's values.
+    ///
+    /// # Errors
+    /// As [`Settings::from_toml`].
+    pub fn from_toml_with(text: &str, profile: Option<Profile>) -> Result<Self> {
+        let msg = |e: toml::de::Error| anyhow::anyhow!("{}", e.message());
+        let mut raw: toml::Table = toml::from_str(text).map_err(msg)?;
+        let has = |raw: &toml::Table, table: &str, key: &str| {
             raw.get(table)
                 .and_then(toml::Value::as_table)
                 .is_some_and(|t| t.contains_key(key))
         };
-        match (has("ssl", "num_peaks"), has("iasm", "num_doas")) {
+        let has_peaks = has(&raw, "ssl", "num_peaks");
+        let has_doas = has(&raw, "iasm", "num_doas");
+        let mut iasm = match raw.remove("iasm") {
+            Some(toml::Value::Table(t)) => t,
+            Some(_) => bail!("iasm must be a table"),
+            None => toml::Table::new(),
+        };
+        let file_profile = match iasm.remove("profile") {
+            Some(v) => Some(Profile::deserialize(v).map_err(msg)?),
+            None => None,
+        };
+        let profile = profile.or(file_profile).unwrap_or_default();
+        let mut base = toml::Table::try_from(IasmConfig::profile(profile))?;
+        base.extend(iasm);
+        raw.insert("iasm".into(), toml::Value::Table(base));
+        let mut s: Settings = raw.try_into().map_err(msg)?;
+        match (has_peaks, has_doas) {
             (true, true) if s.ssl.num_peaks != s.iasm.num_doas => bail!(
                 "ssl.num_peaks = {} but iasm.num_doas = {}: both are N, the DoAs per stop; set one",
                 s.ssl.num_peaks,
@@ -77,12 +104,21 @@ impl Settings {
     /// # Errors
     /// A file that cannot be read or is refused, named.
     pub fn load(path: Option<&Path>) -> Result<Self> {
+        Self::load_with(path, None)
+    }
+
+    /// [`Settings::load`] with the I-ASM profile `profile` when given (see
+    /// [`Settings::from_toml_with`]).
+    ///
+    /// # Errors
+    /// As [`Settings::load`].
+    pub fn load_with(path: Option<&Path>, profile: Option<Profile>) -> Result<Self> {
         let Some(p) = path else {
-            return Ok(Self::default());
+            return Self::from_toml_with("", profile);
         };
         let text = std::fs::read_to_string(p)
             .with_context(|| format!("reading settings {}", p.display()))?;
-        Self::from_toml(&text).with_context(|| format!("settings {}", p.display()))
+        Self::from_toml_with(&text, profile).with_context(|| format!("settings {}", p.display()))
     }
 
     /// Sets N, the DoAs per stop, for the SSL and the mapper alike.
@@ -129,6 +165,20 @@ mod tests {
         assert_eq!((s.ssl.num_peaks, s.iasm.num_doas), (2, 2));
         let e = Settings::from_toml("[ssl]\nnum_peaks = 3\n[iasm]\nnum_doas = 4\n").unwrap_err();
         assert!(format!("{e:#}").contains("num_peaks = 3"), "{e:#}");
+    }
+
+    #[test]
+    fn a_profile_is_a_base_that_the_files_keys_override() {
+        let s = Settings::from_toml("[iasm]\nprofile = \"paper\"\n").unwrap();
+        assert_eq!(s.iasm, IasmConfig::profile(Profile::Paper));
+        let s = Settings::from_toml("[iasm]\nprofile = \"paper\"\nrefine = true\n").unwrap();
+        assert!(s.iasm.refine);
+        assert_eq!(s.iasm.min_observations, 1);
+        // A profile given from outside (the command line) wins over the file's.
+        let s = Settings::from_toml_with("[iasm]\nprofile = \"paper\"\n", Some(Profile::Robust))
+            .unwrap();
+        assert_eq!(s.iasm, IasmConfig::default());
+        assert!(Settings::from_toml("[iasm]\nprofile = \"fast\"\n").is_err());
     }
 
     #[test]

@@ -15,8 +15,25 @@
 use crate::Pose;
 use crate::wrap_rad;
 
-/// A DoA explained by a source: the robot's position (m) and the DoA's world bearing (rad).
-pub type Ray = ([f64; 2], f64);
+/// A DoA explained by a source: where it was heard and its world bearing.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    /// The stop (index into the poses).
+    pub stop: usize,
+    /// The robot's position there (m).
+    pub from: [f64; 2],
+    /// The DoA's world bearing (rad).
+    pub bearing: f64,
+}
+
+impl Ray {
+    /// The wrapped angle (rad, `>= 0`) between this ray and the bearing from its stop to
+    /// `point`.
+    pub fn miss(&self, point: [f64; 2]) -> f64 {
+        let to = (point[1] - self.from[1]).atan2(point[0] - self.from[0]);
+        wrap_rad(to - self.bearing).abs()
+    }
+}
 
 /// Removes from `bearings` (per stop, world frame, rad) every DoA that a source at
 /// `source` explains under the paper's rule (see the module docs), and returns them as
@@ -32,7 +49,7 @@ pub fn associate(
 ) -> Vec<Ray> {
     assert_eq!(poses.len(), bearings.len(), "one row of bearings per pose");
     let mut rays = Vec::new();
-    for (p, row) in poses.iter().zip(bearings.iter_mut()) {
+    for (stop, (p, row)) in poses.iter().zip(bearings.iter_mut()).enumerate() {
         let theta = p.bearing_to(source);
         let best = row
             .iter()
@@ -42,7 +59,11 @@ pub fn associate(
         if let Some((n, d)) = best
             && d < gamma
         {
-            rays.push((p.position(), row.remove(n)));
+            rays.push(Ray {
+                stop,
+                from: p.position(),
+                bearing: row.remove(n),
+            });
         }
     }
     rays
@@ -67,9 +88,11 @@ mod tests {
             vec![deg(140.0), deg(0.0)],
         ];
         let rays = associate([2.0, 2.0], &poses, &mut b, GAMMA);
+        let got: Vec<(usize, [f64; 2], f64)> =
+            rays.iter().map(|r| (r.stop, r.from, r.bearing)).collect();
         assert_eq!(
-            rays,
-            vec![([0.0, 0.0], deg(40.5)), ([4.0, 0.0], deg(140.0))]
+            got,
+            vec![(0, [0.0, 0.0], deg(40.5)), (1, [4.0, 0.0], deg(140.0))]
         );
         // The others stay for the next round, in their order.
         assert_eq!(b, vec![vec![deg(-90.0), deg(50.0)], vec![deg(0.0)]]);
@@ -81,7 +104,8 @@ mod tests {
         let poses = [Pose::new(0.0, 0.0, 0.0)];
         let mut b = vec![vec![deg(3.0), deg(-1.0)]];
         let rays = associate([5.0, 0.0], &poses, &mut b, GAMMA);
-        assert_eq!(rays, vec![([0.0, 0.0], deg(-1.0))]);
+        assert_eq!(rays.len(), 1);
+        assert_eq!(rays[0].bearing, deg(-1.0));
         assert_eq!(b, vec![vec![deg(3.0)]]);
     }
 

@@ -26,6 +26,9 @@ pub enum ConfigError {
     /// A count that must be at least one is zero.
     #[error("{0} must be at least 1")]
     Zero(&'static str),
+    /// A profile name that is not known.
+    #[error("unknown profile {0:?}; expected paper or robust")]
+    UnknownProfile(String),
     /// A variant name that is not one of the paper's.
     #[error("unknown variant {0:?}; expected one of: ca, ws, wdp")]
     UnknownVariant(String),

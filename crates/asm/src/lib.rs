@@ -41,4 +41,4 @@ pub mod pf;
 
 pub use error::{ConfigError, Error, MapError, Result};
 pub use geom::{Pose, wrap_rad};
-pub use mapper::{IasmConfig, MapResult, Mapper, Source, Variant};
+pub use mapper::{IasmConfig, MapResult, Mapper, Profile, Round, Source, Variant};

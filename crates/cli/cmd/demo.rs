@@ -11,6 +11,7 @@ use ssl::Method;
 use crate::Outcome;
 use crate::pipeline::{SceneRun, Simulated, scene_settings};
 use crate::scenes::{parse_scene, prepare};
+use crate::settings::Settings;
 
 /// The built-in scene (also a scene of the regression suite).
 pub const SCENE: &str = include_str!("../../../fixtures/rooms/rows_ten.toml");
@@ -26,7 +27,7 @@ pub fn run_scene(seed: u64, method: Method) -> Result<(Simulated, SceneRun)> {
     let (mut scene, _) = parse_scene(SCENE)?;
     scene.seed = seed;
     let simulated = Simulated::render(prepare(scene)?, "demo".into())?;
-    let run = simulated.run(&scene_settings(method, N), seed)?;
+    let run = simulated.run(&scene_settings(&Settings::default(), method, N), seed)?;
     Ok((simulated, run))
 }
 

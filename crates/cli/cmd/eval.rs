@@ -62,18 +62,28 @@ pub fn run(a: &EvalArgs) -> Result<Outcome> {
             a.runs, survey.doa_source, a.report.ospa_p, a.report.ospa_c, secs
         );
         println!(
-            "{:<8} {:>10} {:>10} {:>10} {:>10} {:>9}",
-            "variant", "mean (m)", "median (m)", "loc. (m)", "card. (m)", "sources"
+            "{:<8} {:>10} {:>10} {:>10} {:>10} {:>9} {:>11} {:>17}",
+            "variant",
+            "mean (m)",
+            "median (m)",
+            "loc. (m)",
+            "card. (m)",
+            "sources",
+            "right count",
+            "worst (m, seed)"
         );
         for s in &stats {
             println!(
-                "{:<8} {:>10.3} {:>10.3} {:>10.3} {:>10.3} {:>9.2}",
+                "{:<8} {:>10.3} {:>10.3} {:>10.3} {:>10.3} {:>9.2} {:>10.0}% {:>10.3} ({:>4})",
                 s.variant.name().to_uppercase(),
                 s.mean,
                 s.median,
                 s.mean_localization,
                 s.mean_cardinality,
-                s.mean_sources
+                s.mean_sources,
+                100.0 * s.right_count,
+                s.worst,
+                s.worst_seed
             );
         }
     }

@@ -7,14 +7,15 @@ use anyhow::Result;
 use ssl::Method;
 
 use crate::Outcome;
+use crate::settings::Settings;
 use crate::suite::run_suite;
 
 /// Runs `iasm regress`.
 ///
 /// # Errors
 /// As [`run_suite`].
-pub fn run(dir: &Path, json: bool) -> Result<Outcome> {
-    let report = run_suite(dir)?;
+pub fn run(dir: &Path, settings: &Settings, json: bool) -> Result<Outcome> {
+    let report = run_suite(dir, settings)?;
     if json {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {

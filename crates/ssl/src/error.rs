@@ -59,6 +59,9 @@ pub enum ConfigError {
     /// Peak separation outside `[0, 180]` degrees.
     #[error("minimum peak separation {0} degrees must be in [0, 180]")]
     MinSeparation(f64),
+    /// A relative peak threshold outside `[0, 1]`.
+    #[error("min_relative must be in [0, 1], got {0}")]
+    MinRelative(f64),
     /// Asked for no peaks at all.
     #[error("number of peaks must be at least 1, got {0}")]
     MaxPeaks(usize),

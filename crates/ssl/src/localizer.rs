@@ -264,7 +264,10 @@ impl Localizer {
     pub fn locate_with_scratch(&self, audio: &Audio, scratch: &mut Scratch) -> Result<Vec<Doa>> {
         Ok(self
             .spectrum_with_scratch(audio, scratch)?
-            .peaks(self.config.num_peaks, self.config.min_sep_deg))
+            .peaks(self.config.num_peaks, self.config.min_sep_deg)
+            .into_iter()
+            .filter(|d| d.relative >= self.config.min_relative)
+            .collect())
     }
 }
 

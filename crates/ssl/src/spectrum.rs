@@ -14,6 +14,10 @@ pub struct Doa {
     pub elevation_deg: f64,
     /// The pooled spectrum's value at the peak (method-specific scale; larger is stronger).
     pub strength: f64,
+    /// How the peak stands out, on a scale every method shares: its height above the
+    /// spectrum's median over azimuths, as a fraction of the strongest peak's height above
+    /// it (1 for the strongest peak; near 0 for a ripple of the background).
+    pub relative: f64,
 }
 
 /// An angular spectrum over a [`DirectionGrid`]: `values[e * num_azimuths + a]`.
@@ -92,6 +96,13 @@ impl AngularSpectrum {
             }
         }
         cands.sort_by(|a, b| b.2.total_cmp(&a.2));
+        let median = {
+            let mut s: Vec<f32> = v.clone();
+            let mid = s.len() / 2;
+            f64::from(*s.select_nth_unstable_by(mid, f32::total_cmp).1)
+        };
+        let top = cands.first().map_or(median, |c| c.2);
+        let span = top - median;
         let mut out: Vec<Doa> = Vec::with_capacity(max_peaks);
         for (i, az, val) in cands {
             if out.len() == max_peaks {
@@ -105,6 +116,11 @@ impl AngularSpectrum {
                     azimuth_deg: az,
                     elevation_deg: self.grid.elevations()[el_at[i]],
                     strength: val,
+                    relative: if span > 0.0 {
+                        (val - median) / span
+                    } else {
+                        1.0
+                    },
                 });
             }
         }
@@ -143,6 +159,29 @@ mod tests {
             assert_eq!(wrap_deg(a), w);
         }
         assert!(wrap_deg(-1e-15) < 180.0);
+    }
+
+    #[test]
+    fn relative_heights_are_measured_from_the_median() {
+        // Narrow bumps on a flat floor of 0.1: the median is the floor, so a bump of height
+        // h over it stands h / 2 as high as the strongest (2).
+        let g = DirectionGrid::new(1.0, ElevationRange::default()).unwrap();
+        let values = g
+            .azimuths()
+            .iter()
+            .map(|&a| {
+                0.1 + [(0.0, 2.0f32), (90.0, 1.0), (-90.0, 0.4)]
+                    .iter()
+                    .map(|&(c, h)| h * (-(wrap_deg(a - c) / 3.0).powi(2) as f32).exp())
+                    .sum::<f32>()
+            })
+            .collect();
+        let p = AngularSpectrum::new(g, values).peaks(4, 10.0);
+        let rel: Vec<f64> = p.iter().map(|d| d.relative).collect();
+        assert_eq!(rel.len(), 3);
+        for (got, want) in rel.iter().zip([1.0, 0.5, 0.2]) {
+            assert!((got - want).abs() < 1e-3, "{rel:?}");
+        }
     }
 
     #[test]

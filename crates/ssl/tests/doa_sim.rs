@@ -235,3 +235,40 @@ proptest! {
         prop_assert!(failures.is_empty(), "{}", failures.join("\n"));
     }
 }
+
+/// N is an upper bound: one source in free field gives one DoA by default, and the
+/// spectrum's ripples only when `min_relative` is 0 (MBSS Locate's behaviour).
+#[test]
+fn one_source_gives_one_doa_when_n_is_set_high() {
+    let array = MicArray::default();
+    for method in Method::ALL {
+        for (k, az) in [-150.0, -20.0, 75.0].into_iter().enumerate() {
+            let audio = render(
+                &array,
+                &[(az, 0.0, Signal::Noise)],
+                0.4,
+                30.0,
+                SEED + k as u64,
+            );
+            let locate = |min_relative| {
+                let config = SslConfig {
+                    method,
+                    num_peaks: 4,
+                    min_relative,
+                    ..SslConfig::default()
+                };
+                Localizer::new(&array, FS, &config)
+                    .unwrap()
+                    .locate(&audio)
+                    .unwrap()
+            };
+            let d = locate(SslConfig::default().min_relative);
+            assert_eq!(d.len(), 1, "{method} {az}: {d:?}");
+            assert!(
+                wrap_deg(d[0].azimuth_deg - az).abs() < 2.0,
+                "{method} {az}: {d:?}"
+            );
+            assert_eq!(locate(0.0).len(), 4, "{method} {az}");
+        }
+    }
+}
