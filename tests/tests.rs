@@ -2,6 +2,7 @@
 
 mod cli;
 mod map;
+mod near;
 mod regression;
 mod settings;
 mod simulate;

@@ -305,6 +305,11 @@ pub struct SslArgs {
     /// With --score: a DoA within this many degrees of a true source's bearing is a hit.
     #[arg(long, default_value_t = 5.0, value_name = "DEG")]
     pub tol_deg: f64,
+    /// With --score: also print where the DoAs fail, for ours and the published tables:
+    /// errors by the source's distance from the robot, bias towards the heading axis, and
+    /// the recall of sources within 3 m.
+    #[arg(long)]
+    pub by_distance: bool,
     /// With --score: exit with status 1 if the score is below this.
     #[arg(long, value_name = "SCORE")]
     pub min_score: Option<f64>,

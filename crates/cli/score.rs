@@ -79,6 +79,140 @@ pub fn score_doas(
     })
 }
 
+/// Upper edges (m) of the distance bands of [`diagnose`]; the last band is open.
+pub const BAND_EDGES_M: [f64; 4] = [1.0, 1.5, 2.5, 4.0];
+
+/// The errors of the DoAs attributed to sources in one band of distance from the robot.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct BandStats {
+    /// The band, in words (`"1-1.5 m"`).
+    pub band: String,
+    /// DoAs attributed to a source at this distance.
+    pub doas: usize,
+    /// Their mean absolute error (degrees).
+    pub mean_abs_err_deg: f64,
+    /// Their median absolute error (degrees).
+    pub median_abs_err_deg: f64,
+    /// Their mean signed error towards the array's x axis (degrees): positive when the DoA
+    /// lies closer to the heading axis (0 or 180 degrees) than the true bearing, the way a
+    /// source's elevation bends the azimuth of a search in the plane.
+    pub axis_bias_deg: f64,
+}
+
+/// Where DoAs fail: errors by the source's distance, and recall of near sources.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Diagnostics {
+    /// A DoA is attributed to the source whose bearing is nearest, if within this.
+    pub match_deg: f64,
+    /// Errors by distance band, nearest first.
+    pub bands: Vec<BandStats>,
+    /// (stop, source within 3 m) pairs.
+    pub near_pairs: usize,
+    /// The share of those pairs in which some DoA of the stop lies within `tol_deg` of the
+    /// source's bearing.
+    pub recall_3m: f64,
+}
+
+/// Diagnoses the first `n` DoAs of every row of `doas` (degrees, array frame) heard at
+/// `poses` against `sources` (m): each DoA is attributed to the source of nearest bearing
+/// if within `match_deg`, and its error filed under that source's distance; recall counts
+/// sources within 3 m found within `tol_deg`.
+///
+/// # Errors
+/// As [`score_doas`].
+pub fn diagnose(
+    doas: &Table,
+    poses: &[Pose],
+    sources: &[[f64; 2]],
+    n: usize,
+    match_deg: f64,
+    tol_deg: f64,
+) -> Result<Diagnostics> {
+    ensure!(
+        doas.len() == poses.len(),
+        "the DoA table has {} rows but there are {} poses",
+        doas.len(),
+        poses.len()
+    );
+    let axis_dist = |a: f64| {
+        let a = wrap_deg(a).abs();
+        a.min(180.0 - a)
+    };
+    let mut errs: Vec<Vec<(f64, f64)>> = vec![Vec::new(); BAND_EDGES_M.len() + 1];
+    let (mut near, mut found) = (0usize, 0usize);
+    for (row, pose) in doas.iter().zip(poses) {
+        let truth: Vec<(f64, f64)> = sources
+            .iter()
+            .map(|s| {
+                let world = pose.bearing_to(*s).to_degrees();
+                let dist = (s[0] - pose.x).hypot(s[1] - pose.y);
+                (wrap_deg(world - pose.theta_deg()), dist)
+            })
+            .collect();
+        let azs: Vec<f64> = row.iter().take(n).flatten().copied().collect();
+        for &az in &azs {
+            let Some(&(t, dist)) = truth.iter().min_by(|a, b| {
+                wrap_deg(az - a.0)
+                    .abs()
+                    .total_cmp(&wrap_deg(az - b.0).abs())
+            }) else {
+                continue;
+            };
+            let e = wrap_deg(az - t);
+            if e.abs() <= match_deg {
+                let band = BAND_EDGES_M
+                    .iter()
+                    .take_while(|&&edge| dist >= edge)
+                    .count();
+                errs[band].push((e.abs(), axis_dist(t) - axis_dist(az)));
+            }
+        }
+        for &(t, dist) in &truth {
+            if dist < 3.0 {
+                near += 1;
+                found += usize::from(azs.iter().any(|&az| wrap_deg(az - t).abs() <= tol_deg));
+            }
+        }
+    }
+    let bands = errs
+        .into_iter()
+        .enumerate()
+        .map(|(i, mut v)| {
+            let lo = if i == 0 { 0.0 } else { BAND_EDGES_M[i - 1] };
+            let band = match BAND_EDGES_M.get(i) {
+                Some(hi) => format!("{lo}-{hi} m"),
+                None => format!(">= {lo} m"),
+            };
+            let k = v.len();
+            v.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let mean = |f: fn(&(f64, f64)) -> f64| {
+                if k == 0 {
+                    f64::NAN
+                } else {
+                    v.iter().map(f).sum::<f64>() / k as f64
+                }
+            };
+            BandStats {
+                band,
+                doas: k,
+                mean_abs_err_deg: mean(|e| e.0),
+                median_abs_err_deg: if k == 0 { f64::NAN } else { v[k / 2].0 },
+                axis_bias_deg: mean(|e| e.1),
+            }
+        })
+        .collect();
+    Ok(Diagnostics {
+        match_deg,
+        bands,
+        near_pairs: near,
+        recall_3m: if near > 0 {
+            found as f64 / near as f64
+        } else {
+            f64::NAN
+        },
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -107,6 +241,39 @@ mod tests {
         let doas = vec![vec![Some(2.0)]]; // world bearing 182 = -178
         let s = score_doas(&doas, &poses, &[[-5.0, -0.1]], 1, 5.0).unwrap();
         assert_eq!(s.hits, 1);
+    }
+
+    #[test]
+    fn diagnostics_file_errors_by_distance_and_count_near_recall() {
+        // Robot at the origin facing +x. A source at (0.8, 0.8) (1.13 m, bearing 45) and
+        // one at (-3, 0) (3 m, bearing 180). DoAs: 48 (3 off the near one and 3 further
+        // from the heading axis: axis bias -3), -178 (2 off the far one, 2 further from the
+        // axis: -2), and -90 (no source within 10 degrees: not attributed).
+        let poses = [Pose::from_degrees(0.0, 0.0, 0.0)];
+        let sources = [[0.8, 0.8], [-3.0, 0.0]];
+        let doas = vec![vec![Some(48.0), Some(-178.0), Some(-90.0)]];
+        let d = diagnose(&doas, &poses, &sources, 3, 10.0, 5.0).unwrap();
+        let b: Vec<(usize, f64, f64)> = d
+            .bands
+            .iter()
+            .map(|b| (b.doas, b.mean_abs_err_deg, b.axis_bias_deg))
+            .collect();
+        assert_eq!(b[0].0, 0);
+        assert_eq!(b[1].0, 1); // 1-1.5 m
+        assert!(
+            (b[1].1 - 3.0).abs() < 1e-9 && (b[1].2 + 3.0).abs() < 1e-9,
+            "{b:?}"
+        );
+        assert_eq!(b[3].0, 1); // 2.5-4 m
+        assert!(
+            (b[3].1 - 2.0).abs() < 1e-9 && (b[3].2 + 2.0).abs() < 1e-9,
+            "{b:?}"
+        );
+        // Only the near source is within 3 m (the far one is at exactly 3 m), and a DoA
+        // 3 degrees off finds it.
+        assert_eq!((d.near_pairs, d.recall_3m), (1, 1.0));
+        let d = diagnose(&doas, &poses, &sources, 3, 10.0, 2.0).unwrap();
+        assert_eq!(d.recall_3m, 0.0);
     }
 
     #[test]

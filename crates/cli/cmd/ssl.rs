@@ -12,7 +12,7 @@ use crate::Outcome;
 use crate::args::SslArgs;
 use crate::dataset::{Dataset, Table, read_poses, read_sources, read_table};
 use crate::pipeline::{FileDoas, doa_table, localise_files};
-use crate::score::{DoaScore, score_doas};
+use crate::score::{Diagnostics, DoaScore, diagnose, score_doas};
 
 /// Version of the JSON this command prints.
 pub const SCHEMA_VERSION: u32 = 1;
@@ -94,6 +94,12 @@ pub fn run(args: &SslArgs) -> Result<Outcome> {
     let n = config.num_peaks;
     let ours = score_doas(&table, &poses, &sources, n, args.tol_deg)
         .with_context(|| format!("scoring against {}", poses_path.display()))?;
+    let diag = |t: &Table| -> Result<Option<Diagnostics>> {
+        args.by_distance
+            .then(|| diagnose(t, &poses, &sources, n, MATCH_DEG, args.tol_deg))
+            .transpose()
+    };
+    let mut diagnostics = vec![(format!("iasm {}", config.method), diag(&table)?)];
     let mut published: Vec<(String, DoaScore)> = Vec::new();
     for t in &ds.doa_tables {
         let name = t
@@ -101,8 +107,17 @@ pub fn run(args: &SslArgs) -> Result<Outcome> {
             .unwrap_or_default()
             .to_string_lossy()
             .into_owned();
-        match read_table(t).and_then(|tab| score_doas(&tab, &poses, &sources, n, args.tol_deg)) {
-            Ok(s) => published.push((name, s)),
+        let scored = read_table(t).and_then(|tab| {
+            Ok((
+                score_doas(&tab, &poses, &sources, n, args.tol_deg)?,
+                diag(&tab)?,
+            ))
+        });
+        match scored {
+            Ok((s, d)) => {
+                published.push((name.clone(), s));
+                diagnostics.push((name, d));
+            }
             Err(e) => eprintln!("warning: cannot score {}: {e:#}", t.display()),
         }
     }
@@ -114,6 +129,15 @@ pub fn run(args: &SslArgs) -> Result<Outcome> {
         recordings: rows.len(),
         ms_per_recording: 1e3 * elapsed / rows.len() as f64,
         ours: ours.clone(),
+        diagnostics: diagnostics
+            .iter()
+            .filter_map(|(name, d)| {
+                d.clone().map(|d| NamedDiagnostics {
+                    table: name.clone(),
+                    diagnostics: d,
+                })
+            })
+            .collect(),
         published: published
             .iter()
             .map(|(n, s)| PublishedScore {
@@ -142,6 +166,23 @@ pub fn run(args: &SslArgs) -> Result<Outcome> {
         line(&format!("iasm {}", config.method), &ours);
         for (name, s) in &published {
             line(name, s);
+        }
+        for (name, d) in &diagnostics {
+            let Some(d) = d else { continue };
+            println!(
+                "\n{name}: DoAs within {} deg of a source, by its distance; recall of sources within 3 m {:.3} ({} pairs)",
+                d.match_deg, d.recall_3m, d.near_pairs
+            );
+            println!(
+                "  {:<10} {:>5} {:>10} {:>12} {:>11}",
+                "distance", "DoAs", "mean |err|", "median |err|", "axis bias"
+            );
+            for b in &d.bands {
+                println!(
+                    "  {:<10} {:>5} {:>9.2}° {:>11.2}° {:>10.2}°",
+                    b.band, b.doas, b.mean_abs_err_deg, b.median_abs_err_deg, b.axis_bias_deg
+                );
+            }
         }
     }
     let mut failed = false;
@@ -187,6 +228,16 @@ struct PublishedScore {
 }
 
 #[derive(Serialize)]
+struct NamedDiagnostics {
+    table: String,
+    #[serde(flatten)]
+    diagnostics: Diagnostics,
+}
+
+/// With --by-distance, a DoA is attributed to the source of nearest bearing within this.
+const MATCH_DEG: f64 = 10.0;
+
+#[derive(Serialize)]
 struct ScoreReport {
     schema_version: u32,
     method: &'static str,
@@ -195,6 +246,8 @@ struct ScoreReport {
     recordings: usize,
     ms_per_recording: f64,
     ours: DoaScore,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    diagnostics: Vec<NamedDiagnostics>,
     published: Vec<PublishedScore>,
 }
 
