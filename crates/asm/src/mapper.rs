@@ -499,8 +499,9 @@ impl Mapper {
 
     /// One round of the paper's loop: [filter](Mapper::filter) a fresh cloud over the
     /// remaining `bearings`, take the [largest cluster](largest_cluster) as a source and
-    /// [associate](crate::assoc::associate) it, removing the DoAs it explains. `round` is
-    /// the round's number, recorded in the source.
+    /// [associate](crate::assoc::associate) it, removing the DoAs it explains; then, in the
+    /// robust profile, refine it and require [`IasmConfig::min_observations`] stops.
+    /// `round` is the round's number, recorded in the source.
     ///
     /// # Panics
     /// If `poses` and `bearings` differ in length (use [`Mapper::world_bearings`]).

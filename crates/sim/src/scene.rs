@@ -20,6 +20,7 @@
 //! f0 = 140.0
 //! # or: wav = "talker.wav" (relative to the scene file; first channel, at the scene's fs)
 //! level_db = 65.0       # dB SPL at 1 m
+//! active_s = [0.0, 0.8] # plays only then (s into each clip); the decay follows
 //! [trajectory]
 //! waypoints = [[1.0, 1.0], [5.0, 1.0]]
 //! spacing = 0.5         # or poses = [[x, y, theta_deg], ...]
@@ -139,6 +140,11 @@ pub struct SourceSpec {
     /// Level (dB SPL at 1 m). Default: 65.
     #[serde(default = "default_level")]
     pub level_db: f64,
+    /// `[start, stop]` (s from the start of each stop's clip): the source plays only
+    /// then, silent before and after, so that a recording holds its onset and the room's
+    /// decay after it stops. Default: the whole clip.
+    #[serde(default)]
+    pub active_s: Option<[f64; 2]>,
 }
 
 fn default_f0() -> f64 {
@@ -304,7 +310,23 @@ impl Scene {
                 };
                 // 94 dB SPL is 1 Pa RMS.
                 let rms = 10f64.powf((s.level_db - 94.0) / 20.0);
-                Ok(unit.into_iter().map(|v| v * rms).collect())
+                let mut x: Vec<f64> = unit.into_iter().map(|v| v * rms).collect();
+                if let Some([start, stop]) = s.active_s {
+                    if !(0.0 <= start && start < stop && start < self.clip_s) {
+                        return Err(invalid(
+                            format!("sources[{i}].active_s"),
+                            format!(
+                                "[{start}, {stop}] is not a span within the {} s clip",
+                                self.clip_s
+                            ),
+                        ));
+                    }
+                    let fs = f64::from(self.fs);
+                    let (a, b) = ((start * fs) as usize, ((stop * fs) as usize).min(n));
+                    x[..a].fill(0.0);
+                    x[b..].fill(0.0);
+                }
+                Ok(x)
             })
             .collect::<Result<Vec<Vec<f64>>, SimError>>()?;
         Ok(PreparedScene {
@@ -554,6 +576,34 @@ spacing = 0.5
             let e = refusal(&text, dir.path());
             assert!(e.contains("sources[0]") && e.contains(want), "{e}");
         }
+    }
+
+    #[test]
+    fn a_source_stops_and_the_room_rings_on() {
+        // Active for the first 0.1 s of the 0.2 s clip: its signal is silent after, and the
+        // microphones hear a decay that falls, but has not vanished, after the direct
+        // sound (about 2 m, 6 ms) has passed.
+        let text = SCENE.replace(
+            "pos = [1.5, 3.0, 1.2]",
+            "pos = [1.5, 3.0, 1.2]\nactive_s = [0.0, 0.1]",
+        );
+        let p = Scene::from_toml(&text).unwrap().prepare(two_mics).unwrap();
+        assert!(p.signals[0][800..].iter().all(|&v| v == 0.0));
+        assert!(p.signals[0][..800].iter().any(|&v| v != 0.0));
+        let audio = p.render_stop(0);
+        let power = |r: std::ops::Range<usize>| {
+            let n = r.len() as f64;
+            audio[0][r].iter().map(|v| v * v).sum::<f64>() / n
+        };
+        let (on, tail, late) = (power(400..800), power(900..1000), power(1500..1600));
+        assert!(tail > 1e-6 * on && tail < 0.5 * on, "{on} {tail}");
+        assert!(late < tail, "{tail} {late}");
+        let bad = SCENE.replace(
+            "pos = [1.5, 3.0, 1.2]",
+            "pos = [1.5, 3.0, 1.2]\nactive_s = [0.3, 0.4]",
+        );
+        let e = refusal(&bad, std::path::Path::new("."));
+        assert!(e.contains("sources[0].active_s"), "{e}");
     }
 
     #[test]

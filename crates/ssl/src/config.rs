@@ -89,6 +89,12 @@ impl FromStr for Pooling {
 ///   to dominate each bin, so the block's covariance is close to rank one and its peak sharp;
 ///   across blocks, talkers take turns, and max pooling keeps every talker's best moment.
 ///
+/// - **Blocks of the room's decay left out** ([`SslConfig::decay_gate_db`]): after a
+///   sound stops and in a talker's pauses, the diffuse decay would otherwise win the max
+///   pooling with peaks along the room's axes.
+/// - **N is an upper bound** ([`SslConfig::min_relative`]): peaks that barely rise above
+///   the spectrum's background are not reported.
+///
 /// These choices were checked on real recordings of ten talkers (see `BENCHMARKS.md`):
 /// short blocks beat one spectrum over the whole recording by a wide margin, and the
 /// 64 ms frame of MBSS Locate (`frame_len = 4096` at 48 kHz) scores lower and costs more.
@@ -133,6 +139,19 @@ pub struct SslConfig {
     /// lie below it too and are lost; on the authors' ten-loudspeaker recordings the first
     /// 4 DoAs of every stop lie above it (the DoA score is unchanged).
     pub min_relative: f64,
+    /// Blocks whose energy (all channels, the band) lies more than this many dB below the
+    /// loudest block of the preceding `decay_window_s` are left out of the pooling (`>= 0`;
+    /// 0 pools every block, as MBSS Locate does). Default: 10.
+    ///
+    /// Why: after a sound stops, and in a talker's pauses, what the array hears is the
+    /// room's decay, a diffuse field whose spectrum has peaks of its own (along the room's
+    /// axes in a shoebox) that max pooling would keep; the decay falls 60 dB in RT60
+    /// (6 dB per 50-ms block at 0.5 s), so it soon lies far below what preceded it, while
+    /// a talker's own blocks, and the onset of a new one, do not.
+    pub decay_gate_db: f64,
+    /// The memory of the decay gate (s, `> 0`): about the reverberation time of the rooms
+    /// a robot works in. Default: 0.5.
+    pub decay_window_s: f64,
     /// Speed of sound (m/s). Default: 343.
     pub speed_of_sound: f64,
     /// MVDR diagonal loading, relative to the (unit) diagonal of the pair's coherence
@@ -158,6 +177,8 @@ impl Default for SslConfig {
             num_peaks: 4,
             min_sep_deg: 10.0,
             min_relative: 0.3,
+            decay_gate_db: 10.0,
+            decay_window_s: 0.5,
             speed_of_sound: 343.0,
             mvdr_loading: 0.1,
             mvdr_freq_smoothing: 2,
@@ -190,6 +211,12 @@ impl SslConfig {
         }
         if !(0.0..=1.0).contains(&self.min_relative) {
             return Err(ConfigError::MinRelative(self.min_relative));
+        }
+        if !(self.decay_gate_db.is_finite() && self.decay_gate_db >= 0.0) {
+            return Err(ConfigError::DecayGate(self.decay_gate_db));
+        }
+        if !(self.decay_window_s.is_finite() && self.decay_window_s > 0.0) {
+            return Err(ConfigError::DecayWindow(self.decay_window_s));
         }
         if !(self.speed_of_sound.is_finite() && self.speed_of_sound > 0.0) {
             return Err(ConfigError::SpeedOfSound(self.speed_of_sound));

@@ -59,6 +59,12 @@ pub enum ConfigError {
     /// Peak separation outside `[0, 180]` degrees.
     #[error("minimum peak separation {0} degrees must be in [0, 180]")]
     MinSeparation(f64),
+    /// A decay gate that is negative or not finite.
+    #[error("decay_gate_db must be finite and >= 0, got {0}")]
+    DecayGate(f64),
+    /// A decay window that is not positive.
+    #[error("decay_window_s must be positive, got {0}")]
+    DecayWindow(f64),
     /// A relative peak threshold outside `[0, 1]`.
     #[error("min_relative must be in [0, 1], got {0}")]
     MinRelative(f64),

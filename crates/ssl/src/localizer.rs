@@ -225,16 +225,19 @@ impl Localizer {
         let spec = self.stft.analyze(audio, self.bins.clone())?;
         let nf = spec.num_frames();
         let n_blocks = (nf / self.config.block_frames).max(1);
+        // Blocks split the frames as evenly as possible and cover all of them.
+        let frames = |b: usize| b * nf / n_blocks..(b + 1) * nf / n_blocks;
+        let keep = self.decay_gate(&spec, n_blocks, &frames);
+        let kept = keep.iter().filter(|&&k| k).count();
         let mut pooled = vec![0.0f32; self.grid.len()];
         let mut block = std::mem::take(&mut scratch.block);
         block.resize(self.grid.len(), 0.0);
-        for b in 0..n_blocks {
-            // Blocks split the frames as evenly as possible and cover all of them.
-            let frames = b * nf / n_blocks..(b + 1) * nf / n_blocks;
+        let mut first = true;
+        for b in (0..n_blocks).filter(|&b| keep[b]) {
             self.estimator
-                .estimate_into(&spec, frames, &mut block, scratch);
+                .estimate_into(&spec, frames(b), &mut block, scratch);
             match self.config.pooling {
-                Pooling::Max if b == 0 => pooled.copy_from_slice(&block),
+                Pooling::Max if first => pooled.copy_from_slice(&block),
                 Pooling::Max => pooled
                     .iter_mut()
                     .zip(&block)
@@ -242,11 +245,55 @@ impl Localizer {
                 Pooling::Mean => pooled
                     .iter_mut()
                     .zip(&block)
-                    .for_each(|(p, &v)| *p += v / n_blocks as f32),
+                    .for_each(|(p, &v)| *p += v / kept as f32),
             }
+            first = false;
         }
         scratch.block = block;
         Ok(AngularSpectrum::new(self.grid.clone(), pooled))
+    }
+
+    /// Which blocks the pooling keeps: all when the gate is off; else those whose energy
+    /// (all channels, the band's bins) is within `decay_gate_db` of the loudest block of
+    /// the preceding `decay_window_s` (see [`SslConfig::decay_gate_db`]). The loudest
+    /// block of a recording is always kept.
+    fn decay_gate(
+        &self,
+        spec: &Spectrogram,
+        n_blocks: usize,
+        frames: &dyn Fn(usize) -> Range<usize>,
+    ) -> Vec<bool> {
+        let gate = self.config.decay_gate_db;
+        if gate <= 0.0 || n_blocks < 2 {
+            return vec![true; n_blocks];
+        }
+        let energy: Vec<f64> = (0..n_blocks)
+            .map(|b| {
+                frames(b)
+                    .flat_map(|f| (0..spec.num_channels()).map(move |c| (f, c)))
+                    .map(|(f, c)| {
+                        spec.frame(f, c)
+                            .iter()
+                            .map(|x| f64::from(x.norm_sqr()))
+                            .sum::<f64>()
+                    })
+                    .sum()
+            })
+            .collect();
+        // Blocks per window: the window's length over one block's hop in time.
+        let frames_per_block = spec.num_frames() as f64 / n_blocks as f64;
+        let block_s = self.stft.hop() as f64 * frames_per_block / f64::from(self.sample_rate);
+        let window = ((self.config.decay_window_s / block_s).round() as usize).max(1);
+        let floor = 10f64.powf(-gate / 10.0);
+        (0..n_blocks)
+            .map(|b| {
+                let recent = energy[b.saturating_sub(window)..b]
+                    .iter()
+                    .copied()
+                    .fold(0.0, f64::max);
+                energy[b] >= floor * recent
+            })
+            .collect()
     }
 
     /// The ranked DoAs of `audio`: at most `num_peaks`, strongest first.
@@ -279,6 +326,72 @@ mod tests {
     fn localizer_is_send_and_sync() {
         fn check<T: Send + Sync>() {}
         check::<Localizer>();
+    }
+
+    #[test]
+    fn the_decay_gate_drops_the_decay_and_keeps_a_new_onset() {
+        // 16 kHz: noise for 0.5 s, then a decay at RT60 0.5 s (-60 dB in 0.5 s) for 0.5 s,
+        // then noise again. Blocks are 4 hops of 256 samples (16 ms): 64 ms, and a frame
+        // reaches 32 ms beyond its start.
+        let fs = 16_000;
+        let n = 3 * fs as usize / 2;
+        let mut state = 1u64;
+        let mut noise = move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((state >> 33) as f64 / (1u64 << 31) as f64 - 1.0) as f32
+        };
+        let ch: Vec<Vec<f32>> = (0..6)
+            .map(|_| {
+                (0..n)
+                    .map(|i| {
+                        let t = i as f64 / f64::from(fs);
+                        let g = if (0.5..1.0).contains(&t) {
+                            10f64.powf(-3.0 * (t - 0.5) / 0.5) // -60 dB in 0.5 s
+                        } else {
+                            1.0
+                        };
+                        (g as f32) * noise()
+                    })
+                    .collect()
+            })
+            .collect();
+        let audio = Audio::new(fs, ch).unwrap();
+        let loc = Localizer::new(&MicArray::default(), fs, &SslConfig::default()).unwrap();
+        let spec = loc.stft.analyze(&audio, loc.bins.clone()).unwrap();
+        let nf = spec.num_frames();
+        let nb = nf / loc.config.block_frames;
+        let frames = |b: usize| b * nf / nb..(b + 1) * nf / nb;
+        let keep = loc.decay_gate(&spec, nb, &frames);
+        let hop = loc.stft.hop();
+        let block_s = |b: usize| (frames(b).start * hop) as f64 / f64::from(fs);
+        for b in 0..nb {
+            let (t0, t1) = (block_s(b), block_s(b) + 0.064 + 0.032);
+            if t1 < 0.5 || t0 > 1.0 {
+                assert!(
+                    keep[b],
+                    "block {b} at {t0:.2} s (sound) was dropped: {keep:?}"
+                );
+            } else if t0 > 0.65 && t1 <= 1.0 {
+                // More than 0.15 s (18 dB) into the decay.
+                assert!(
+                    !keep[b],
+                    "block {b} at {t0:.2} s (decay) was kept: {keep:?}"
+                );
+            }
+        }
+        // With the gate off, every block is pooled.
+        let off = Localizer::new(
+            &MicArray::default(),
+            fs,
+            &SslConfig {
+                decay_gate_db: 0.0,
+                ..SslConfig::default()
+            },
+        )
+        .unwrap();
+        assert!(off.decay_gate(&spec, nb, &frames).iter().all(|&k| k));
     }
 
     #[test]
