@@ -46,6 +46,7 @@ retries = 1
 variant = "wdp"
 refine = false
 min_observations = 4
+densest_fallback = true
 "#;
 
 // See: issue 8

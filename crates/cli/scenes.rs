@@ -36,6 +36,10 @@ pub struct Expect {
     pub found_min: Option<usize>,
     /// Most sources any seed's map may find.
     pub found_max: Option<usize>,
+    /// Settings the suite runs this scene with, over its own (a settings file's tables:
+    /// `[expect.settings.ssl]`, `[expect.settings.iasm]`), for scenes that exercise a
+    /// setting off by default.
+    pub settings: Option<toml::Table>,
 }
 
 /// Parses a scene file's text into the scene and its `[expect]` table.

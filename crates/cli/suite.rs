@@ -164,6 +164,7 @@ pub fn run_scene(path: &Path, base: &Settings) -> Result<Vec<SceneResult>> {
         .unwrap_or_default()
         .to_string_lossy()
         .into_owned();
+    let base = &scene_base(base, &e)?;
     let seed0 = scene.scene.seed;
     let seeds: Vec<u64> = (0..e.seeds.unwrap_or(DEFAULT_SEEDS) as u64)
         .map(|i| seed0 + i)
@@ -210,6 +211,29 @@ pub fn run_scene(path: &Path, base: &Settings) -> Result<Vec<SceneResult>> {
             r
         })
         .collect())
+}
+
+/// `base` with the scene's `[expect.settings]` laid over it, key by key.
+fn scene_base(base: &Settings, e: &Expect) -> Result<Settings> {
+    let Some(over) = &e.settings else {
+        return Ok(base.clone());
+    };
+    fn merge(into: &mut toml::Table, from: &toml::Table) {
+        for (k, v) in from {
+            match (into.get_mut(k), v) {
+                (Some(toml::Value::Table(a)), toml::Value::Table(b)) => merge(a, b),
+                _ => {
+                    into.insert(k.clone(), v.clone());
+                }
+            }
+        }
+    }
+    let mut t = toml::Table::try_from(base)?;
+    merge(&mut t, over);
+    let s = Settings::from_toml(&toml::to_string(&t)?)
+        .map_err(|e| anyhow::anyhow!("expect.settings: {e:#}"))?;
+    s.validate()?;
+    Ok(s)
 }
 
 /// Seeds per scene when its `[expect]` does not say.
