@@ -250,7 +250,9 @@ fn malformed_yaml_and_pgm_are_clear_errors() {
 }
 
 #[test]
-fn a_doa_table_wider_than_n_is_a_clear_error() {
+fn a_doa_table_wider_than_n_maps_its_first_n_columns() {
+    // See: issue 13. Three sources, three columns, N = 2: the first two columns (the
+    // first two sources) are mapped, and stderr says so once.
     let dir = tempdir();
     let root = dataset(&dir);
     let o = iasm(&[
@@ -261,6 +263,54 @@ fn a_doa_table_wider_than_n_is_a_clear_error() {
         arg(&root.join("doas.csv")),
         "--num",
         "2",
+        "--json",
     ]);
-    assert_clear_error(&o, &["DoA row 1", "3 azimuths", "N = 2"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(
+        err.matches("mapping the first 2").count(),
+        1,
+        "{}",
+        show(&o)
+    );
+    let v = json(&o);
+    let found: Vec<[f64; 2]> = v["sources"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| [s["x"].as_f64().unwrap(), s["y"].as_f64().unwrap()])
+        .collect();
+    assert_eq!(found.len(), 2, "{v}");
+    for t in &TRUTH[..2] {
+        assert!(
+            found.iter().any(|f| (f[0] - t[0]).hypot(f[1] - t[1]) < 0.2),
+            "{v}"
+        );
+    }
+}
+
+// See: issue 13
+#[test]
+fn r13_an_absurd_map_resolution_is_a_clear_error_not_a_panic() {
+    // resolution: 999999999990.05 once made the DBSCAN grid overflow its allocation.
+    let dir = tempdir();
+    let root = dataset(&dir);
+    let yaml = root.join("map/room.yaml");
+    let text = std::fs::read_to_string(&yaml)
+        .unwrap()
+        .replace("resolution: 0.05", "resolution: 999999999990.05");
+    std::fs::write(&yaml, text).unwrap();
+    let t0 = std::time::Instant::now();
+    let o = iasm(&[
+        "map",
+        "--map",
+        arg(&yaml),
+        "--poses",
+        arg(&root.join("pose/poses.csv")),
+        "--doas",
+        arg(&root.join("doas.csv")),
+        "--num",
+        "3",
+    ]);
+    assert_clear_error(&o, &["room.yaml", "resolution"]);
+    assert!(t0.elapsed().as_secs_f64() < 5.0, "{:?}", t0.elapsed());
 }

@@ -109,3 +109,24 @@ fn bad_scenes_are_clear_errors() {
         );
     }
 }
+
+// See: issue 13
+#[test]
+fn r13_a_waypoint_far_outside_the_room_is_refused_at_once() {
+    // The path used to be cut into stops before anything checked it against the room:
+    // 5e11 stops. The bound on time is only there to catch a hang, not to measure speed.
+    let dir = tempdir();
+    let scene = path(&dir, "far.toml");
+    let text = SMALL.replace(
+        "poses = [[1.0, 1.0, 0.0], [2.0, 1.0, 30.0], [3.0, 1.2, 60.0]]",
+        "waypoints = [[0.8, 199999999999.5], [3.0, 1.0]]\nspacing = 0.4",
+    );
+    std::fs::write(&scene, text).unwrap();
+    let t0 = std::time::Instant::now();
+    let o = iasm(&["simulate", arg(&scene), "--out", arg(&path(&dir, "o"))]);
+    assert_clear_error(
+        &o,
+        &["far.toml", "trajectory.waypoints[0]", "outside the room"],
+    );
+    assert!(t0.elapsed().as_secs_f64() < 5.0, "{:?}", t0.elapsed());
+}

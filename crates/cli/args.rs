@@ -165,7 +165,8 @@ pub struct InputArgs {
     /// Unit of theta in the pose table.
     #[arg(long, value_enum, default_value_t = AngleUnit::Deg)]
     pub theta_unit: AngleUnit,
-    /// DoA table: up to N azimuths per stop (degrees, array frame), CSV or .xlsx.
+    /// DoA table: azimuths per stop (degrees, array frame, strongest first), CSV or .xlsx;
+    /// a wider table than N maps its first N columns.
     #[arg(long, value_name = "TABLE", conflicts_with = "audio")]
     pub doas: Option<PathBuf>,
     /// Folder of WAV recordings, one per stop, localised with the SSL settings (default:

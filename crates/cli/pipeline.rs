@@ -155,7 +155,10 @@ impl Survey {
             .or_else(|| ds.as_ref().and_then(|d| d.sources.clone()));
         let truth = truth_path.as_deref().map(read_sources).transpose()?;
         let (doas_deg, doa_source) = if let Some(t) = &inputs.doas {
-            (read_table(t)?, t.display().to_string())
+            (
+                first_columns(read_table(t)?, settings.iasm.num_doas, t),
+                t.display().to_string(),
+            )
         } else {
             let files = match (&inputs.audio, &ds) {
                 (Some(dir), _) => list_files(dir, "wav")?,
@@ -231,6 +234,20 @@ impl Survey {
             .map(|t| score_doas(&self.doas_deg, &self.poses, t, n, tol_deg))
             .transpose()
     }
+}
+
+/// The first `n` columns of a DoA table (ranked tables list the strongest first, and are
+/// often wider than the N a user maps with), saying once on stderr when it cuts.
+fn first_columns(mut table: Table, n: usize, path: &std::path::Path) -> Table {
+    let widest = table.iter().map(Vec::len).max().unwrap_or(0);
+    if widest > n {
+        eprintln!(
+            "note: {} has up to {widest} DoAs per stop; mapping the first {n} (N = {n}, strongest first)",
+            path.display()
+        );
+        table.iter_mut().for_each(|row| row.truncate(n));
+    }
+    table
 }
 
 /// One variant's Monte Carlo summary.

@@ -43,6 +43,9 @@ fn invalid(field: impl Into<String>, message: impl Into<String>) -> SimError {
     }
 }
 
+/// The most stops a scene may have (each is rendered: a bound on work and memory).
+pub const MAX_STOPS: usize = 10_000;
+
 /// A scene as written in its TOML file.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -346,6 +349,10 @@ impl Scene {
     fn stops(&self) -> Result<Vec<Pose>, SimError> {
         let t = &self.trajectory;
         match (&t.poses, &t.waypoints) {
+            (Some(p), None) if p.len() > MAX_STOPS => Err(invalid(
+                "trajectory.poses",
+                format!("{} poses are more than {MAX_STOPS}", p.len()),
+            )),
             (Some(p), None) if !p.is_empty() => Ok(p
                 .iter()
                 .map(|q| Pose::from_degrees(q[0], q[1], q[2]))
@@ -358,6 +365,28 @@ impl Scene {
                     return Err(invalid(
                         "trajectory.spacing",
                         format!("{spacing} m is not positive"),
+                    ));
+                }
+                // Check the path before walking it: its length bounds the stop count.
+                let [lx, ly, _] = self.room.dims;
+                for (i, p) in w.iter().enumerate() {
+                    if !((0.0..=lx).contains(&p[0]) && (0.0..=ly).contains(&p[1])) {
+                        return Err(invalid(
+                            format!("trajectory.waypoints[{i}]"),
+                            format!("{p:?} is outside the room {:?}", self.room.dims),
+                        ));
+                    }
+                }
+                let length: f64 = w
+                    .windows(2)
+                    .map(|s| (s[1][0] - s[0][0]).hypot(s[1][1] - s[0][1]))
+                    .sum();
+                if length / spacing > MAX_STOPS as f64 {
+                    return Err(invalid(
+                        "trajectory.spacing",
+                        format!(
+                            "{spacing} m along a {length:.1} m path is more than {MAX_STOPS} stops"
+                        ),
                     ));
                 }
                 let mut out = Vec::new();
@@ -689,6 +718,17 @@ spacing = 0.5
                 "height = 1.0",
                 "height = 3.5",
                 &["trajectory stop 0", "outside the room"],
+            ),
+            // See: issue 13 (a waypoint far outside the room once hung the path walk).
+            (
+                "[3.0, 1.0], [3.0, 2.0]",
+                "[3.0, 1.0], [3.0, 199999999999.5]",
+                &["trajectory.waypoints[2]", "outside the room"],
+            ),
+            (
+                "spacing = 0.5",
+                "spacing = 0.00001",
+                &["trajectory.spacing", "stops"],
             ),
         ] {
             let e = refusal(&SCENE.replace(from, to), here);

@@ -2,11 +2,23 @@ use std::collections::HashMap;
 
 use super::Label;
 
-/// Points binned into a dense grid of square cells, as compressed rows: the points of
-/// cell `c` are `order[start[c]..start[c + 1]]`.
+/// How cell coordinates map to cell indices.
+enum Index {
+    /// Every cell of the points' bounding box, row-major: `cy * nx + cx`.
+    Dense { nx: i64, ny: i64 },
+    /// Only the occupied cells, found by their coordinates (`coords[c]` are cell `c`'s):
+    /// for points spread so widely that the bounding box holds far more cells than
+    /// points (a dense table would then exhaust memory, or overflow its size).
+    Sparse {
+        cells: HashMap<(i64, i64), usize>,
+        coords: Vec<(i64, i64)>,
+    },
+}
+
+/// Points binned into square cells, as compressed rows: the points of cell `c` are
+/// `order[start[c]..start[c + 1]]`.
 struct Grid {
-    nx: i64,
-    ny: i64,
+    index: Index,
     start: Vec<u32>,
     order: Vec<u32>,
     cell_of: Vec<u32>,
@@ -14,29 +26,56 @@ struct Grid {
 
 impl Grid {
     fn new(points: &[[f64; 2]], side: f64) -> Self {
-        let (mut x0, mut y0, mut x1, mut y1) = (
-            f64::INFINITY,
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-            f64::NEG_INFINITY,
-        );
+        let (mut x0, mut y0) = (f64::INFINITY, f64::INFINITY);
+        let (mut x1, mut y1) = (f64::NEG_INFINITY, f64::NEG_INFINITY);
         for p in points {
             x0 = x0.min(p[0]);
             y0 = y0.min(p[1]);
             x1 = x1.max(p[0]);
             y1 = y1.max(p[1]);
         }
-        let nx = ((x1 - x0) / side).floor() as i64 + 1;
-        let ny = ((y1 - y0) / side).floor() as i64 + 1;
-        let cell_of: Vec<u32> = points
-            .iter()
-            .map(|p| {
-                let cx = (((p[0] - x0) / side).floor() as i64).clamp(0, nx - 1);
-                let cy = (((p[1] - y0) / side).floor() as i64).clamp(0, ny - 1);
-                (cy * nx + cx) as u32
-            })
-            .collect();
-        let n_cells = (nx * ny) as usize;
+        // Cell coordinates relative to the lower-left point (saturating far outside i64).
+        let coord = |p: &[f64; 2]| {
+            (
+                ((p[0] - x0) / side).floor() as i64,
+                ((p[1] - y0) / side).floor() as i64,
+            )
+        };
+        let (fx, fy) = (
+            ((x1 - x0) / side).floor() + 1.0,
+            ((y1 - y0) / side).floor() + 1.0,
+        );
+        // A dense table costs a word per cell: worth it while the box holds not many more
+        // cells than there are points.
+        let dense = fx * fy <= (4 * points.len() + 4096) as f64;
+        let (index, cell_of, n_cells) = if dense {
+            let (nx, ny) = (fx as i64, fy as i64);
+            let cell_of: Vec<u32> = points
+                .iter()
+                .map(|p| {
+                    let (cx, cy) = coord(p);
+                    (cy.clamp(0, ny - 1) * nx + cx.clamp(0, nx - 1)) as u32
+                })
+                .collect();
+            (Index::Dense { nx, ny }, cell_of, (nx * ny) as usize)
+        } else {
+            let mut cells: HashMap<(i64, i64), usize> = HashMap::new();
+            let mut coords = Vec::new();
+            let cell_of: Vec<u32> = points
+                .iter()
+                .map(|p| {
+                    let k = coord(p);
+                    let next = coords.len();
+                    let c = *cells.entry(k).or_insert(next);
+                    if c == next {
+                        coords.push(k);
+                    }
+                    c as u32
+                })
+                .collect();
+            let n = coords.len();
+            (Index::Sparse { cells, coords }, cell_of, n)
+        };
         let mut start = vec![0u32; n_cells + 1];
         for &c in &cell_of {
             start[c as usize + 1] += 1;
@@ -51,8 +90,7 @@ impl Grid {
             fill[c as usize] += 1;
         }
         Self {
-            nx,
-            ny,
+            index,
             start,
             order,
             cell_of,
@@ -65,12 +103,19 @@ impl Grid {
 
     /// The cells in the 5 x 5 block around `c` (itself included) that exist.
     fn around(&self, c: usize) -> impl Iterator<Item = usize> + '_ {
-        let (cx, cy) = (c as i64 % self.nx, c as i64 / self.nx);
+        let (cx, cy) = match &self.index {
+            Index::Dense { nx, .. } => (c as i64 % nx, c as i64 / nx),
+            Index::Sparse { coords, .. } => coords[c],
+        };
         (-2..=2).flat_map(move |dy| {
             (-2..=2).filter_map(move |dx| {
-                let (x, y) = (cx + dx, cy + dy);
-                (x >= 0 && y >= 0 && x < self.nx && y < self.ny)
-                    .then_some((y * self.nx + x) as usize)
+                let (x, y) = (cx.saturating_add(dx), cy.saturating_add(dy));
+                match &self.index {
+                    Index::Dense { nx, ny } => {
+                        (x >= 0 && y >= 0 && x < *nx && y < *ny).then_some((y * nx + x) as usize)
+                    }
+                    Index::Sparse { cells, .. } => cells.get(&(x, y)).copied(),
+                }
             })
         })
     }
@@ -255,6 +300,19 @@ mod tests {
             }
         }
         Ok(())
+    }
+
+    #[test]
+    fn points_spread_over_a_huge_box_use_the_sparse_grid() {
+        // Two tight groups 1e12 m apart: a dense grid would need ~1e26 cells.
+        let mut pts: Vec<[f64; 2]> = (0..20).map(|i| [0.01 * i as f64, 0.0]).collect();
+        pts.extend((0..20).map(|i| [1e12, 1e12 + 0.01 * i as f64]));
+        pts.push([5e11, -3e11]);
+        check_against_naive(&pts, 0.1, 5).unwrap();
+        let labels = dbscan(&pts, 0.1, 5);
+        assert_eq!(labels[0], Label::Cluster(0));
+        assert_eq!(labels[20], Label::Cluster(1));
+        assert_eq!(labels[40], Label::Noise);
     }
 
     #[test]

@@ -13,6 +13,12 @@ pub enum Cell {
     Unknown,
 }
 
+/// The coarsest resolution accepted (m per cell): occupancy maps are centimetres to a metre.
+pub const MAX_RESOLUTION_M: f64 = 10.0;
+/// The largest extent a map may span, and the farthest its origin may lie (m): a robot's
+/// building, campus or yard, with room to spare. Bounds every size computed from a map.
+pub const MAX_EXTENT_M: f64 = 10_000.0;
+
 /// An occupancy grid: `width x height` cells of `resolution` metres, row 0 at the top
 /// (image order), lower-left cell at `origin`.
 #[derive(Clone, Debug, PartialEq)]
@@ -109,6 +115,16 @@ impl OccupancyMap {
             })
             .collect();
         let _ = (&meta.image, &meta.mode);
+        let extent = (w.max(h) as f64) * meta.resolution;
+        if extent > MAX_EXTENT_M {
+            return Err(MapError::Yaml {
+                path: yaml.to_owned(),
+                message: format!(
+                    "resolution {} m x {w} x {h} cells spans {extent:.0} m, more than the {MAX_EXTENT_M} m a map may span",
+                    meta.resolution
+                ),
+            });
+        }
         let map = Self::new(
             w,
             h,
@@ -260,9 +276,20 @@ fn parse_yaml(text: &str) -> Result<Meta, String> {
     if !(resolution.is_finite() && resolution > 0.0) {
         return Err(format!("resolution {resolution} must be positive"));
     }
+    if resolution > MAX_RESOLUTION_M {
+        return Err(format!(
+            "resolution {resolution} m per cell is beyond any occupancy map (at most {MAX_RESOLUTION_M})"
+        ));
+    }
     let origin = origin.ok_or("missing key `origin`")?;
     if origin.iter().any(|v| !v.is_finite()) {
         return Err("origin has a non-finite value".into());
+    }
+    if origin[..2].iter().any(|v| v.abs() > MAX_EXTENT_M) {
+        return Err(format!(
+            "origin {:?} lies more than {MAX_EXTENT_M} m from the world frame's origin",
+            &origin[..2]
+        ));
     }
     if origin[2] != 0.0 {
         return Err(format!(
