@@ -2,11 +2,6 @@
 
 use crate::util::*;
 
-fn json(o: &std::process::Output) -> serde_json::Value {
-    assert!(o.status.success(), "{}", show(o));
-    serde_json::from_slice(&o.stdout).expect("JSON on stdout")
-}
-
 #[test]
 fn ssl_finds_a_source_in_a_wav_file() {
     let dir = tempdir();

@@ -7,11 +7,6 @@ use crate::util::*;
 
 const TRUTH: [[f64; 2]; 3] = [[1.5, 1.5], [4.0, -1.2], [5.5, 2.0]];
 
-fn json(o: &std::process::Output) -> serde_json::Value {
-    assert!(o.status.success(), "{}", show(o));
-    serde_json::from_slice(&o.stdout).expect("JSON on stdout")
-}
-
 fn dataset(dir: &tempfile::TempDir) -> std::path::PathBuf {
     let root = path(dir, "ds");
     mapping_dataset(&root, &TRUTH, &drive());

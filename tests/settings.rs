@@ -3,11 +3,6 @@
 
 use crate::util::*;
 
-fn json(o: &std::process::Output) -> serde_json::Value {
-    assert!(o.status.success(), "{}", show(o));
-    serde_json::from_slice(&o.stdout).expect("JSON on stdout")
-}
-
 /// Every `[ssl]` and `[iasm]` field away from its default (but still a sensible setting).
 const EVERY_FIELD: &str = r#"
 [ssl]

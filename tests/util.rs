@@ -74,6 +74,12 @@ pub fn show(o: &Output) -> String {
     )
 }
 
+/// The JSON a successful command printed.
+pub fn json(o: &Output) -> serde_json::Value {
+    assert!(o.status.success(), "{}", show(o));
+    serde_json::from_slice(&o.stdout).expect("JSON on stdout")
+}
+
 /// Asserts that a command failed with exit status 2, without a panic, and that its
 /// message names every one of `needles`.
 pub fn assert_clear_error(o: &Output, needles: &[&str]) {

@@ -27,6 +27,16 @@ pub struct DoaScore {
     pub mean_hit_error_deg: f64,
 }
 
+fn same_length(doas: &Table, poses: &[Pose]) -> Result<()> {
+    ensure!(
+        doas.len() == poses.len(),
+        "the DoA table has {} rows but there are {} poses",
+        doas.len(),
+        poses.len()
+    );
+    Ok(())
+}
+
 /// Scores the first `n` DoAs of every row of `doas` (degrees, array frame) heard at
 /// `poses`, against `sources` (m).
 ///
@@ -39,12 +49,7 @@ pub fn score_doas(
     n: usize,
     tol_deg: f64,
 ) -> Result<DoaScore> {
-    ensure!(
-        doas.len() == poses.len(),
-        "the DoA table has {} rows but there are {} poses",
-        doas.len(),
-        poses.len()
-    );
+    same_length(doas, poses)?;
     ensure!(
         n > 0 && !poses.is_empty() && !sources.is_empty(),
         "nothing to score"
@@ -128,12 +133,7 @@ pub fn diagnose(
     match_deg: f64,
     tol_deg: f64,
 ) -> Result<Diagnostics> {
-    ensure!(
-        doas.len() == poses.len(),
-        "the DoA table has {} rows but there are {} poses",
-        doas.len(),
-        poses.len()
-    );
+    same_length(doas, poses)?;
     let axis_dist = |a: f64| {
         let a = wrap_deg(a).abs();
         a.min(180.0 - a)

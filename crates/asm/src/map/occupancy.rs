@@ -80,14 +80,7 @@ impl OccupancyMap {
     /// # Errors
     /// As [`OccupancyMap::load`].
     pub fn load_with_image(yaml: &Path, image: Option<&Path>) -> Result<Self, MapError> {
-        let text = std::fs::read_to_string(yaml).map_err(|source| MapError::Io {
-            path: yaml.to_owned(),
-            source,
-        })?;
-        let meta = parse_yaml(&text).map_err(|message| MapError::Yaml {
-            path: yaml.to_owned(),
-            message,
-        })?;
+        let meta = read_meta(yaml)?;
         let img_path = match image {
             Some(p) => p.to_owned(),
             None => resolve_image(yaml, &meta.image),
@@ -145,15 +138,7 @@ impl OccupancyMap {
     /// # Errors
     /// [`MapError::Io`] if the YAML cannot be read, [`MapError::Yaml`] if it is malformed.
     pub fn image_path(yaml: &Path) -> Result<PathBuf, MapError> {
-        let text = std::fs::read_to_string(yaml).map_err(|source| MapError::Io {
-            path: yaml.to_owned(),
-            source,
-        })?;
-        let meta = parse_yaml(&text).map_err(|message| MapError::Yaml {
-            path: yaml.to_owned(),
-            message,
-        })?;
-        Ok(resolve_image(yaml, &meta.image))
+        Ok(resolve_image(yaml, &read_meta(yaml)?.image))
     }
 
     /// Width (cells).
@@ -217,6 +202,18 @@ fn resolve_image(yaml: &Path, image: &str) -> PathBuf {
     } else {
         yaml.parent().unwrap_or(Path::new(".")).join(p)
     }
+}
+
+/// Reads and parses a map YAML, naming it in any error.
+fn read_meta(yaml: &Path) -> Result<Meta, MapError> {
+    let text = std::fs::read_to_string(yaml).map_err(|source| MapError::Io {
+        path: yaml.to_owned(),
+        source,
+    })?;
+    parse_yaml(&text).map_err(|message| MapError::Yaml {
+        path: yaml.to_owned(),
+        message,
+    })
 }
 
 fn parse_yaml(text: &str) -> Result<Meta, String> {
