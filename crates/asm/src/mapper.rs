@@ -440,17 +440,15 @@ impl Mapper {
                     failed = 0;
                     sources.push(s);
                 }
-                // One retry policy for both failures: each is one random draw's bad luck
-                // until `retries + 1` happen in a row (see the module documentation).
-                Round::NoCluster | Round::NothingExplained => {
+                // One retry policy for every round that finds no source: each is one
+                // random draw's bad luck until `retries + 1` happen in a row (see the
+                // module documentation). A clutter round has at least used its DoAs up.
+                Round::NoCluster | Round::NothingExplained | Round::Clutter => {
                     failed += 1;
                     if failed > c.retries {
                         break;
                     }
                 }
-                // Clutter used up is progress (fewer DoAs remain), but not a source: the
-                // run of failures neither grows nor resets. `max_rounds` bounds it.
-                Round::Clutter => {}
             }
         }
         let merged = merge_close(&mut sources, c.merge_dist_m);
