@@ -130,3 +130,43 @@ fn r13_a_waypoint_far_outside_the_room_is_refused_at_once() {
     );
     assert!(t0.elapsed().as_secs_f64() < 5.0, "{:?}", t0.elapsed());
 }
+
+// See: issue 13
+#[test]
+fn r13_simulate_replaces_its_own_output_whole_and_refuses_other_folders() {
+    let dir = tempdir();
+    let scene = path(&dir, "small.toml");
+    std::fs::write(&scene, SMALL).unwrap();
+    let out = path(&dir, "sim");
+    let run = |extra: &[&str]| {
+        let mut args = vec!["simulate", arg(&scene), "--out", arg(&out)];
+        args.extend_from_slice(extra);
+        iasm(&args)
+    };
+    // A folder of the user's own is refused, and left as it was.
+    std::fs::create_dir_all(&out).unwrap();
+    std::fs::write(out.join("notes.txt"), "mine").unwrap();
+    assert_clear_error(&run(&[]), &["sim", "not empty", "--force"]);
+    assert_eq!(
+        std::fs::read_to_string(out.join("notes.txt")).unwrap(),
+        "mine"
+    );
+    // With --force it is replaced whole.
+    let o = run(&["--force"]);
+    assert!(o.status.success(), "{}", show(&o));
+    assert!(!out.join("notes.txt").exists());
+    assert_eq!(std::fs::read_dir(out.join("audio")).unwrap().count(), 3);
+    // An earlier output is replaced whole: a recording the new scene does not make (an
+    // earlier run's fourth stop) does not survive beside the new ones.
+    std::fs::copy(out.join("audio/sub01.wav"), out.join("audio/sub04.wav")).unwrap();
+    let o = run(&[]);
+    assert!(o.status.success(), "{}", show(&o));
+    assert_eq!(std::fs::read_dir(out.join("audio")).unwrap().count(), 3);
+    // Nothing is left beside the output: no temporary or old folder.
+    let mut names: Vec<String> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["sim", "small.toml"]);
+}

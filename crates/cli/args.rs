@@ -48,6 +48,10 @@ pub enum Command {
         /// Worker threads, one stop each (default: all cores).
         #[arg(long)]
         threads: Option<usize>,
+        /// Replace the --out folder even if it is not empty and not an earlier output of
+        /// iasm simulate (an earlier output is always replaced whole).
+        #[arg(long)]
+        force: bool,
     },
     /// The synthetic-room regression suite: simulate, localise and map every scene in a
     /// folder and check its thresholds.

@@ -11,6 +11,7 @@
 //! - [`suite`]: the synthetic-room regression suite.
 //! - [`score`]: the DoA score against known sources.
 //! - [`render`]: the map picture.
+//! - [`output`]: files and folders written whole (temporary name, then rename).
 //! - [`args`]: the command line, and its conversion into settings and inputs.
 //!
 //! The commands ([`cmd`]): `ssl`, `map`, `eval`, `simulate`, `regress`, `demo`, one module
@@ -19,6 +20,7 @@
 pub mod args;
 pub mod cmd;
 pub mod dataset;
+pub mod output;
 pub mod pipeline;
 pub mod render;
 pub mod scenes;
@@ -51,9 +53,10 @@ pub fn run(cli: &args::Cli) -> anyhow::Result<Outcome> {
             scene,
             out,
             threads,
+            force,
         } => {
             set_threads(*threads);
-            cmd::simulate::run(scene, out)
+            cmd::simulate::run(scene, out, *force)
         }
         args::Command::Regress { dir, config, json } => {
             let settings = settings::Settings::load(config.as_deref())?;

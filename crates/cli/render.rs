@@ -172,9 +172,8 @@ pub fn write_png(
             }
         }
     }
-    let file =
-        std::fs::File::create(path).with_context(|| format!("writing {}", path.display()))?;
-    let mut enc = png::Encoder::new(std::io::BufWriter::new(file), w as u32, h as u32);
+    let mut bytes = Vec::new();
+    let mut enc = png::Encoder::new(&mut bytes, w as u32, h as u32);
     enc.set_color(png::ColorType::Rgb);
     enc.set_depth(png::BitDepth::Eight);
     let mut wr = enc
@@ -184,5 +183,5 @@ pub fn write_png(
         .with_context(|| format!("writing {}", path.display()))?;
     wr.finish()
         .with_context(|| format!("writing {}", path.display()))?;
-    Ok(())
+    crate::output::write_atomic(path, &bytes)
 }

@@ -131,7 +131,7 @@ pub fn write_dataset(scene: &PreparedScene, out: &Path) -> Result<()> {
 }
 
 fn write(path: &Path, bytes: &[u8]) -> Result<()> {
-    std::fs::write(path, bytes).with_context(|| format!("writing {}", path.display()))
+    crate::output::write_atomic(path, bytes)
 }
 
 fn write_f32_wav(path: &Path, channels: &[Vec<f64>], fs: u32) -> Result<()> {

@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use asm::ospa::Ospa;
 use asm::{IasmConfig, MapResult};
 use serde::Serialize;
@@ -80,8 +80,7 @@ pub fn run(a: &MapArgs) -> Result<Outcome> {
         ospa: o,
     };
     if let Some(out) = &a.out {
-        std::fs::write(out, serde_json::to_string_pretty(&report)?)
-            .with_context(|| format!("writing {}", out.display()))?;
+        crate::output::write_atomic(out, serde_json::to_string_pretty(&report)?.as_bytes())?;
     }
     if let Some(csv) = &a.csv {
         write_sources_csv(csv, &result)?;
@@ -151,5 +150,5 @@ fn write_sources_csv(path: &Path, r: &MapResult) -> Result<()> {
             src.round
         ));
     }
-    std::fs::write(path, s).with_context(|| format!("writing {}", path.display()))
+    crate::output::write_atomic(path, s.as_bytes())
 }

@@ -5,16 +5,17 @@ use std::path::Path;
 use anyhow::Result;
 
 use crate::Outcome;
+use crate::output::replace_dir;
 use crate::scenes::{load_scene, write_dataset};
 
 /// Runs `iasm simulate`.
 ///
 /// # Errors
-/// A refused scene or an unwritable output folder.
-pub fn run(scene_path: &Path, out: &Path) -> Result<Outcome> {
+/// A refused scene, or an output folder that is refused or cannot be written.
+pub fn run(scene_path: &Path, out: &Path, force: bool) -> Result<Outcome> {
     let t0 = std::time::Instant::now();
     let (scene, _) = load_scene(scene_path)?;
-    write_dataset(&scene, out)?;
+    replace_dir(out, force, |dir| write_dataset(&scene, dir))?;
     println!(
         "{}: {} stops x {} microphones x {:.2} s at {} Hz, {} sources, written to {} ({:.1} s)",
         scene_path.display(),

@@ -37,7 +37,7 @@ pub fn write_doa_csv(path: &Path, table: &Table, header: bool) -> Result<()> {
         s.push_str(&cells.join(","));
         s.push('\n');
     }
-    std::fs::write(path, s).with_context(|| format!("writing {}", path.display()))
+    crate::output::write_atomic(path, s.as_bytes())
 }
 
 /// Runs `iasm ssl`.

@@ -1,0 +1,113 @@
+//! Writing outputs safely: a file is written under a temporary name beside its place and
+//! renamed into it, and a data set folder is built beside its place and swapped in whole,
+//! so that a crash or an error never leaves half a file, or a folder that mixes two runs,
+//! where a good one was.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+
+/// The file that marks a folder as written by `iasm simulate` (and so safe to replace).
+pub const SIMULATE_MARKER: &str = ".iasm-simulate";
+
+/// `path`'s sibling `.NAME.TAG-PID`.
+fn sibling(path: &Path, tag: &str) -> PathBuf {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "out".into());
+    path.with_file_name(format!(".{name}.{tag}-{}", std::process::id()))
+}
+
+/// Writes `bytes` to `path` through a temporary file beside it and a rename.
+///
+/// # Errors
+/// If the temporary file cannot be written or renamed; the message names `path`.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    let tmp = sibling(path, "tmp");
+    let written = std::fs::write(&tmp, bytes).and_then(|()| std::fs::rename(&tmp, path));
+    if written.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    written.with_context(|| format!("writing {}", path.display()))
+}
+
+/// Builds a data set folder at `out` with `fill`, which writes into the folder it is given:
+/// a temporary folder beside `out`, marked with [`SIMULATE_MARKER`] and renamed into place
+/// when `fill` succeeds. An existing `out` is replaced whole when it is empty, an earlier
+/// output (it holds the marker), or `force` is set; any other folder or file is refused.
+///
+/// # Errors
+/// A refused `out`, or what `fill` or the file system says.
+pub fn replace_dir(out: &Path, force: bool, fill: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+    if out.exists() {
+        if !out.is_dir() {
+            bail!("{} exists and is not a folder", out.display());
+        }
+        let empty = std::fs::read_dir(out)
+            .with_context(|| format!("reading folder {}", out.display()))?
+            .next()
+            .is_none();
+        if !empty && !out.join(SIMULATE_MARKER).exists() && !force {
+            bail!(
+                "{} is not empty and is not an earlier output of iasm simulate: give another \
+                 folder, or --force to replace it whole",
+                out.display()
+            );
+        }
+    }
+    let tmp = sibling(out, "tmp");
+    if tmp.exists() {
+        std::fs::remove_dir_all(&tmp).with_context(|| format!("removing {}", tmp.display()))?;
+    }
+    std::fs::create_dir_all(&tmp).with_context(|| format!("creating {}", tmp.display()))?;
+    let built = fill(&tmp).and_then(|()| {
+        std::fs::write(tmp.join(SIMULATE_MARKER), "written by iasm simulate\n")
+            .with_context(|| format!("writing {}", tmp.join(SIMULATE_MARKER).display()))
+    });
+    if let Err(e) = built {
+        let _ = std::fs::remove_dir_all(&tmp);
+        return Err(e);
+    }
+    let old = sibling(out, "old");
+    if out.exists() {
+        std::fs::rename(out, &old).with_context(|| format!("moving {} aside", out.display()))?;
+    }
+    std::fs::rename(&tmp, out).with_context(|| format!("renaming into {}", out.display()))?;
+    if old.exists() {
+        std::fs::remove_dir_all(&old).with_context(|| format!("removing {}", old.display()))?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_file_is_replaced_whole_and_no_temporary_is_left() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("m.json");
+        std::fs::write(&p, "old, longer content").unwrap();
+        write_atomic(&p, b"new").unwrap();
+        assert_eq!(std::fs::read_to_string(&p).unwrap(), "new");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
+    #[test]
+    fn a_failed_fill_leaves_the_old_folder_as_it_was() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("ds");
+        replace_dir(&out, false, |d| Ok(std::fs::write(d.join("a"), "1")?)).unwrap();
+        let e = replace_dir(&out, false, |d| {
+            std::fs::write(d.join("b"), "2")?;
+            bail!("render failed")
+        })
+        .unwrap_err();
+        assert!(e.to_string().contains("render failed"));
+        assert_eq!(std::fs::read_to_string(out.join("a")).unwrap(), "1");
+        assert!(!out.join("b").exists());
+        // Only the output folder remains: no temporary beside it.
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+}
