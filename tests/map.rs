@@ -309,3 +309,47 @@ fn r13_an_absurd_map_resolution_is_a_clear_error_not_a_panic() {
     assert_clear_error(&o, &["room.yaml", "resolution"]);
     assert!(t0.elapsed().as_secs_f64() < 5.0, "{:?}", t0.elapsed());
 }
+
+// See: issue 13
+#[test]
+fn r13_a_ros_exported_pose_csv_with_a_quaternion_maps_like_the_plain_table() {
+    let dir = tempdir();
+    let root = dataset(&dir);
+    let mut ros = String::from(
+        "stamp,frame_id,pose.position.x,pose.position.y,pose.position.z,\
+         pose.orientation.x,pose.orientation.y,pose.orientation.z,pose.orientation.w\n",
+    );
+    for (k, &(x, y, th)) in drive().iter().enumerate() {
+        let half = th.to_radians() / 2.0;
+        ros.push_str(&format!(
+            "{k}.0,map,{x},{y},0.0,0.0,0.0,{},{}\n",
+            half.sin(),
+            half.cos()
+        ));
+    }
+    let ros_path = path(&dir, "ros_poses.csv");
+    std::fs::write(&ros_path, ros).unwrap();
+    let run = |poses: &Path| {
+        json(&iasm(&[
+            "map",
+            "--dataset",
+            arg(&root),
+            "--poses",
+            arg(poses),
+            "--doas",
+            arg(&root.join("doas.csv")),
+            "--num",
+            "3",
+            "--json",
+        ]))
+    };
+    let plain = run(&root.join("pose/poses.csv"));
+    let v = run(&ros_path);
+    assert_eq!(v["sources"].as_array().unwrap().len(), 3, "{v}");
+    assert!(v["ospa"]["total"].as_f64().unwrap() < 0.15, "{v}");
+    assert!(
+        (v["ospa"]["total"].as_f64().unwrap() - plain["ospa"]["total"].as_f64().unwrap()).abs()
+            < 1e-6,
+        "{v}\n{plain}"
+    );
+}

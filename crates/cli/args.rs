@@ -163,7 +163,11 @@ pub struct InputArgs {
     /// ROS occupancy map YAML (overrides the data set's).
     #[arg(long, value_name = "YAML")]
     pub map: Option<PathBuf>,
-    /// Pose table: x, y, theta per stop, CSV or .xlsx (overrides the data set's).
+    /// Pose table, one row per stop, CSV or .xlsx (overrides the data set's): plain x, y,
+    /// theta columns, or a CSV whose header names them as ROS exports do: x and y (or
+    /// `*position.x`, `*position.y`), and yaw or theta_rad (radians), theta_deg (degrees),
+    /// theta (--theta-unit), or a quaternion qx, qy, qz, qw (or `*orientation.x..w`);
+    /// other columns are ignored.
     #[arg(long, value_name = "FILE")]
     pub poses: Option<PathBuf>,
     /// Unit of theta in the pose table.

@@ -83,24 +83,7 @@ pub fn read_table(path: &Path) -> Result<Table> {
     } else {
         let text = std::fs::read_to_string(path)
             .with_context(|| format!("reading table {}", path.display()))?;
-        text.lines()
-            .filter(|l| !l.trim().is_empty() && !l.trim_start().starts_with('#'))
-            .map(|l| {
-                let sep: &[char] = if l.contains(',') {
-                    &[',']
-                } else if l.contains(';') {
-                    &[';']
-                } else if l.contains('\t') {
-                    &['\t']
-                } else {
-                    &[' ']
-                };
-                l.split(sep)
-                    .filter(|c| sep != [' '] || !c.is_empty())
-                    .map(|c| c.trim().to_owned())
-                    .collect()
-            })
-            .collect()
+        csv_lines(&text).map(split_cells).collect()
     };
     let mut rows = Vec::with_capacity(raw.len());
     for (r, line) in raw.iter().enumerate() {
@@ -123,6 +106,29 @@ pub fn read_table(path: &Path) -> Result<Table> {
         rows.push(row);
     }
     Ok(rows)
+}
+
+/// The lines of a CSV text that hold data or a header (not blank, not `#` comments).
+fn csv_lines(text: &str) -> impl Iterator<Item = &str> {
+    text.lines()
+        .filter(|l| !l.trim().is_empty() && !l.trim_start().starts_with('#'))
+}
+
+/// A line's cells: comma, semicolon, tab or space separated (the first that occurs).
+fn split_cells(l: &str) -> Vec<String> {
+    let sep: &[char] = if l.contains(',') {
+        &[',']
+    } else if l.contains(';') {
+        &[';']
+    } else if l.contains('\t') {
+        &['\t']
+    } else {
+        &[' ']
+    };
+    l.split(sep)
+        .filter(|c| sep != [' '] || !c.is_empty())
+        .map(|c| c.trim().to_owned())
+        .collect()
 }
 
 fn parse_cell(s: &String) -> Result<Option<f64>, &String> {
@@ -158,11 +164,140 @@ fn read_workbook(path: &Path) -> Result<Vec<Vec<String>>> {
         .collect())
 }
 
+/// How a pose table with a header gives the heading.
+enum Heading {
+    /// A column of angles, in radians or not.
+    Angle { col: usize, radians: bool },
+    /// A quaternion's x, y, z, w columns (a ROS `geometry_msgs/Pose` orientation).
+    Quaternion([usize; 4]),
+}
+
+/// A pose table whose header names its columns, as ROS tools export them: `x`, `y` (or
+/// any name ending in `position.x`, `position.y`), and a heading: `yaw` or `theta_rad`
+/// (radians), `theta_deg` or `yaw_deg` (degrees), `theta` (in the unit `theta_in_radians`
+/// says), or a quaternion `qx, qy, qz, qw` (or names ending in `orientation.x` ... `.w`).
+/// Other columns (a time stamp, a frame id) are ignored. `None` when the file is a workbook
+/// or its first line is not such a header (plain x, y, theta columns).
+///
+/// # Errors
+/// A header that names some columns but lacks x, y or a heading (the message names the
+/// missing column and the header), or a row whose named cells are not numbers.
+pub fn read_named_poses(path: &Path, theta_in_radians: bool) -> Result<Option<Vec<Pose>>> {
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    if matches!(ext.as_str(), "xlsx" | "xls" | "xlsm" | "ods") {
+        return Ok(None);
+    }
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("reading table {}", path.display()))?;
+    let mut lines = csv_lines(&text);
+    let Some(first) = lines.next() else {
+        return Ok(None);
+    };
+    let header: Vec<String> = split_cells(first)
+        .iter()
+        .map(|c| c.to_ascii_lowercase())
+        .collect();
+    if header.iter().all(|c| parse_cell(c).is_ok()) {
+        return Ok(None); // no header: plain columns
+    }
+    let find = |names: &[&str], suffix: &str| {
+        header.iter().position(|h| {
+            names.contains(&h.as_str()) || (!suffix.is_empty() && h.ends_with(suffix))
+        })
+    };
+    let (x, y) = (find(&["x"], "position.x"), find(&["y"], "position.y"));
+    let angle = [
+        (&["yaw", "yaw_rad", "theta_rad"][..], Some(true)),
+        (&["theta_deg", "yaw_deg"][..], Some(false)),
+        (&["theta"][..], None),
+    ]
+    .iter()
+    .find_map(|(names, rad)| {
+        find(names, "").map(|col| Heading::Angle {
+            col,
+            radians: rad.unwrap_or(theta_in_radians),
+        })
+    });
+    let quat = [
+        find(&["qx"], "orientation.x"),
+        find(&["qy"], "orientation.y"),
+        find(&["qz"], "orientation.z"),
+        find(&["qw"], "orientation.w"),
+    ];
+    let heading = angle.or_else(|| {
+        quat.iter()
+            .all(Option::is_some)
+            .then(|| Heading::Quaternion(quat.map(|c| c.unwrap_or(0))))
+    });
+    let named = x.is_some() || y.is_some() || heading.is_some();
+    if !named {
+        return Ok(None); // a header of other names: read as plain columns
+    }
+    let missing = |what: &str| {
+        anyhow::anyhow!(
+            "{}: the header names no {what} column (header: {}; expected x, y and yaw, \
+             theta_rad, theta_deg, theta or qx, qy, qz, qw)",
+            path.display(),
+            header.join(", ")
+        )
+    };
+    let (x, y) = (
+        x.ok_or_else(|| missing("x"))?,
+        y.ok_or_else(|| missing("y"))?,
+    );
+    let heading = heading.ok_or_else(|| missing("heading (yaw, theta or quaternion)"))?;
+    let poses: Vec<Pose> = lines
+        .enumerate()
+        .map(|(r, line)| {
+            let cells = split_cells(line);
+            let get = |c: usize| -> Result<f64> {
+                cells
+                    .get(c)
+                    .and_then(|v| v.parse::<f64>().ok())
+                    .filter(|v| v.is_finite())
+                    .with_context(|| {
+                        format!(
+                            "{}: row {}, column {} ({}): not a finite number",
+                            path.display(),
+                            r + 2,
+                            c + 1,
+                            header[c]
+                        )
+                    })
+            };
+            let theta = match heading {
+                Heading::Angle { col, radians: true } => get(col)?,
+                Heading::Angle { col, .. } => get(col)?.to_radians(),
+                Heading::Quaternion([qx, qy, qz, qw]) => {
+                    let (qx, qy, qz, qw) = (get(qx)?, get(qy)?, get(qz)?, get(qw)?);
+                    // The rotation about z of a unit quaternion (ZYX yaw).
+                    (2.0 * (qw * qz + qx * qy)).atan2(1.0 - 2.0 * (qy * qy + qz * qz))
+                }
+            };
+            Ok(Pose::new(get(x)?, get(y)?, theta))
+        })
+        .collect::<Result<_>>()?;
+    ensure!(
+        !poses.is_empty(),
+        "{}: the pose table is empty",
+        path.display()
+    );
+    Ok(Some(poses))
+}
+
 /// Reads a pose table: x, y, theta per row; theta in degrees unless `theta_in_radians`.
+/// A header that names the columns (see [`read_named_poses`]) is honoured, so tables
+/// exported from ROS read as they are.
 ///
 /// # Errors
 /// If the table cannot be read or a row lacks a finite x, y or theta.
 pub fn read_poses(path: &Path, theta_in_radians: bool) -> Result<Vec<Pose>> {
+    if let Some(poses) = read_named_poses(path, theta_in_radians)? {
+        return Ok(poses);
+    }
     let rows = read_table(path)?;
     ensure!(
         !rows.is_empty(),
@@ -395,6 +530,46 @@ mod tests {
         )
         .unwrap();
         assert_eq!(read_sources(&p).unwrap(), vec![[1.25, 0.6], [1.25, -0.6]]);
+    }
+
+    #[test]
+    fn named_columns_and_quaternions_are_read() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("poses.csv");
+        // A ROS-like export: stamp and frame id columns, position and orientation (yaw 90
+        // and -45 degrees as quaternions about z).
+        let h = std::f64::consts::FRAC_PI_4;
+        let (s8, c8) = (std::f64::consts::PI / 8.0).sin_cos();
+        std::fs::write(
+            &p,
+            format!(
+                "stamp,frame_id,pose.position.x,pose.position.y,pose.position.z,\
+                 pose.orientation.x,pose.orientation.y,pose.orientation.z,pose.orientation.w\n\
+                 1.5,map,1.0,2.0,0.0,0,0,{},{}\n2.5,map,3.0,-1.0,0.0,0,0,{},{}\n",
+                h.sin(),
+                h.cos(),
+                -s8,
+                c8
+            ),
+        )
+        .unwrap();
+        let poses = read_poses(&p, false).unwrap();
+        assert_eq!(poses.len(), 2);
+        assert_eq!((poses[0].x, poses[0].y), (1.0, 2.0));
+        assert!((poses[0].theta - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
+        assert!((poses[1].theta + std::f64::consts::FRAC_PI_4).abs() < 1e-12);
+        // yaw is radians; theta_deg degrees; a column order of our own.
+        std::fs::write(&p, "yaw,y,x\n1.0,2.0,3.0\n").unwrap();
+        let q = read_poses(&p, false).unwrap();
+        assert_eq!((q[0].x, q[0].y, q[0].theta), (3.0, 2.0, 1.0));
+        std::fs::write(&p, "x,y,theta_deg\n0,0,90\n").unwrap();
+        assert!(
+            (read_poses(&p, true).unwrap()[0].theta - std::f64::consts::FRAC_PI_2).abs() < 1e-12
+        );
+        // A missing column is named, with the header.
+        std::fs::write(&p, "x,y,qz,qw\n0,0,0,1\n").unwrap();
+        let e = format!("{:#}", read_poses(&p, false).unwrap_err());
+        assert!(e.contains("heading") && e.contains("x, y, qz, qw"), "{e}");
     }
 
     #[test]
