@@ -353,3 +353,23 @@ fn r13_a_ros_exported_pose_csv_with_a_quaternion_maps_like_the_plain_table() {
         "{v}\n{plain}"
     );
 }
+
+// See: issue 13
+#[test]
+fn r13_a_map_yaml_with_a_quoted_hash_and_a_block_origin_is_read_as_yaml() {
+    let dir = tempdir();
+    let root = dataset(&dir);
+    std::fs::rename(root.join("map/room.pgm"), root.join("map/room#1.pgm")).unwrap();
+    std::fs::write(
+        root.join("map/room.yaml"),
+        "image: \"room#1.pgm\"   # quoted: the # is part of the name\nresolution: 0.05\n\
+         origin:\n  - -1.0\n  - -3.0\n  - 0.0\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n",
+    )
+    .unwrap();
+    let o = map_with(&root, &["--doas", arg(&root.join("doas.csv")), "--json"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!err.contains("warning"), "{}", show(&o)); // the named image was found
+    let v = json(&o);
+    assert_eq!(v["sources"].as_array().unwrap().len(), 3, "{v}");
+    assert!(v["ospa"]["total"].as_f64().unwrap() < 0.15, "{v}");
+}

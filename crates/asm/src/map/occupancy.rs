@@ -216,59 +216,71 @@ fn read_meta(yaml: &Path) -> Result<Meta, MapError> {
     })
 }
 
+/// A map YAML's keys as `map_server` writes them; other keys are ignored.
+#[derive(serde::Deserialize)]
+struct RawMeta {
+    image: Option<String>,
+    resolution: Option<serde_norway::Value>,
+    origin: Option<serde_norway::Value>,
+    negate: Option<serde_norway::Value>,
+    occupied_thresh: Option<serde_norway::Value>,
+    free_thresh: Option<serde_norway::Value>,
+    mode: Option<String>,
+}
+
+/// A YAML number (or a string holding one, as some tools quote them), named in the error.
+fn yaml_number(v: &serde_norway::Value, what: &str) -> Result<f64, String> {
+    let n = match v {
+        serde_norway::Value::Number(n) => n.as_f64(),
+        serde_norway::Value::String(s) => s.trim().parse::<f64>().ok(),
+        serde_norway::Value::Bool(b) => Some(f64::from(u8::from(*b))),
+        _ => None,
+    };
+    n.ok_or_else(|| format!("{what} {v:?} is not a number"))
+}
+
+/// Parses a ROS map YAML with a YAML parser (quoted values, `#` inside quotes, flow or
+/// block lists), then checks what I-ASM needs of it.
 fn parse_yaml(text: &str) -> Result<Meta, String> {
-    let mut image = None;
-    let mut resolution = None;
-    let mut origin = None;
-    let mut negate = false;
-    let mut occupied_thresh = 0.65;
-    let mut free_thresh = 0.196;
-    let mut mode = "trinary".to_owned();
-    for (n, raw) in text.lines().enumerate() {
-        let line = raw.split('#').next().unwrap_or("").trim();
-        if line.is_empty() {
-            continue;
-        }
-        let (key, value) = line
-            .split_once(':')
-            .ok_or_else(|| format!("line {}: expected `key: value`, got {raw:?}", n + 1))?;
-        let value = value.trim().trim_matches(|c| c == '"' || c == '\'');
-        let num = |what: &str| {
-            value
-                .parse::<f64>()
-                .map_err(|_| format!("line {}: {what} {value:?} is not a number", n + 1))
-        };
-        match key.trim() {
-            "image" => image = Some(value.to_owned()),
-            "resolution" => resolution = Some(num("resolution")?),
-            "origin" => {
-                let inner = value
-                    .strip_prefix('[')
-                    .and_then(|v| v.strip_suffix(']'))
-                    .ok_or_else(|| format!("line {}: origin must be [x, y, yaw]", n + 1))?;
-                let v: Vec<f64> = inner
-                    .split(',')
-                    .map(|s| s.trim().parse::<f64>())
-                    .collect::<Result<_, _>>()
-                    .map_err(|_| {
-                        format!("line {}: origin {value:?} is not three numbers", n + 1)
-                    })?;
-                if v.len() != 3 {
-                    return Err(format!(
-                        "line {}: origin must be [x, y, yaw], got {} values",
-                        n + 1,
-                        v.len()
-                    ));
-                }
-                origin = Some([v[0], v[1], v[2]]);
+    let raw: RawMeta = serde_norway::from_str(text).map_err(|e| e.to_string())?;
+    let image = raw.image;
+    let resolution = raw
+        .resolution
+        .as_ref()
+        .map(|v| yaml_number(v, "resolution"))
+        .transpose()?;
+    let origin = match &raw.origin {
+        None => None,
+        Some(serde_norway::Value::Sequence(v)) => {
+            let v: Vec<f64> = v
+                .iter()
+                .map(|x| yaml_number(x, "origin value"))
+                .collect::<Result<_, _>>()?;
+            if v.len() != 3 {
+                return Err(format!(
+                    "origin must be [x, y, yaw], got {} values",
+                    v.len()
+                ));
             }
-            "negate" => negate = num("negate")? != 0.0,
-            "occupied_thresh" => occupied_thresh = num("occupied_thresh")?,
-            "free_thresh" => free_thresh = num("free_thresh")?,
-            "mode" => mode = value.to_owned(),
-            _ => {} // other map_server keys do not affect occupancy
+            Some([v[0], v[1], v[2]])
         }
-    }
+        Some(other) => return Err(format!("origin must be [x, y, yaw], got {other:?}")),
+    };
+    let negate = raw
+        .negate
+        .as_ref()
+        .map(|v| yaml_number(v, "negate"))
+        .transpose()?
+        .is_some_and(|v| v != 0.0);
+    let occupied_thresh = raw
+        .occupied_thresh
+        .as_ref()
+        .map_or(Ok(0.65), |v| yaml_number(v, "occupied_thresh"))?;
+    let free_thresh = raw
+        .free_thresh
+        .as_ref()
+        .map_or(Ok(0.196), |v| yaml_number(v, "free_thresh"))?;
+    let mode = raw.mode.unwrap_or_else(|| "trinary".to_owned());
     let resolution = resolution.ok_or("missing key `resolution`")?;
     if !(resolution.is_finite() && resolution > 0.0) {
         return Err(format!("resolution {resolution} must be positive"));
@@ -498,6 +510,37 @@ mod tests {
                 .to_string()
                 .contains("not a PGM")
         );
+    }
+
+    #[test]
+    fn yaml_as_yaml_writes_it() {
+        // A quoted path with a `#` (no comment), a block-style origin, quoted numbers, and
+        // a trailing comment.
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("room#2.pgm"), b"P2\n1 1\n255\n254\n").unwrap();
+        let y = dir.path().join("m.yaml");
+        std::fs::write(
+            &y,
+            "image: \"room#2.pgm\"  # the image\nresolution: '0.5'\norigin:\n  - -1.0\n  - 2.0\n  - 0.0\nnegate: 0\n",
+        )
+        .unwrap();
+        let m = OccupancyMap::load(&y).unwrap();
+        assert_eq!(m.cell_center(0, 0), [-0.75, 2.25]);
+        assert_eq!(
+            OccupancyMap::image_path(&y).unwrap(),
+            dir.path().join("room#2.pgm")
+        );
+        // Not a mapping, or an origin of two values: refused, named.
+        std::fs::write(&y, "- 1\n- 2\n").unwrap();
+        assert!(
+            OccupancyMap::load(&y)
+                .unwrap_err()
+                .to_string()
+                .contains("m.yaml")
+        );
+        std::fs::write(&y, YAML.replace("[-1.0, 2.0, 0.0]", "[-1.0, 2.0]")).unwrap();
+        let e = OccupancyMap::load(&y).unwrap_err().to_string();
+        assert!(e.contains("origin") && e.contains("2 values"), "{e}");
     }
 
     #[test]
