@@ -222,18 +222,6 @@ impl Survey {
             .as_ref()
             .map(|t| ospa(&result.positions(), t, c, p))
     }
-
-    /// The DoA score of the first `n` DoAs per stop (hit within `tol_deg`), when the truth
-    /// is known.
-    ///
-    /// # Errors
-    /// As [`score_doas`].
-    pub fn score(&self, n: usize, tol_deg: f64) -> Result<Option<DoaScore>> {
-        self.truth
-            .as_ref()
-            .map(|t| score_doas(&self.doas_deg, &self.poses, t, n, tol_deg))
-            .transpose()
-    }
 }
 
 /// The first `n` columns of a DoA table (ranked tables list the strongest first, and are

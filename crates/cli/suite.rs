@@ -166,16 +166,32 @@ pub fn run_scene(path: &Path, base: &Settings) -> Result<Vec<SceneResult>> {
         .into_owned();
     let base = &scene_base(base, &e)?;
     let seed0 = scene.scene.seed;
-    let seeds: Vec<u64> = (0..e.seeds.unwrap_or(DEFAULT_SEEDS) as u64)
-        .map(|i| seed0 + i)
-        .collect();
+    let count = e.seeds.unwrap_or(DEFAULT_SEEDS);
+    anyhow::ensure!(
+        count >= 1,
+        "scene {}: expect.seeds must be at least 1",
+        path.display()
+    );
+    let seeds: Vec<u64> = (0..count as u64).map(|i| seed0 + i).collect();
+    let sources = scene.scene.sources.len();
+    let stops = scene.stops.len();
+    let n = e.num.unwrap_or(user_n(sources));
+    let template = scene.scene.clone();
+    // The first seed is the scene as loaded; the others are prepared anew from it.
+    let mut loaded = Some(scene);
+    let mut name = None;
     let mut runs = Vec::new(); // per seed, per method: (score, found, ospa)
-    let mut first: Option<Simulated> = None;
     for &seed in &seeds {
-        let mut s = scene.scene.clone();
-        s.seed = seed;
-        let sim = Simulated::render(prepare(s)?, stem.clone())?;
-        let n = e.num.unwrap_or(user_n(sim.truth.len()));
+        let prepared = match loaded.take() {
+            Some(p) => p,
+            None => {
+                let mut s = template.clone();
+                s.seed = seed;
+                prepare(s)?
+            }
+        };
+        let sim = Simulated::render(prepared, stem.clone())?;
+        name.get_or_insert_with(|| sim.name.clone());
         let per_method: Vec<(f64, usize, f64)> = Method::ALL
             .iter()
             .map(|&method| {
@@ -184,10 +200,8 @@ pub fn run_scene(path: &Path, base: &Settings) -> Result<Vec<SceneResult>> {
             })
             .collect::<Result<_>>()?;
         runs.push(per_method);
-        first.get_or_insert(sim);
     }
-    let sim = first.expect("at least one seed");
-    let n = e.num.unwrap_or(user_n(sim.truth.len()));
+    let name = name.expect("at least one seed");
     let k = seeds.len() as f64;
     Ok(Method::ALL
         .iter()
@@ -195,10 +209,10 @@ pub fn run_scene(path: &Path, base: &Settings) -> Result<Vec<SceneResult>> {
         .map(|(m, &method)| {
             let col: Vec<(f64, usize, f64)> = runs.iter().map(|r| r[m]).collect();
             let mut r = SceneResult {
-                scene: sim.name.clone(),
+                scene: name.clone(),
                 method: method.name(),
-                stops: sim.poses().len(),
-                sources: sim.truth.len(),
+                stops,
+                sources,
                 n,
                 seeds: seeds.clone(),
                 doa_score: col.iter().map(|c| c.0).sum::<f64>() / k,
@@ -260,4 +274,25 @@ pub fn run_suite(dir: &Path, base: &Settings) -> Result<SuiteReport> {
         rows,
         seconds: t0.elapsed().as_secs_f64(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_scene_with_no_seeds_is_a_clear_error() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("s.toml");
+        std::fs::write(
+            &p,
+            "fs = 8000\nclip_s = 0.1\n[room]\ndims = [5.0, 4.0, 3.0]\n\
+             absorption = [0.6, 0.6, 0.6, 0.6, 0.6, 0.6]\n[array]\npreset = \"iasm6\"\n\
+             height = 0.8\n[[sources]]\npos = [1.0, 3.0, 1.0]\n[trajectory]\n\
+             poses = [[1.0, 1.0, 0.0]]\n[expect]\nseeds = 0\n",
+        )
+        .unwrap();
+        let e = format!("{:#}", run_scene(&p, &Settings::default()).unwrap_err());
+        assert!(e.contains("s.toml") && e.contains("expect.seeds"), "{e}");
+    }
 }
