@@ -176,8 +176,8 @@ fn an_unknown_array_or_method_is_a_clear_error() {
         &["nosuch", "iasm6"],
     );
     assert_clear_error(
-        &iasm(&["ssl", arg(&wav), "--method", "music"]),
-        &["music", "gcc-phat"],
+        &iasm(&["ssl", arg(&wav), "--method", "musik"]),
+        &["musik", "normmusic"],
     );
 }
 

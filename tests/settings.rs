@@ -23,6 +23,8 @@ decay_window_s = 0.4
 speed_of_sound = 340.0
 mvdr_loading = 0.2
 mvdr_freq_smoothing = 1
+music_sources = 3
+music_freq_smoothing = 1
 
 [iasm]
 density_d = 8.0

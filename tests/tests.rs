@@ -1,6 +1,7 @@
 //! The application's integration tests: one binary (ripgrep's layout).
 
 mod cli;
+mod compare;
 mod map;
 mod near;
 mod regression;

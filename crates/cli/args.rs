@@ -70,6 +70,40 @@ pub enum Command {
     Map(MapArgs),
     /// The paper's Monte Carlo evaluation: OSPA of CA, WS and WDP over many seeds.
     Eval(EvalArgs),
+    /// Every SSL method side by side on one data set: DoA score, errors by distance,
+    /// recall, map OSPA over many seeds, speed; the published tables as extra rows.
+    Compare(CompareArgs),
+}
+
+/// `iasm compare`.
+#[derive(Debug, Clone, Args)]
+pub struct CompareArgs {
+    /// A data set folder in the published layout, with ground truth (src_gt*).
+    #[arg(long, value_name = "DIR")]
+    pub dataset: PathBuf,
+    /// The methods: all, or a comma-separated list (gcc-phat, mvdr, srp-phat, music,
+    /// normmusic).
+    #[arg(long, default_value = "all")]
+    pub methods: String,
+    /// Maps per method (seeds seed..seed + runs).
+    #[arg(long, default_value_t = 20)]
+    pub runs: usize,
+    /// The first seed.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Write report.json, report.csv and the figures (ospa.svg, error_by_distance.svg,
+    /// maps.svg) into this folder (created if missing).
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// The settings (the method is each row's own).
+    #[command(flatten)]
+    pub settings: SettingsArgs,
+    /// Output and metric.
+    #[command(flatten)]
+    pub report: ReportArgs,
 }
 
 /// The settings every command reads the same way: one file, then the flags that were given.
@@ -83,7 +117,8 @@ pub struct SettingsArgs {
     /// file [default: iasm6, or the settings file's].
     #[arg(long)]
     pub array: Option<String>,
-    /// Angular-spectrum method: gcc-phat or mvdr [default: mvdr, or the settings file's].
+    /// Angular-spectrum method: gcc-phat, mvdr, srp-phat, music or normmusic [default:
+    /// mvdr, or the settings file's].
     #[arg(long)]
     pub method: Option<Method>,
     /// N, the DoAs per stop, strongest first, for the SSL and the mapper alike

@@ -10,16 +10,20 @@
 //! - [`scenes`]: scene files (with the suite's `[expect]`), and writing a rendered scene.
 //! - [`suite`]: the synthetic-room regression suite.
 //! - [`score`]: the DoA score against known sources.
+//! - [`compare`]: every SSL method side by side on one data set, DoAs to maps.
+//! - [`figure`]: the comparison's figures (SVG).
 //! - [`render`]: the map picture.
 //! - [`output`]: files and folders written whole (temporary name, then rename).
 //! - [`args`]: the command line, and its conversion into settings and inputs.
 //!
-//! The commands ([`cmd`]): `ssl`, `map`, `eval`, `simulate`, `regress`, `demo`, one module
+//! The commands ([`cmd`]): `ssl`, `map`, `eval`, `compare`, `simulate`, `regress`, `demo`, one module
 //! each; none imports another.
 
 pub mod args;
 pub mod cmd;
+pub mod compare;
 pub mod dataset;
+pub mod figure;
 pub mod output;
 pub mod pipeline;
 pub mod render;
@@ -66,6 +70,10 @@ pub fn run(cli: &args::Cli) -> anyhow::Result<Outcome> {
         args::Command::Eval(a) => {
             set_threads(a.threads);
             cmd::eval::run(a)
+        }
+        args::Command::Compare(a) => {
+            set_threads(a.threads);
+            cmd::compare::run(a)
         }
     }
 }

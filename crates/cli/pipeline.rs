@@ -41,6 +41,8 @@ pub struct FileDoas {
     pub file: PathBuf,
     /// Strongest first.
     pub doas: Vec<Doa>,
+    /// The time it took to read and localise it on one thread (s).
+    pub seconds: f64,
 }
 
 /// Localises every file with one localizer per sample rate, in parallel, keeping order.
@@ -57,6 +59,7 @@ pub fn localise_files(
     let out = files
         .par_iter()
         .map_init(Scratch::default, |scratch, f| {
+            let t0 = std::time::Instant::now();
             let audio = ssl::read_wav(f)?;
             let loc = {
                 let mut c = cache.lock().expect("no panics while locked");
@@ -76,6 +79,7 @@ pub fn localise_files(
             Ok(FileDoas {
                 file: f.clone(),
                 doas,
+                seconds: t0.elapsed().as_secs_f64(),
             })
         })
         .collect::<Result<Vec<_>>>();
@@ -133,6 +137,19 @@ impl Survey {
     /// # Errors
     /// Missing or unreadable inputs, or tables that do not match one to one, named.
     pub fn load(inputs: &SurveyInputs, settings: &Settings) -> Result<Self> {
+        Self::load_with_doas(inputs, settings, None)
+    }
+
+    /// [`Survey::load`] with the DoAs given (a table and where it came from) instead of
+    /// read or localised: several DoA sources on one survey.
+    ///
+    /// # Errors
+    /// As [`Survey::load`].
+    pub fn load_with_doas(
+        inputs: &SurveyInputs,
+        settings: &Settings,
+        doas: Option<(Table, String)>,
+    ) -> Result<Self> {
         let ds = inputs.dataset.as_deref().map(Dataset::open).transpose()?;
         let map_path = match (&inputs.map, &ds) {
             (Some(p), _) => p.clone(),
@@ -154,7 +171,9 @@ impl Survey {
             .clone()
             .or_else(|| ds.as_ref().and_then(|d| d.sources.clone()));
         let truth = truth_path.as_deref().map(read_sources).transpose()?;
-        let (doas_deg, doa_source) = if let Some(t) = &inputs.doas {
+        let (doas_deg, doa_source) = if let Some(given) = doas {
+            given
+        } else if let Some(t) = &inputs.doas {
             (
                 first_columns(read_table(t)?, settings.iasm.num_doas, t),
                 t.display().to_string(),

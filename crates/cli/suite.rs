@@ -192,7 +192,7 @@ pub fn run_scene(path: &Path, base: &Settings) -> Result<Vec<SceneResult>> {
         };
         let sim = Simulated::render(prepared, stem.clone())?;
         name.get_or_insert_with(|| sim.name.clone());
-        let per_method: Vec<(f64, usize, f64)> = Method::ALL
+        let per_method: Vec<(f64, usize, f64)> = Method::PAPER
             .iter()
             .map(|&method| {
                 let r = sim.run(&scene_settings(base, method, n), seed)?;
@@ -203,7 +203,7 @@ pub fn run_scene(path: &Path, base: &Settings) -> Result<Vec<SceneResult>> {
     }
     let name = name.expect("at least one seed");
     let k = seeds.len() as f64;
-    Ok(Method::ALL
+    Ok(Method::PAPER
         .iter()
         .enumerate()
         .map(|(m, &method)| {

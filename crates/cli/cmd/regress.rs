@@ -22,8 +22,8 @@ pub fn run(dir: &Path, settings: &Settings, json: bool) -> Result<Outcome> {
         print!("{}", report.table());
         println!(
             "{} scenes x {} methods in {:.1} s",
-            report.rows.len() / Method::ALL.len(),
-            Method::ALL.len(),
+            report.rows.len() / Method::PAPER.len(),
+            Method::PAPER.len(),
             report.seconds
         );
     }

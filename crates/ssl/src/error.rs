@@ -74,6 +74,9 @@ pub enum ConfigError {
     /// Speed of sound not positive and finite.
     #[error("speed of sound {0} m/s must be positive and finite")]
     SpeedOfSound(f64),
+    /// A MUSIC signal subspace of no dimension.
+    #[error("music_sources must be at least 1, got {0}")]
+    MusicSources(usize),
     /// MVDR diagonal loading not positive and finite.
     #[error("diagonal loading {0} must be positive and finite")]
     Loading(f64),
@@ -81,7 +84,7 @@ pub enum ConfigError {
     #[error("sample rate must be positive")]
     SampleRate,
     /// A method name that is not known.
-    #[error("unknown method {0:?}; expected one of: gcc-phat, mvdr")]
+    #[error("unknown method {0:?}; expected one of: gcc-phat, mvdr, srp-phat, music, normmusic")]
     UnknownMethod(String),
     /// A pooling name that is not known.
     #[error("unknown pooling {0:?}; expected one of: max, mean")]

@@ -6,8 +6,8 @@
 //! A [`Localizer`] is built once per array, sample rate and [`SslConfig`]: it plans the STFT
 //! ([`stft`]), the direction grid and every microphone pair's delay tables ([`grid`]).
 //! [`Localizer::locate`] then transforms the audio, computes one angular spectrum per block
-//! of frames with the chosen [`Method`] ([`gcc_phat`] or [`mvdr`]), pools the blocks, and
-//! returns the strongest peaks of the pooled spectrum as [`Doa`]s.
+//! of frames with the chosen [`Method`] (see [`method`]), pools the blocks, and returns the
+//! strongest peaks of the pooled spectrum as [`Doa`]s.
 //!
 //! # Example
 //!
@@ -41,10 +41,9 @@ pub mod array;
 pub mod audio;
 pub mod config;
 pub mod error;
-pub mod gcc_phat;
 pub mod grid;
 mod localizer;
-pub mod mvdr;
+pub mod method;
 pub mod spectrum;
 pub mod stft;
 
@@ -54,5 +53,6 @@ pub use config::{Method, Pooling, SslConfig};
 pub use error::{ArrayError, ConfigError, Error, Result};
 pub use grid::{DirectionGrid, ElevationRange};
 pub use localizer::{Localizer, Scratch, SpectrumEstimator};
+pub use method::{gcc_phat, music, mvdr, srp_phat};
 pub use spectrum::{AngularSpectrum, Doa, wrap_deg};
 pub use stft::{Spectrogram, Stft};

@@ -1,17 +1,15 @@
 //! The localizer: from multichannel audio to a pooled angular spectrum and ranked DoAs.
 
 use std::ops::Range;
-use std::sync::Arc;
 
 use realfft::num_complex::Complex32;
 
 use crate::array::MicArray;
 use crate::audio::Audio;
-use crate::config::{Method, Pooling, SslConfig};
+use crate::config::{Pooling, SslConfig};
 use crate::error::{ConfigError, Error, Result};
-use crate::gcc_phat::GccPhat;
-use crate::grid::{DirectionGrid, PairLags, PairScratch};
-use crate::mvdr::Mvdr;
+use crate::grid::{DirectionGrid, PairScratch};
+use crate::method::music::SubspaceScratch;
 use crate::spectrum::{AngularSpectrum, Doa};
 use crate::stft::{Spectrogram, Stft};
 
@@ -57,6 +55,8 @@ pub struct Scratch {
     pub(crate) prefix_complex: Vec<Complex32>,
     /// The pairwise lag-function machinery ([`crate::grid`]).
     pub(crate) pairs: PairScratch,
+    /// The full-array estimators' buffers ([`crate::music`]).
+    pub(crate) subspace: SubspaceScratch,
     /// One block's spectrum (the localizer).
     pub(crate) block: Vec<f32>,
 }
@@ -136,22 +136,7 @@ impl Localizer {
             .elevation
             .unwrap_or_else(|| crate::ElevationRange::auto(array));
         let grid = DirectionGrid::new(config.az_step_deg, elevation)?;
-        let lags = Arc::new(PairLags::new(
-            array,
-            &grid,
-            fs,
-            config.speed_of_sound,
-            bins.clone(),
-            frame_len,
-        ));
-        let estimator: Box<dyn SpectrumEstimator> = match config.method {
-            Method::GccPhat => Box::new(GccPhat::new(lags)),
-            Method::Mvdr => Box::new(Mvdr::new(
-                lags,
-                config.mvdr_loading,
-                config.mvdr_freq_smoothing,
-            )),
-        };
+        let estimator = crate::method::estimator(config, array, &grid, fs, bins.clone(), frame_len);
         Ok(Self {
             array: array.clone(),
             sample_rate,

@@ -52,7 +52,8 @@ fn the_fixture_is_what_its_script_says() {
 #[test]
 fn both_sources_are_found_through_the_decay() {
     for file in ["decay_rt03.wav", "decay_rt05.wav"] {
-        for method in Method::ALL {
+        // Plain MUSIC is the exception, shown below.
+        for method in Method::ALL.into_iter().filter(|&m| m != Method::Music) {
             let az = azimuths(file, method, SslConfig::default().decay_gate_db);
             for t in TRUTH {
                 assert!(finds(&az, t, 3.0), "{file} {method}: {az:?} misses {t}");
@@ -62,11 +63,24 @@ fn both_sources_are_found_through_the_decay() {
 }
 
 #[test]
+fn plain_music_lets_a_few_bins_decide_and_normmusic_does_not() {
+    // Summed as they come, the bins with the sharpest pseudo-spectra (strong reflections
+    // among them) pull plain MUSIC's DoA of the source at 40 degrees more than 4 degrees
+    // off in both rooms; with each bin normalised to a peak of 1 first, it is within 3.
+    for file in ["decay_rt03.wav", "decay_rt05.wav"] {
+        let music = azimuths(file, Method::Music, 10.0);
+        assert!(!finds(&music, TRUTH[0], 4.0), "{file} music: {music:?}");
+        let norm = azimuths(file, Method::NormMusic, 10.0);
+        assert!(finds(&norm, TRUTH[0], 3.0), "{file} normmusic: {norm:?}");
+    }
+}
+
+#[test]
 fn without_the_gate_the_rooms_axes_win() {
     // The failure the gate mends: every block pooled, both DoAs within 5 degrees of the
-    // room's x axis (0 or 180), and neither source found.
+    // room's x axis (0 or 180), and neither source found, by the paper's two methods.
     for file in ["decay_rt03.wav", "decay_rt05.wav"] {
-        for method in Method::ALL {
+        for method in Method::PAPER {
             let az = azimuths(file, method, 0.0);
             let on_axis = |a: &f64| a.abs() <= 5.0 || a.abs() >= 175.0;
             assert!(az.iter().all(on_axis), "{file} {method}: {az:?}");

@@ -115,11 +115,13 @@ fn one_harmonic_source_is_found_within_2_degrees_all_around() {
 fn an_elevated_source_needs_the_elevation_search_on_a_3d_array() {
     // iasm6 has microphones at two heights, so a source 20 degrees above the plane adds a
     // vertical delay that a horizontal-only search mistakes for azimuth; searching
-    // elevation recovers both angles.
+    // elevation recovers both angles. (The subspace methods find a lone source's azimuth
+    // even in the plane: the steering vector nearest its subspace keeps the azimuth. Their
+    // elevation search is checked below all the same.)
     let array = MicArray::default();
     let audio = render(&array, &[(63.0, 20.0, Signal::Noise)], 0.4, 30.0, SEED);
     let mut failures = Vec::new();
-    for method in Method::ALL {
+    for method in Method::PAPER {
         let flat = SslConfig {
             method,
             num_peaks: 1,
@@ -135,6 +137,8 @@ fn an_elevated_source_needs_the_elevation_search_on_a_3d_array() {
                 "{method}: horizontal search unexpectedly unbiased: {d:?}"
             ));
         }
+    }
+    for method in Method::ALL {
         // The default for a 3-D array searches elevation.
         let search = SslConfig {
             method,

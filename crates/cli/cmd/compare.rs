@@ -1,0 +1,110 @@
+//! `iasm compare`: every SSL method side by side on one data set.
+
+use anyhow::{Context, Result};
+
+use crate::Outcome;
+use crate::args::CompareArgs;
+use crate::compare::{CompareOptions, Report, compare, parse_methods, to_csv};
+
+/// Runs `iasm compare`.
+///
+/// # Errors
+/// Bad arguments, a data set without truth, or a failure of the pipeline.
+pub fn run(a: &CompareArgs) -> Result<Outcome> {
+    let settings = a.settings.settings()?;
+    let opts = CompareOptions {
+        methods: parse_methods(&a.methods)?,
+        runs: a.runs,
+        seed0: a.seed,
+        ospa_c: a.report.ospa_c,
+        ospa_p: a.report.ospa_p,
+    };
+    let t0 = std::time::Instant::now();
+    let stages = opts.methods.len() as u64;
+    let bar = crate::progress(stages, "compare");
+    let report = compare(&a.dataset, &settings, &opts, &|stage| {
+        bar.set_message(stage.to_owned());
+    })?;
+    bar.finish_and_clear();
+    let secs = t0.elapsed().as_secs_f64();
+    if a.report.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        print_table(&report, secs);
+    }
+    if let Some(dir) = &a.out {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        let json = serde_json::to_string_pretty(&report)?;
+        crate::output::write_atomic(&dir.join("report.json"), json.as_bytes())?;
+        crate::output::write_atomic(&dir.join("report.csv"), to_csv(&report).as_bytes())?;
+        crate::figure::comparison(&report, dir)?;
+        if !a.report.json {
+            println!(
+                "report: {} (report.json, report.csv, ospa.svg, error_by_distance.svg, maps.svg)",
+                dir.display()
+            );
+        }
+    }
+    Ok(Outcome::Success)
+}
+
+fn print_table(r: &Report, secs: f64) {
+    println!(
+        "{}: {} recordings, N = {}, {} maps per row (seeds {}..{}), {:.1} s",
+        r.dataset,
+        r.recordings,
+        r.num_doas,
+        r.runs,
+        r.seed0,
+        r.seed0 + r.runs as u64,
+        secs
+    );
+    println!(
+        "{:<24} {:>6} {:>7} {:>9} {:>9} {:>8} {:>8} {:>7} {:>7} {:>7} {:>9}",
+        "DoA source",
+        "score",
+        "recall",
+        "err<1.5m",
+        "OSPA mean",
+        "median",
+        "worst",
+        "loc.",
+        "card.",
+        "right",
+        "ms/rec."
+    );
+    for row in &r.rows {
+        let near = {
+            // DoAs on sources nearer than 1.5 m: the first two bands, weighted by count.
+            let b = &row.diagnostics.bands;
+            let (n, s) = b.iter().take(2).fold((0usize, 0.0), |(n, s), x| {
+                if x.doas > 0 {
+                    (n + x.doas, s + x.mean_abs_err_deg * x.doas as f64)
+                } else {
+                    (n, s)
+                }
+            });
+            if n > 0 { s / n as f64 } else { f64::NAN }
+        };
+        let o = &row.ospa;
+        println!(
+            "{:<24} {:>6.3} {:>7.3} {:>9} {:>9.3} {:>8.3} {:>8.3} {:>7.3} {:>7.3} {:>6.0}% {:>9}",
+            row.name,
+            row.doa.score,
+            row.diagnostics.recall_3m,
+            if near.is_finite() {
+                format!("{near:.1}°")
+            } else {
+                "-".to_owned()
+            },
+            o.mean,
+            o.median,
+            o.worst,
+            o.mean_localization,
+            o.mean_cardinality,
+            100.0 * o.right_count,
+            row.ms_per_recording
+                .map_or_else(|| "-".to_owned(), |v| format!("{v:.1}"))
+        );
+    }
+}

@@ -1,0 +1,305 @@
+//! The SSL method comparison: every method side by side on one data set, from its DoAs to
+//! its maps.
+//!
+//! For each method the recordings are localised once (timed on the worker thread, file
+//! read included), and its DoA table is scored ([`crate::score`]: the DoA score, errors by
+//! distance band, recall of sources within 3 m) and mapped over `runs` seeds with the full
+//! I-ASM (CA) variant and the settings' profile ([`crate::pipeline::evaluate`]). The
+//! published tables in `azimuth/`, when present, are scored and mapped the same way as
+//! extra rows, so that a method is always seen beside the authors' own DoAs.
+
+use std::path::Path;
+
+use anyhow::{Context, Result, ensure};
+use asm::Variant;
+use serde::Serialize;
+use ssl::Method;
+
+use crate::dataset::{Dataset, read_table};
+use crate::pipeline::{Survey, SurveyInputs, VariantStats, doa_table, evaluate, localise_files};
+use crate::score::{Diagnostics, DoaScore, diagnose, score_doas};
+use crate::settings::Settings;
+
+/// Version of the report's JSON layout.
+pub const SCHEMA_VERSION: u32 = 1;
+
+/// A DoA within this many degrees of a source's bearing is a hit (the DoA score's rule).
+pub const HIT_DEG: f64 = 5.0;
+/// A DoA is attributed to the nearest source's bearing within this for the error bands.
+pub const MATCH_DEG: f64 = 10.0;
+
+/// What to compare and how.
+#[derive(Clone, Debug)]
+pub struct CompareOptions {
+    /// The methods, in report order.
+    pub methods: Vec<Method>,
+    /// Maps per method (seeds `seed0..seed0 + runs`).
+    pub runs: usize,
+    /// The first seed.
+    pub seed0: u64,
+    /// OSPA cutoff (m) and order.
+    pub ospa_c: f64,
+    /// OSPA order.
+    pub ospa_p: f64,
+}
+
+/// One row of the comparison: a method of ours, or a published table.
+#[derive(Clone, Debug, Serialize)]
+pub struct Row {
+    /// The method's name, or the published table's file name.
+    pub name: String,
+    /// `"ssl"` for a method run here, `"published"` for a table in `azimuth/`.
+    pub kind: &'static str,
+    /// The DoA score (first N DoAs, hit within [`HIT_DEG`]).
+    pub doa: DoaScore,
+    /// Errors by distance band and the recall of sources within 3 m.
+    pub diagnostics: Diagnostics,
+    /// The CA maps' OSPA over the runs.
+    pub ospa: VariantStats,
+    /// Milliseconds per recording on one thread, file read included (methods only).
+    pub ms_per_recording: Option<f64>,
+    /// The sources of the first seed's map (m), for the figure.
+    pub map_seed0: Vec<[f64; 2]>,
+}
+
+/// The whole comparison.
+#[derive(Clone, Debug, Serialize)]
+pub struct Report {
+    /// [`SCHEMA_VERSION`].
+    pub schema_version: u32,
+    /// The data set folder.
+    pub dataset: String,
+    /// Recordings (stops).
+    pub recordings: usize,
+    /// N: DoAs per stop.
+    pub num_doas: usize,
+    /// Maps per row, and the first seed.
+    pub runs: usize,
+    /// The first seed.
+    pub seed0: u64,
+    /// The true sources (m).
+    pub truth: Vec<[f64; 2]>,
+    /// The robot's stops (x, y in m).
+    pub path: Vec<[f64; 2]>,
+    /// One row per method, then one per published table.
+    pub rows: Vec<Row>,
+}
+
+/// Parses `all` or a comma-separated list of method names.
+///
+/// # Errors
+/// An unknown name, or an empty list.
+pub fn parse_methods(s: &str) -> Result<Vec<Method>> {
+    if s.trim().eq_ignore_ascii_case("all") {
+        return Ok(Method::ALL.to_vec());
+    }
+    let mut out = Vec::new();
+    for name in s.split(',').map(str::trim).filter(|n| !n.is_empty()) {
+        let m: Method = name.parse().with_context(|| {
+            format!(
+                "--methods: unknown method {name:?} (known: all, {})",
+                Method::ALL.map(Method::name).join(", ")
+            )
+        })?;
+        if !out.contains(&m) {
+            out.push(m);
+        }
+    }
+    ensure!(!out.is_empty(), "--methods names no method");
+    Ok(out)
+}
+
+/// Runs the comparison on the data set at `root` (published layout, with ground truth).
+/// `progress` is told each stage as it starts.
+///
+/// # Errors
+/// A data set without recordings, poses or truth, or any failure of the pipeline, named.
+pub fn compare(
+    root: &Path,
+    settings: &Settings,
+    opts: &CompareOptions,
+    progress: &dyn Fn(&str),
+) -> Result<Report> {
+    ensure!(opts.runs > 0, "--runs must be at least 1");
+    let ds = Dataset::open(root)?;
+    ensure!(
+        !ds.audio.is_empty(),
+        "{}: no recordings in audio/",
+        root.display()
+    );
+    let inputs = SurveyInputs {
+        dataset: Some(root.to_owned()),
+        ..SurveyInputs::default()
+    };
+    let n = settings.ssl.num_peaks;
+    let array = settings.mic_array()?;
+    let mut rows = Vec::new();
+    let mut base: Option<Survey> = None;
+    for &method in &opts.methods {
+        progress(&format!(
+            "{method}: localising {} recordings",
+            ds.audio.len()
+        ));
+        let mut s = settings.clone();
+        s.ssl.method = method;
+        let files = localise_files(&ds.audio, &array, &s.ssl)?;
+        let ms = 1e3 * files.iter().map(|f| f.seconds).sum::<f64>() / files.len() as f64;
+        let table = doa_table(files.iter().map(|f| &f.doas[..]), n);
+        let survey = Survey::load_with_doas(&inputs, &s, Some((table, format!("ssl:{method}"))))?;
+        progress(&format!("{method}: {} maps", opts.runs));
+        rows.push(row(
+            &survey,
+            method.name().to_owned(),
+            "ssl",
+            Some(ms),
+            &s,
+            opts,
+        )?);
+        base.get_or_insert(survey);
+    }
+    for t in &ds.doa_tables {
+        let name = t.file_name().map_or_else(
+            || t.display().to_string(),
+            |f| f.to_string_lossy().into_owned(),
+        );
+        progress(&format!("{name}: {} maps", opts.runs));
+        let mut table = read_table(t)?;
+        table.iter_mut().for_each(|r| r.truncate(n));
+        let survey =
+            Survey::load_with_doas(&inputs, settings, Some((table, t.display().to_string())))
+                .with_context(|| format!("published table {}", t.display()))?;
+        rows.push(row(&survey, name, "published", None, settings, opts)?);
+        base.get_or_insert(survey);
+    }
+    let base = base.context("nothing to compare: no method and no published table")?;
+    Ok(Report {
+        schema_version: SCHEMA_VERSION,
+        dataset: root.display().to_string(),
+        recordings: base.poses.len(),
+        num_doas: n,
+        runs: opts.runs,
+        seed0: opts.seed0,
+        truth: base.truth.clone().unwrap_or_default(),
+        path: base.poses.iter().map(|p| [p.x, p.y]).collect(),
+        rows,
+    })
+}
+
+fn row(
+    survey: &Survey,
+    name: String,
+    kind: &'static str,
+    ms_per_recording: Option<f64>,
+    settings: &Settings,
+    opts: &CompareOptions,
+) -> Result<Row> {
+    let truth = survey
+        .truth
+        .as_ref()
+        .context("the comparison needs ground truth (src_gt* in the data set)")?;
+    let n = settings.ssl.num_peaks;
+    let doa = score_doas(&survey.doas_deg, &survey.poses, truth, n, HIT_DEG)?;
+    let diagnostics = diagnose(
+        &survey.doas_deg,
+        &survey.poses,
+        truth,
+        n,
+        MATCH_DEG,
+        HIT_DEG,
+    )?;
+    let ospa = evaluate(
+        survey,
+        &settings.iasm,
+        &[Variant::Ca],
+        opts.runs,
+        opts.seed0,
+        opts.ospa_c,
+        opts.ospa_p,
+    )?
+    .pop()
+    .expect("one variant asked, one returned");
+    let map_seed0 = survey.map(&settings.iasm, opts.seed0)?.positions();
+    Ok(Row {
+        name,
+        kind,
+        doa,
+        diagnostics,
+        ospa,
+        ms_per_recording,
+        map_seed0,
+    })
+}
+
+/// The report as CSV: one line per row, the columns of the terminal table and the error
+/// of each distance band.
+pub fn to_csv(r: &Report) -> String {
+    let bands: Vec<String> = r
+        .rows
+        .first()
+        .map(|row| {
+            row.diagnostics
+                .bands
+                .iter()
+                .map(|b| b.band.clone())
+                .collect()
+        })
+        .unwrap_or_default();
+    let mut out = String::from(
+        "name,kind,doa_score,doa_hits,doa_total,mean_hit_error_deg,recall_3m,ospa_mean,ospa_median,ospa_worst,ospa_localization,ospa_cardinality,right_count,mean_sources,ms_per_recording",
+    );
+    for b in &bands {
+        out.push_str(&format!(",err_deg_{}", b.replace(' ', "")));
+    }
+    out.push('\n');
+    let num = |v: f64| {
+        if v.is_finite() {
+            format!("{v:.4}")
+        } else {
+            String::new()
+        }
+    };
+    for row in &r.rows {
+        let o = &row.ospa;
+        out.push_str(&format!(
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            row.name,
+            row.kind,
+            num(row.doa.score),
+            row.doa.hits,
+            row.doa.total,
+            num(row.doa.mean_hit_error_deg),
+            num(row.diagnostics.recall_3m),
+            num(o.mean),
+            num(o.median),
+            num(o.worst),
+            num(o.mean_localization),
+            num(o.mean_cardinality),
+            num(o.right_count),
+            num(o.mean_sources),
+            row.ms_per_recording.map(num).unwrap_or_default(),
+        ));
+        for b in &row.diagnostics.bands {
+            out.push(',');
+            out.push_str(&num(b.mean_abs_err_deg));
+        }
+        out.push('\n');
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn methods_are_parsed_from_all_or_a_list() {
+        assert_eq!(parse_methods("all").unwrap(), Method::ALL.to_vec());
+        assert_eq!(
+            parse_methods("mvdr, normmusic,mvdr").unwrap(),
+            vec![Method::Mvdr, Method::NormMusic]
+        );
+        let e = parse_methods("mvdr,beamformit").unwrap_err();
+        assert!(format!("{e:#}").contains("beamformit"), "{e:#}");
+        assert!(parse_methods(" , ").is_err());
+    }
+}

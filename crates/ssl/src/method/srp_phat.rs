@@ -1,0 +1,87 @@
+//! SRP-PHAT: the steered response power of the whole array with the phase transform
+//! (DiBiase, Silverman & Brandstein 2001), as pyroomacoustics computes it.
+//!
+//! For each bin, the block's cross-spectral matrix `R_b = sum_f x_f x_f^H` over all
+//! microphones is whitened element by element, `R_ij / |R_ij|`, and the power of the array
+//! steered to direction `u` is `sum_b a_b(u)^H R_b a_b(u)`. Under PHAT the diagonal is the
+//! constant `M` per bin, so the steered power is exactly `M * n_bins` plus twice the sum over
+//! the `M (M - 1) / 2` pairs of `Re(R_ij/|R_ij| e^{i w_b tau_ij(u)})`: the full-array power
+//! decomposes into pairs without approximation, and so it runs on the pairwise lag kernel of
+//! [`crate::grid`] (the constant is dropped; peaks and their order do not change).
+//!
+//! It differs from [`super::gcc_phat`] only in where the whitening is applied. GCC-PHAT
+//! averages the unit phasors of single frames, so a bin whose phase wanders across the
+//! block (reverberation, two sources taking turns) votes with less than full weight;
+//! SRP-PHAT whitens the block's averaged cross-spectrum, so every bin with any energy
+//! votes with weight one, coherent or not. On a block of one frame the two are equal.
+
+use std::ops::Range;
+use std::sync::Arc;
+
+use realfft::num_complex::Complex32;
+
+use crate::grid::{PairLags, padded};
+use crate::localizer::zeroed;
+use crate::stft::Spectrogram;
+use crate::{Scratch, SpectrumEstimator};
+
+/// The SRP-PHAT estimator for one array, grid, band and sample rate.
+#[derive(Clone, Debug)]
+pub struct SrpPhat {
+    lags: Arc<PairLags>,
+}
+
+impl SrpPhat {
+    pub(crate) fn new(lags: Arc<PairLags>) -> Self {
+        Self { lags }
+    }
+}
+
+impl SpectrumEstimator for SrpPhat {
+    fn name(&self) -> &'static str {
+        "srp-phat"
+    }
+
+    fn estimate_into(
+        &self,
+        stft: &Spectrogram,
+        frames: Range<usize>,
+        out: &mut [f32],
+        scratch: &mut Scratch,
+    ) {
+        let l = &*self.lags;
+        let nb = stft.bins().len();
+        assert_eq!(
+            padded(nb),
+            l.n_bins,
+            "spectrogram band differs from the plan"
+        );
+        let norm = 1.0 / (nb * l.pairs.len()) as f32;
+        let Scratch { cross, pairs, .. } = scratch;
+        let cross = zeroed(cross, nb);
+        // Bins past the band stay 0 and so add nothing.
+        let coefficients = |_, (i, j), gr: &mut [f32], gi: &mut [f32], _: &mut [f32]| {
+            cross.fill(Complex32::default());
+            for f in frames.clone() {
+                let (xi, xj) = (stft.frame(f, i), stft.frame(f, j));
+                for ((c, a), b) in cross.iter_mut().zip(xi).zip(xj) {
+                    *c += a * b.conj();
+                }
+            }
+            for (b, c) in cross.iter().enumerate() {
+                let m = c.norm();
+                // A bin with no energy carries no phase: it votes for nothing.
+                let u = if m > f32::MIN_POSITIVE {
+                    c / m
+                } else {
+                    Complex32::default()
+                };
+                gr[b] = u.re;
+                gi[b] = u.im;
+            }
+        };
+        l.pairwise_spectrum(out, norm, pairs, coefficients, |gr, gi, _, c, s| {
+            gr * c - gi * s
+        });
+    }
+}

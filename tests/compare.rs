@@ -1,0 +1,162 @@
+//! `iasm compare`: every method side by side on one data set, with the published tables as
+//! extra rows, a JSON report, CSV and figures.
+
+use crate::util::*;
+
+/// The audio data set of [`audio_dataset`], with the exact bearings as a "published" table.
+fn dataset(dir: &tempfile::TempDir) -> std::path::PathBuf {
+    let root = path(dir, "ds");
+    audio_dataset(&root, &AUDIO_TRUTH);
+    std::fs::create_dir_all(root.join("azimuth")).unwrap();
+    std::fs::copy(root.join("doas.csv"), root.join("azimuth/azEst_exact.csv")).unwrap();
+    root
+}
+
+#[test]
+fn compare_reports_every_method_and_the_published_table() {
+    let dir = tempdir();
+    let root = dataset(&dir);
+    let out = path(&dir, "report");
+    let o = iasm(&[
+        "compare",
+        "--dataset",
+        arg(&root),
+        "--methods",
+        "gcc-phat,normmusic",
+        "--runs",
+        "3",
+        "--num",
+        "2",
+        "--json",
+        "--out",
+        arg(&out),
+    ]);
+    let r = json(&o);
+    assert_eq!(r["schema_version"], 1);
+    assert_eq!(r["recordings"], 20);
+    let rows = r["rows"].as_array().unwrap();
+    let names: Vec<&str> = rows.iter().map(|x| x["name"].as_str().unwrap()).collect();
+    assert_eq!(names, ["gcc-phat", "normmusic", "azEst_exact.csv"]);
+    for row in rows {
+        let name = row["name"].as_str().unwrap();
+        // Every field the issue names is there.
+        for key in [
+            "doa",
+            "diagnostics",
+            "ospa",
+            "ms_per_recording",
+            "map_seed0",
+        ] {
+            assert!(row.get(key).is_some(), "{name}: no {key}");
+        }
+        assert_eq!(row["ospa"]["runs"].as_array().unwrap().len(), 3, "{name}");
+        let score = row["doa"]["score"].as_f64().unwrap();
+        let ospa = row["ospa"]["mean"].as_f64().unwrap();
+        if row["kind"] == "published" {
+            // The exact bearings: every DoA a hit, and the map on the sources.
+            assert_eq!(score, 1.0, "{name}");
+            assert!(row["ms_per_recording"].is_null(), "{name}");
+            assert!(ospa < 0.1, "{name}: OSPA {ospa}");
+        } else {
+            // Two plane waves at 30 dB SNR: nearly every DoA within 5 degrees.
+            assert!(score >= 0.9, "{name}: DoA score {score}");
+            assert!(row["ms_per_recording"].as_f64().unwrap() > 0.0, "{name}");
+            assert!(ospa < 0.3, "{name}: OSPA {ospa}");
+        }
+    }
+    // The report folder: the same JSON, a CSV line per row, three figures.
+    let saved: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(saved, r);
+    let csv = std::fs::read_to_string(out.join("report.csv")).unwrap();
+    let lines: Vec<&str> = csv.lines().collect();
+    assert_eq!(lines.len(), 4, "{csv}");
+    assert!(lines[0].starts_with("name,kind,doa_score"), "{csv}");
+    assert!(lines[2].starts_with("normmusic,ssl,"), "{csv}");
+}
+
+/// The text elements of an SVG file, in order.
+fn svg_texts(path: &std::path::Path) -> Vec<String> {
+    let s = std::fs::read_to_string(path).unwrap();
+    s.split("<text")
+        .skip(1)
+        .filter_map(|t| {
+            let body = &t[t.find('>')? + 1..];
+            Some(body[..body.find("</text>")?].trim().to_owned())
+        })
+        .collect()
+}
+
+#[test]
+fn the_figures_have_titles_axes_in_units_and_legends() {
+    let dir = tempdir();
+    let root = dataset(&dir);
+    let out = path(&dir, "report");
+    let o = iasm(&[
+        "compare",
+        "--dataset",
+        arg(&root),
+        "--methods",
+        "mvdr",
+        "--runs",
+        "2",
+        "--num",
+        "2",
+        "--out",
+        arg(&out),
+    ]);
+    assert!(o.status.success(), "{}", show(&o));
+    let has = |texts: &[String], want: &str| texts.iter().any(|t| t.contains(want));
+    let ospa = svg_texts(&out.join("ospa.svg"));
+    for want in [
+        "Map OSPA per DoA source",
+        "OSPA (m)",
+        "mvdr (mean",
+        "azEst_exact.csv",
+    ] {
+        assert!(has(&ospa, want), "ospa.svg lacks {want:?}: {ospa:?}");
+    }
+    let err = svg_texts(&out.join("error_by_distance.svg"));
+    for want in ["DoA error by source distance", "mean |error| (deg)", "mvdr"] {
+        assert!(
+            has(&err, want),
+            "error_by_distance.svg lacks {want:?}: {err:?}"
+        );
+    }
+    let maps = svg_texts(&out.join("maps.svg"));
+    for want in [
+        "x (m)",
+        "y (m)",
+        "true source",
+        "source found",
+        "robot stops",
+        "mvdr:",
+    ] {
+        assert!(has(&maps, want), "maps.svg lacks {want:?}: {maps:?}");
+    }
+}
+
+#[test]
+fn an_unknown_method_or_a_data_set_without_truth_is_a_clear_error() {
+    let dir = tempdir();
+    let root = dataset(&dir);
+    let o = iasm(&[
+        "compare",
+        "--dataset",
+        arg(&root),
+        "--methods",
+        "mvdr,beamformit",
+    ]);
+    assert_clear_error(&o, &["beamformit", "normmusic"]);
+    std::fs::remove_file(root.join("src_gt.txt")).unwrap();
+    let o = iasm(&[
+        "compare",
+        "--dataset",
+        arg(&root),
+        "--methods",
+        "mvdr",
+        "--runs",
+        "1",
+    ]);
+    assert_clear_error(&o, &["ground truth"]);
+}
