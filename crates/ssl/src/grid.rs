@@ -248,6 +248,20 @@ impl PairLags {
         }
     }
 
+    /// The number of bins of `stft`'s band, checked against the plan.
+    ///
+    /// # Panics
+    /// If `stft` was not made with the band the tables were built for.
+    pub fn band_of(&self, stft: &crate::stft::Spectrogram) -> usize {
+        let nb = stft.bins().len();
+        assert_eq!(
+            padded(nb),
+            self.n_bins,
+            "spectrogram band differs from the plan"
+        );
+        nb
+    }
+
     /// The cosine and sine table rows of pair `p`'s lags.
     pub fn rows(&self, p: usize) -> (&[f32], &[f32]) {
         let h = self.half[p];

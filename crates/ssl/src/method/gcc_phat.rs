@@ -19,7 +19,7 @@
 use std::ops::Range;
 use std::sync::Arc;
 
-use crate::grid::{PairLags, padded};
+use crate::grid::PairLags;
 use crate::localizer::zeroed;
 use crate::stft::Spectrogram;
 use crate::{Scratch, SpectrumEstimator};
@@ -49,12 +49,7 @@ impl SpectrumEstimator for GccPhat {
         scratch: &mut Scratch,
     ) {
         let l = &*self.lags;
-        let nb = stft.bins().len();
-        assert_eq!(
-            padded(nb),
-            l.n_bins,
-            "spectrogram band differs from the plan"
-        );
+        let nb = l.band_of(stft);
         let norm = 1.0 / (frames.len() * nb * l.pairs.len()) as f32;
         // PHAT factorises: X_i X_j^* / |X_i X_j^*| = (X_i / |X_i|) (X_j / |X_j|)^*, so each
         // channel's bins are normalised once per frame instead of once per pair.

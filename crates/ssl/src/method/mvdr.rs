@@ -27,7 +27,7 @@ use std::sync::Arc;
 
 use realfft::num_complex::Complex32;
 
-use crate::grid::{PairLags, padded};
+use crate::grid::PairLags;
 use crate::localizer::zeroed;
 use crate::stft::Spectrogram;
 use crate::{Scratch, SpectrumEstimator};
@@ -85,12 +85,7 @@ impl SpectrumEstimator for Mvdr {
         scratch: &mut Scratch,
     ) {
         let l = &*self.lags;
-        let nb = stft.bins().len();
-        assert_eq!(
-            padded(nb),
-            l.n_bins,
-            "spectrogram band differs from the plan"
-        );
+        let nb = l.band_of(stft);
         let n_ch = stft.num_channels();
         let Scratch {
             power,

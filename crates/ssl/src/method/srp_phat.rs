@@ -20,7 +20,7 @@ use std::sync::Arc;
 
 use realfft::num_complex::Complex32;
 
-use crate::grid::{PairLags, padded};
+use crate::grid::PairLags;
 use crate::localizer::zeroed;
 use crate::stft::Spectrogram;
 use crate::{Scratch, SpectrumEstimator};
@@ -50,12 +50,7 @@ impl SpectrumEstimator for SrpPhat {
         scratch: &mut Scratch,
     ) {
         let l = &*self.lags;
-        let nb = stft.bins().len();
-        assert_eq!(
-            padded(nb),
-            l.n_bins,
-            "spectrogram band differs from the plan"
-        );
+        let nb = l.band_of(stft);
         let norm = 1.0 / (nb * l.pairs.len()) as f32;
         let Scratch { cross, pairs, .. } = scratch;
         let cross = zeroed(cross, nb);
