@@ -364,7 +364,7 @@ fn lag_sums<K>(
     K: Fn(f32, f32, f32, f32, f32) -> f32 + Copy,
 {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+    if crate::localizer::avx2_fma() {
         // SAFETY: the CPU supports the features the function is compiled for.
         unsafe { lag_sums_avx2(x, y, z, cos, sin, out, kernel) };
         return;
@@ -509,7 +509,7 @@ mod tests {
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn the_avx2_lag_sums_equal_the_portable_ones() {
-        if !(is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")) {
+        if !crate::localizer::avx2_fma() {
             eprintln!("no AVX2+FMA here: only the portable kernel runs");
             return;
         }

@@ -61,6 +61,13 @@ pub struct Scratch {
     pub(crate) block: Vec<f32>,
 }
 
+/// Whether this CPU can run the AVX2+FMA builds of the hot kernels (the lag sums, the
+/// subspace steering), which are compiled beside the portable ones and chosen at run time.
+#[cfg(target_arch = "x86_64")]
+pub(crate) fn avx2_fma() -> bool {
+    std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+}
+
 /// Zero-filled `v` of length `n`, reusing its memory.
 pub(crate) fn zeroed<T: Copy + Default>(v: &mut Vec<T>, n: usize) -> &mut [T] {
     v.clear();

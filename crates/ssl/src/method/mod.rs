@@ -17,10 +17,31 @@ pub mod srp_phat;
 use std::ops::Range;
 use std::sync::Arc;
 
+use realfft::num_complex::Complex32;
+
 use crate::array::MicArray;
 use crate::config::{Method, SslConfig};
 use crate::grid::{DirectionGrid, PairLags};
 use crate::localizer::SpectrumEstimator;
+use crate::stft::Spectrogram;
+
+/// Writes the cross-spectrum of channels `i` and `j` summed over `frames`,
+/// `out[b] = sum_f X_i(f, b) X_j(f, b)^*` (MVDR before its smoothing, SRP-PHAT before its
+/// whitening).
+pub(crate) fn block_cross(
+    stft: &Spectrogram,
+    frames: Range<usize>,
+    (i, j): (usize, usize),
+    out: &mut [Complex32],
+) {
+    out.fill(Complex32::default());
+    for f in frames {
+        let (xi, xj) = (stft.frame(f, i), stft.frame(f, j));
+        for ((c, a), b) in out.iter_mut().zip(xi).zip(xj) {
+            *c += a * b.conj();
+        }
+    }
+}
 
 /// The estimator of `config.method` for `array`, `grid`, the band's `bins` of a
 /// `frame_len`-point FFT at `fs` (Hz).

@@ -318,7 +318,7 @@ fn steer_all(
     proj: &mut [f32],
 ) {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+    if crate::localizer::avx2_fma() {
         // SAFETY: the CPU supports the features the function is compiled for.
         unsafe { steer_all_avx2(t, vec_re, vec_im, mics, dim, groups, a_re, a_im, proj) };
         return;
@@ -444,6 +444,21 @@ mod tests {
         steer_all(
             &t, &vec_re, &vec_im, m, dim, ng, &mut a_re, &mut a_im, &mut proj,
         );
+        // The portable build is the same source compiled without AVX2 (no fused
+        // multiply-adds are formed): the same sums, bit for bit.
+        let mut portable = vec![0.0; ng * nd_pad];
+        steer_all_portable(
+            &t,
+            &vec_re,
+            &vec_im,
+            m,
+            dim,
+            ng,
+            &mut a_re,
+            &mut a_im,
+            &mut portable,
+        );
+        assert!(proj == portable, "dispatched and portable kernels differ");
         let pos = array.positions();
         let centroid: [f64; 3] =
             std::array::from_fn(|a| pos.iter().map(|p| p[a]).sum::<f64>() / m as f64);

@@ -115,13 +115,7 @@ impl SpectrumEstimator for Mvdr {
         let smooth = zeroed(smooth, nb);
         // Bins past the band keep num = 0 and so add nothing.
         let coefficients = |_, (i, j), gr: &mut [f32], gi: &mut [f32], num: &mut [f32]| {
-            cross.fill(Complex32::default());
-            for f in frames.clone() {
-                let (xi, xj) = (stft.frame(f, i), stft.frame(f, j));
-                for b in 0..nb {
-                    cross[b] += xi[b] * xj[b].conj();
-                }
-            }
+            super::block_cross(stft, frames.clone(), (i, j), cross);
             box_smooth(cross, self.smoothing, smooth, prefix_complex);
             let (pi, pj) = (&power[i * nb..(i + 1) * nb], &power[j * nb..(j + 1) * nb]);
             for b in 0..nb {

@@ -55,14 +55,8 @@ impl SpectrumEstimator for SrpPhat {
         let Scratch { cross, pairs, .. } = scratch;
         let cross = zeroed(cross, nb);
         // Bins past the band stay 0 and so add nothing.
-        let coefficients = |_, (i, j), gr: &mut [f32], gi: &mut [f32], _: &mut [f32]| {
-            cross.fill(Complex32::default());
-            for f in frames.clone() {
-                let (xi, xj) = (stft.frame(f, i), stft.frame(f, j));
-                for ((c, a), b) in cross.iter_mut().zip(xi).zip(xj) {
-                    *c += a * b.conj();
-                }
-            }
+        let coefficients = |_, pair, gr: &mut [f32], gi: &mut [f32], _: &mut [f32]| {
+            super::block_cross(stft, frames.clone(), pair, cross);
             for (b, c) in cross.iter().enumerate() {
                 let m = c.norm();
                 // A bin with no energy carries no phase: it votes for nothing.
