@@ -12,26 +12,43 @@ fn dataset(dir: &tempfile::TempDir) -> std::path::PathBuf {
     root
 }
 
+/// `iasm compare` on `root` with N = 2, writing its report folder to `out`.
+fn compare(
+    root: &std::path::Path,
+    out: &std::path::Path,
+    methods: &str,
+    runs: &str,
+    more: &[&str],
+) -> std::process::Output {
+    let mut args = vec![
+        "compare",
+        "--dataset",
+        arg(root),
+        "--methods",
+        methods,
+        "--runs",
+        runs,
+        "--num",
+        "2",
+        "--out",
+        arg(out),
+    ];
+    args.extend_from_slice(more);
+    iasm(&args)
+}
+
 #[test]
 fn compare_reports_every_method_and_the_published_table() {
     let dir = tempdir();
     let root = dataset(&dir);
     let out = path(&dir, "report");
-    let o = iasm(&[
-        "compare",
-        "--dataset",
-        arg(&root),
-        "--methods",
+    let r = json(&compare(
+        &root,
+        &out,
         "gcc-phat,normmusic",
-        "--runs",
         "3",
-        "--num",
-        "2",
-        "--json",
-        "--out",
-        arg(&out),
-    ]);
-    let r = json(&o);
+        &["--json"],
+    ));
     assert_eq!(r["schema_version"], 1);
     assert_eq!(r["recordings"], 20);
     let rows = r["rows"].as_array().unwrap();
@@ -92,19 +109,7 @@ fn the_figures_have_titles_axes_in_units_and_legends() {
     let dir = tempdir();
     let root = dataset(&dir);
     let out = path(&dir, "report");
-    let o = iasm(&[
-        "compare",
-        "--dataset",
-        arg(&root),
-        "--methods",
-        "mvdr",
-        "--runs",
-        "2",
-        "--num",
-        "2",
-        "--out",
-        arg(&out),
-    ]);
+    let o = compare(&root, &out, "mvdr", "2", &[]);
     assert!(o.status.success(), "{}", show(&o));
     let has = |texts: &[String], want: &str| texts.iter().any(|t| t.contains(want));
     let ospa = svg_texts(&out.join("ospa.svg"));

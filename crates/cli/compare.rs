@@ -15,8 +15,10 @@ use asm::Variant;
 use serde::Serialize;
 use ssl::Method;
 
-use crate::dataset::{Dataset, read_table};
-use crate::pipeline::{Survey, SurveyInputs, VariantStats, doa_table, evaluate, localise_files};
+use crate::dataset::{Dataset, Table, read_table};
+use crate::pipeline::{
+    Survey, SurveyInputs, VariantStats, doa_table, evaluate, first_columns, localise_files,
+};
 use crate::score::{Diagnostics, DoaScore, diagnose, score_doas};
 use crate::settings::Settings;
 
@@ -110,7 +112,8 @@ pub fn parse_methods(s: &str) -> Result<Vec<Method>> {
 }
 
 /// Runs the comparison on the data set at `root` (published layout, with ground truth).
-/// `progress` is told each stage as it starts.
+/// `progress(stage, stages, what)` is told each stage as it starts: localising and mapping
+/// per method, mapping per published table.
 ///
 /// # Errors
 /// A data set without recordings, poses or truth, or any failure of the pipeline, named.
@@ -118,7 +121,7 @@ pub fn compare(
     root: &Path,
     settings: &Settings,
     opts: &CompareOptions,
-    progress: &dyn Fn(&str),
+    progress: &dyn Fn(usize, usize, &str),
 ) -> Result<Report> {
     ensure!(opts.runs > 0, "--runs must be at least 1");
     let ds = Dataset::open(root)?;
@@ -133,10 +136,28 @@ pub fn compare(
     };
     let n = settings.ssl.num_peaks;
     let array = settings.mic_array()?;
-    let mut rows = Vec::new();
+    let stages = 2 * opts.methods.len() + ds.doa_tables.len();
+    let mut stage = 0;
+    let mut tell = |what: String| {
+        stage += 1;
+        progress(stage, stages, &what);
+    };
+    // The map, poses and truth are read once, with the first DoA table; every other row
+    // swaps its DoAs in.
     let mut base: Option<Survey> = None;
+    let mut survey = |table: Table, source: String, s: &Settings| -> Result<Survey> {
+        match &base {
+            Some(b) => b.clone().with_doas(table, source),
+            None => {
+                let first = Survey::load_with_doas(&inputs, s, Some((table, source)))?;
+                base = Some(first.clone());
+                Ok(first)
+            }
+        }
+    };
+    let mut rows = Vec::new();
     for &method in &opts.methods {
-        progress(&format!(
+        tell(format!(
             "{method}: localising {} recordings",
             ds.audio.len()
         ));
@@ -145,8 +166,8 @@ pub fn compare(
         let files = localise_files(&ds.audio, &array, &s.ssl)?;
         let ms = 1e3 * files.iter().map(|f| f.seconds).sum::<f64>() / files.len() as f64;
         let table = doa_table(files.iter().map(|f| &f.doas[..]), n);
-        let survey = Survey::load_with_doas(&inputs, &s, Some((table, format!("ssl:{method}"))))?;
-        progress(&format!("{method}: {} maps", opts.runs));
+        let survey = survey(table, format!("ssl:{method}"), &s)?;
+        tell(format!("{method}: {} maps", opts.runs));
         rows.push(row(
             &survey,
             method.name().to_owned(),
@@ -155,21 +176,16 @@ pub fn compare(
             &s,
             opts,
         )?);
-        base.get_or_insert(survey);
     }
     for t in &ds.doa_tables {
         let name = t.file_name().map_or_else(
             || t.display().to_string(),
             |f| f.to_string_lossy().into_owned(),
         );
-        progress(&format!("{name}: {} maps", opts.runs));
-        let mut table = read_table(t)?;
-        table.iter_mut().for_each(|r| r.truncate(n));
-        let survey =
-            Survey::load_with_doas(&inputs, settings, Some((table, t.display().to_string())))
-                .with_context(|| format!("published table {}", t.display()))?;
+        tell(format!("{name}: {} maps", opts.runs));
+        let table = first_columns(read_table(t)?, n, t);
+        let survey = survey(table, t.display().to_string(), settings)?;
         rows.push(row(&survey, name, "published", None, settings, opts)?);
-        base.get_or_insert(survey);
     }
     let base = base.context("nothing to compare: no method and no published table")?;
     Ok(Report {
@@ -179,7 +195,7 @@ pub fn compare(
         num_doas: n,
         runs: opts.runs,
         seed0: opts.seed0,
-        truth: base.truth.clone().unwrap_or_default(),
+        truth: base.truth.unwrap_or_default(),
         path: base.poses.iter().map(|p| [p.x, p.y]).collect(),
         rows,
     })

@@ -7,6 +7,7 @@
 use std::path::Path;
 
 use anyhow::{Context, Result};
+use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use crate::compare::Report;
@@ -30,6 +31,45 @@ fn colour(i: usize) -> RGBColor {
 /// A plotters error as ours (its drawing errors are `Debug` only).
 fn fail<E: std::fmt::Debug>(e: E) -> anyhow::Error {
     anyhow::anyhow!("drawing failed: {e:?}")
+}
+
+/// Draws a `size`-pixel figure on a white ground with `draw` and writes it to `path` whole
+/// (a temporary file, then a rename).
+fn write_svg(
+    path: &Path,
+    size: (u32, u32),
+    draw: impl FnOnce(&DrawingArea<SVGBackend<'_>, Shift>) -> Result<()>,
+) -> Result<()> {
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
+        root.fill(&WHITE).map_err(fail)?;
+        draw(&root)?;
+        root.present().map_err(fail)?;
+    }
+    crate::output::write_atomic(path, svg.as_bytes())
+        .with_context(|| format!("figure {}", path.display()))
+}
+
+/// Draws the legend of `chart`'s labelled series at `pos` in a `font_px` font, on a light,
+/// framed box.
+fn legend<'a, DB, CT>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    pos: SeriesLabelPosition,
+    font_px: u32,
+) -> Result<()>
+where
+    DB: DrawingBackend + 'a,
+    CT: CoordTranslate,
+{
+    chart
+        .configure_series_labels()
+        .position(pos)
+        .label_font(("sans-serif", font_px))
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()
+        .map_err(fail)
 }
 
 /// Writes all three figures of `report` into `dir`: `ospa.svg`, `error_by_distance.svg`,
@@ -56,11 +96,8 @@ pub fn ospa_boxes(report: &Report, path: &Path) -> Result<()> {
         .fold(0.1f64, f64::max) as f32
         * 1.1;
     let width = (160 * names.len() as u32).max(480);
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, (width, 420)).into_drawing_area();
-        root.fill(&WHITE).map_err(fail)?;
-        let mut chart = ChartBuilder::on(&root)
+    write_svg(path, (width, 420), |root| {
+        let mut chart = ChartBuilder::on(root)
             .caption(
                 format!("Map OSPA per DoA source ({} runs, CA)", report.runs),
                 ("sans-serif", 20),
@@ -90,17 +127,8 @@ pub fn ospa_boxes(report: &Report, path: &Path) -> Result<()> {
                 .label(format!("{} (mean {:.3} m)", r.name, r.ospa.mean))
                 .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 15, y + 5)], c.filled()));
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()
-            .map_err(fail)?;
-        root.present().map_err(fail)?;
-    }
-    crate::output::write_atomic(path, svg.as_bytes())
-        .with_context(|| format!("figure {}", path.display()))
+        legend(&mut chart, SeriesLabelPosition::UpperRight, 12)
+    })
 }
 
 /// Mean absolute DoA error (degrees) by the source's distance from the robot, one line per
@@ -121,12 +149,9 @@ pub fn error_by_distance(report: &Report, path: &Path) -> Result<()> {
         .filter(|v| v.is_finite())
         .fold(1.0f64, f64::max)
         * 1.15;
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, (640, 420)).into_drawing_area();
-        root.fill(&WHITE).map_err(fail)?;
+    write_svg(path, (640, 420), |root| {
         let last = bands.len().saturating_sub(1) as f64;
-        let mut chart = ChartBuilder::on(&root)
+        let mut chart = ChartBuilder::on(root)
             .caption(
                 format!(
                     "DoA error by source distance (DoAs within {} deg)",
@@ -176,17 +201,8 @@ pub fn error_by_distance(report: &Report, path: &Path) -> Result<()> {
                 .draw_series(pts.iter().map(|&p| Circle::new(p, 3, c.filled())))
                 .map_err(fail)?;
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()
-            .map_err(fail)?;
-        root.present().map_err(fail)?;
-    }
-    crate::output::write_atomic(path, svg.as_bytes())
-        .with_context(|| format!("figure {}", path.display()))
+        legend(&mut chart, SeriesLabelPosition::UpperRight, 12)
+    })
 }
 
 /// Every row's first-seed map beside the others: true sources, the stops, the sources
@@ -224,14 +240,8 @@ pub fn maps(report: &Report, path: &Path) -> Result<()> {
     let panel_w = 420u32;
     let panel_h =
         ((f64::from(panel_w) - 70.0) * (y1 - y0) / (x1 - x0) + 90.0).clamp(200.0, 900.0) as u32;
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(
-            &mut svg,
-            (panel_w * cols as u32, panel_h * rows as u32 + 40),
-        )
-        .into_drawing_area();
-        root.fill(&WHITE).map_err(fail)?;
+    let size = (panel_w * cols as u32, panel_h * rows as u32 + 40);
+    write_svg(path, size, |root| {
         let (title, body) = root.split_vertically(40);
         title
             .titled(
@@ -303,17 +313,8 @@ pub fn maps(report: &Report, path: &Path) -> Result<()> {
                 .map_err(fail)?
                 .label("source found")
                 .legend(move |(x, y)| Circle::new((x + 7, y), 5, c.stroke_width(2)));
-            chart
-                .configure_series_labels()
-                .position(SeriesLabelPosition::LowerRight)
-                .label_font(("sans-serif", 11))
-                .background_style(WHITE.mix(0.8))
-                .border_style(BLACK)
-                .draw()
-                .map_err(fail)?;
+            legend(&mut chart, SeriesLabelPosition::LowerRight, 11)?;
         }
-        root.present().map_err(fail)?;
-    }
-    crate::output::write_atomic(path, svg.as_bytes())
-        .with_context(|| format!("figure {}", path.display()))
+        Ok(())
+    })
 }

@@ -41,7 +41,9 @@ pub struct FileDoas {
     pub file: PathBuf,
     /// Strongest first.
     pub doas: Vec<Doa>,
-    /// The time it took to read and localise it on one thread (s).
+    /// The time it took to read and localise it on one thread (s). Not serialised: the
+    /// DoA output stays the same from run to run.
+    #[serde(skip)]
     pub seconds: f64,
 }
 
@@ -198,19 +200,33 @@ impl Survey {
                 format!("ssl:{}", settings.ssl.method),
             )
         };
-        ensure!(
-            doas_deg.len() == poses.len(),
-            "{} rows of DoAs ({doa_source}) but {} poses ({}): they must match one to one",
-            doas_deg.len(),
-            poses.len(),
-            pose_path.display()
-        );
-        Ok(Self {
+        Self {
             map,
             poses,
-            doas_deg,
+            doas_deg: Table::new(),
             truth,
+            doa_source: String::new(),
+        }
+        .with_doas(doas_deg, doa_source)
+        .with_context(|| format!("poses from {}", pose_path.display()))
+    }
+
+    /// The same survey heard through other DoAs (a table, and where it came from): several
+    /// DoA sources compared on one map, poses and truth, read once.
+    ///
+    /// # Errors
+    /// If the table has not one row per pose.
+    pub fn with_doas(self, doas_deg: Table, doa_source: String) -> Result<Self> {
+        ensure!(
+            doas_deg.len() == self.poses.len(),
+            "{} rows of DoAs ({doa_source}) but {} poses: they must match one to one",
+            doas_deg.len(),
+            self.poses.len()
+        );
+        Ok(Self {
+            doas_deg,
             doa_source,
+            ..self
         })
     }
 
@@ -245,7 +261,7 @@ impl Survey {
 
 /// The first `n` columns of a DoA table (ranked tables list the strongest first, and are
 /// often wider than the N a user maps with), saying once on stderr when it cuts.
-fn first_columns(mut table: Table, n: usize, path: &std::path::Path) -> Table {
+pub fn first_columns(mut table: Table, n: usize, path: &std::path::Path) -> Table {
     let widest = table.iter().map(Vec::len).max().unwrap_or(0);
     if widest > n {
         eprintln!(

@@ -20,12 +20,10 @@ pub fn run(a: &CompareArgs) -> Result<Outcome> {
         ospa_p: a.report.ospa_p,
     };
     let t0 = std::time::Instant::now();
-    let stages = opts.methods.len() as u64;
-    let bar = crate::progress(stages, "compare");
-    let report = compare(&a.dataset, &settings, &opts, &|stage| {
-        bar.set_message(stage.to_owned());
+    // One line per stage; the stages' own progress bars (localising, mapping) show the rest.
+    let report = compare(&a.dataset, &settings, &opts, &|stage, stages, what| {
+        eprintln!("[{stage}/{stages}] {what}");
     })?;
-    bar.finish_and_clear();
     let secs = t0.elapsed().as_secs_f64();
     if a.report.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
