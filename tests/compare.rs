@@ -93,17 +93,6 @@ fn compare_reports_every_method_and_the_published_table() {
 }
 
 /// The text elements of an SVG file, in order.
-fn svg_texts(path: &std::path::Path) -> Vec<String> {
-    let s = std::fs::read_to_string(path).unwrap();
-    s.split("<text")
-        .skip(1)
-        .filter_map(|t| {
-            let body = &t[t.find('>')? + 1..];
-            Some(body[..body.find("</text>")?].trim().to_owned())
-        })
-        .collect()
-}
-
 #[test]
 fn the_figures_have_titles_axes_in_units_and_legends() {
     let dir = tempdir();

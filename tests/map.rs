@@ -54,6 +54,92 @@ fn map_from_a_doa_table_finds_every_source() {
     assert_eq!(saved, v);
 }
 
+/// The numeric tick labels of an SVG figure.
+fn ticks(texts: &[String]) -> Vec<f64> {
+    texts.iter().filter_map(|t| t.parse().ok()).collect()
+}
+
+#[test]
+fn the_svg_map_has_axes_in_metres_a_legend_and_a_title_and_is_cropped_to_the_scene() {
+    let dir = tempdir();
+    let root = dataset(&dir);
+    let svg = path(&dir, "map.svg");
+    let full = path(&dir, "full.SVG");
+    let doas = root.join("doas.csv");
+    let map = |out: &Path, extra: &[&str]| {
+        let mut a = vec![
+            "map",
+            "--dataset",
+            arg(&root),
+            "--doas",
+            arg(&doas),
+            "--num",
+            "3",
+            "--png",
+            arg(out),
+        ];
+        a.extend_from_slice(extra);
+        let o = iasm(&a);
+        assert!(o.status.success(), "{}", show(&o));
+    };
+    map(&svg, &[]);
+    map(&full, &["--full-map"]);
+    let texts = svg_texts(&svg);
+    let has = |want: &str| texts.iter().any(|t| t.contains(want));
+    for want in [
+        "x (m)",
+        "y (m)",
+        "true source",
+        "source found",
+        "2-sigma ellipse",
+        "trajectory",
+        "stop (heading tick)",
+        "particles",
+    ] {
+        assert!(has(want), "map.svg lacks {want:?}: {texts:?}");
+    }
+    // The title: data set, DoA source, variant, sources found, OSPA.
+    let title = texts
+        .iter()
+        .find(|t| t.starts_with("ds: doas.csv, ca, 3 sources found, OSPA 0."))
+        .unwrap_or_else(|| panic!("no title in {texts:?}"));
+    assert!(title.ends_with(" m"), "{title}");
+    // The scene spans x in [0, 5.7] and y in [-1.2, 2]; the occupancy map x in [-1, 7]
+    // and y in [-3, 3]. Cropped, the axes stay within the scene and its 0.8 m margin;
+    // with --full-map they reach the map's edges.
+    let (crop, whole) = (ticks(&texts), ticks(&svg_texts(&full)));
+    let span = |v: &[f64]| {
+        (
+            v.iter().copied().fold(f64::INFINITY, f64::min),
+            v.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+        )
+    };
+    let ((c0, c1), (w0, w1)) = (span(&crop), span(&whole));
+    assert!(
+        c0 >= -2.0 - 1e-9 && c1 <= 6.5 + 1e-9,
+        "cropped ticks {crop:?}"
+    );
+    assert!(w0 <= -2.5 && w1 >= 6.5, "full-map ticks {whole:?}");
+}
+
+#[test]
+fn a_figure_of_an_unknown_format_is_refused_before_the_work() {
+    let dir = tempdir();
+    let root = dataset(&dir);
+    let o = iasm(&[
+        "map",
+        "--dataset",
+        arg(&root),
+        "--doas",
+        arg(&root.join("doas.csv")),
+        "--num",
+        "3",
+        "--png",
+        arg(&path(&dir, "map.jpg")),
+    ]);
+    assert_clear_error(&o, &["map.jpg", ".png or .svg"]);
+}
+
 #[test]
 fn map_from_raw_audio_finds_the_sources() {
     // Each stop hears the two sources as plane waves from their bearings.

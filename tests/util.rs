@@ -171,3 +171,15 @@ pub fn audio_dataset(root: &Path, truth: &[[f64; 2]]) {
         );
     }
 }
+
+/// Every text element of an SVG file, trimmed.
+pub fn svg_texts(path: &Path) -> Vec<String> {
+    let s = std::fs::read_to_string(path).unwrap();
+    s.split("<text")
+        .skip(1)
+        .filter_map(|t| {
+            let body = &t[t.find('>')? + 1..];
+            Some(body[..body.find("</text>")?].trim().to_owned())
+        })
+        .collect()
+}

@@ -32,9 +32,12 @@ pub enum Command {
         /// Seed of the scene's signals, noise and particle filter.
         #[arg(long, default_value_t = 4)]
         seed: u64,
-        /// Where to draw the map.
+        /// Where to draw the map: PNG or SVG by the file's extension.
         #[arg(long, default_value = "iasm-demo.png")]
         png: PathBuf,
+        /// How the map is drawn.
+        #[command(flatten)]
+        figure: FigureArgs,
     },
     /// Directions of arrival from multichannel WAV files (or a whole data set).
     Ssl(SslArgs),
@@ -286,12 +289,29 @@ pub struct MapArgs {
     /// Write the sources as CSV here.
     #[arg(long, value_name = "FILE")]
     pub csv: Option<PathBuf>,
-    /// Draw the map as a PNG here.
-    #[arg(long, value_name = "FILE")]
+    /// Draw the map here: PNG or SVG by the file's extension (axes in metres, legend, title).
+    #[arg(long, value_name = "FILE", visible_alias = "figure")]
     pub png: Option<PathBuf>,
+    /// How the map is drawn.
+    #[command(flatten)]
+    pub figure: FigureArgs,
     /// Output and metric.
     #[command(flatten)]
     pub report: ReportArgs,
+}
+
+/// How a map figure is drawn.
+#[derive(Debug, Clone, Copy, Args)]
+pub struct FigureArgs {
+    /// Draw the whole occupancy map [default: crop to the trajectory and the sources, with a
+    /// margin].
+    #[arg(long)]
+    pub full_map: bool,
+    /// Width of the figure in pixels (the height follows the region's aspect; text scales
+    /// with it: 2000 for print at 200 dpi and 10 inches).
+    #[arg(long, value_name = "PX", default_value_t = 1000,
+          value_parser = clap::value_parser!(u32).range(200..=8000))]
+    pub figure_width: u32,
 }
 
 /// `iasm eval`.

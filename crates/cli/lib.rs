@@ -11,8 +11,7 @@
 //! - [`suite`]: the synthetic-room regression suite.
 //! - [`score`]: the DoA score against known sources.
 //! - [`compare`]: every SSL method side by side on one data set, DoAs to maps.
-//! - [`figure`]: the comparison's figures (SVG).
-//! - [`render`]: the map picture.
+//! - [`figure`]: every figure (the map picture, the comparison's plots), PNG or SVG.
 //! - [`output`]: files and folders written whole (temporary name, then rename).
 //! - [`args`]: the command line, and its conversion into settings and inputs.
 //!
@@ -26,7 +25,6 @@ pub mod dataset;
 pub mod figure;
 pub mod output;
 pub mod pipeline;
-pub mod render;
 pub mod scenes;
 pub mod score;
 pub mod settings;
@@ -51,7 +49,7 @@ pub fn run(cli: &args::Cli) -> anyhow::Result<Outcome> {
             set_threads(a.threads);
             cmd::ssl::run(a)
         }
-        args::Command::Demo { seed, png } => cmd::demo::run(*seed, png),
+        args::Command::Demo { seed, png, figure } => cmd::demo::run(*seed, png, figure),
         args::Command::Map(a) => cmd::map::run(a),
         args::Command::Simulate {
             scene,

@@ -47,6 +47,17 @@ pub enum MapError {
         #[source]
         source: std::io::Error,
     },
+    /// The image a map YAML names could not be read.
+    #[error("{yaml}: the image it names, {image}, could not be read")]
+    Image {
+        /// The YAML.
+        yaml: PathBuf,
+        /// The image, resolved against the YAML's folder.
+        image: PathBuf,
+        /// What the operating system said.
+        #[source]
+        source: std::io::Error,
+    },
     /// The YAML metadata is malformed or lacks a key.
     #[error("{path}: {message}")]
     Yaml {

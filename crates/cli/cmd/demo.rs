@@ -9,6 +9,8 @@ use anyhow::Result;
 use ssl::Method;
 
 use crate::Outcome;
+use crate::args::FigureArgs;
+use crate::figure::MapFigure;
 use crate::pipeline::{SceneRun, Simulated, scene_settings};
 use crate::scenes::{parse_scene, prepare};
 use crate::settings::Settings;
@@ -35,7 +37,8 @@ pub fn run_scene(seed: u64, method: Method) -> Result<(Simulated, SceneRun)> {
 ///
 /// # Errors
 /// If the picture cannot be written.
-pub fn run(seed: u64, png: &Path) -> Result<Outcome> {
+pub fn run(seed: u64, png: &Path, figure: &FigureArgs) -> Result<Outcome> {
+    crate::figure::Format::of(png)?;
     let t0 = std::time::Instant::now();
     let (sim, run) = run_scene(seed, Method::Mvdr)?;
     let [lx, ly, lz] = sim.scene.room.dims();
@@ -82,7 +85,27 @@ pub fn run(seed: u64, png: &Path) -> Result<Outcome> {
         run.ospa.localization,
         run.ospa.cardinality
     );
-    crate::render::write_png(png, &sim.map, sim.poses(), &run.map, Some(&sim.truth))?;
+    crate::figure::map(
+        png,
+        &MapFigure {
+            title: format!(
+                "iasm demo (seed {seed}): mvdr, {}, {} of {} sources found, OSPA {:.3} m",
+                scene_settings(&Settings::default(), Method::Mvdr, N)
+                    .iasm
+                    .variant
+                    .name(),
+                run.map.sources.len(),
+                sim.truth.len(),
+                run.ospa.total
+            ),
+            map: &sim.map,
+            poses: sim.poses(),
+            result: &run.map,
+            truth: Some(&sim.truth),
+            full_map: figure.full_map,
+            width: figure.figure_width,
+        },
+    )?;
     println!("map drawn to {}", png.display());
     Ok(Outcome::Success)
 }

@@ -11,6 +11,7 @@ use ssl::SslConfig;
 
 use crate::Outcome;
 use crate::args::MapArgs;
+use crate::figure::MapFigure;
 use crate::pipeline::Survey;
 use crate::settings::DEFAULT_ARRAY;
 
@@ -49,6 +50,9 @@ struct OspaReport {
 /// # Errors
 /// Bad survey or settings, or files that cannot be written.
 pub fn run(a: &MapArgs) -> Result<Outcome> {
+    if let Some(png) = &a.png {
+        crate::figure::Format::of(png)?;
+    }
     let mut settings = a.input.settings()?;
     if let Some(v) = a.variant {
         settings.iasm.variant = v;
@@ -86,12 +90,39 @@ pub fn run(a: &MapArgs) -> Result<Outcome> {
         write_sources_csv(csv, &result)?;
     }
     if let Some(png) = &a.png {
-        crate::render::write_png(
+        let name = |p: &Path| {
+            p.file_name().map_or_else(
+                || p.display().to_string(),
+                |n| n.to_string_lossy().into_owned(),
+            )
+        };
+        let inputs = a.input.survey_inputs();
+        let data = inputs
+            .dataset
+            .as_deref()
+            .or(inputs.poses.as_deref())
+            .map_or_else(|| "survey".to_owned(), name);
+        let doas = survey
+            .doa_source
+            .strip_prefix("ssl:")
+            .map_or_else(|| name(Path::new(&survey.doa_source)), str::to_owned);
+        let ospa = o.map_or(String::new(), |o| format!(", OSPA {:.3} m", o.value.total));
+        let title = format!(
+            "{data}: {doas}, {}, {} sources found{ospa}",
+            config.variant.name(),
+            result.sources.len()
+        );
+        crate::figure::map(
             png,
-            &survey.map,
-            &survey.poses,
-            &result,
-            survey.truth.as_deref(),
+            &MapFigure {
+                title,
+                map: &survey.map,
+                poses: &survey.poses,
+                result: &result,
+                truth: survey.truth.as_deref(),
+                full_map: a.figure.full_map,
+                width: a.figure.figure_width,
+            },
         )?;
     }
     if a.report.json {

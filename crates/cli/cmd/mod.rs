@@ -1,6 +1,6 @@
 //! The commands: each a thin user of the library modules ([`crate::pipeline`],
 //! [`crate::settings`], [`crate::dataset`], [`crate::scenes`], [`crate::suite`],
-//! [`crate::score`], [`crate::render`], [`crate::compare`], [`crate::figure`]) that parses nothing and prints its report. No
+//! [`crate::score`], [`crate::compare`], [`crate::figure`]) that parses nothing and prints its report. No
 //! command imports another.
 
 pub mod compare;

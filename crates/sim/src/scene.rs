@@ -45,6 +45,17 @@ fn invalid(field: impl Into<String>, message: impl Into<String>) -> SimError {
 
 /// The most stops a scene may have (each is rendered: a bound on work and memory).
 pub const MAX_STOPS: usize = 10_000;
+/// The most samples of source signal a scene may hold (all sources, one clip each: 256 MiB).
+pub const MAX_SIGNAL_SAMPLES: usize = 1 << 25;
+/// The highest sample rate a scene may ask for (Hz).
+pub const MAX_FS: u32 = 384_000;
+/// The longest clip per stop (s).
+pub const MAX_CLIP_S: f64 = 60.0;
+/// The longest reverberation time (s): the most reverberant spaces measured are below it.
+pub const MAX_RT60_S: f64 = 20.0;
+/// The most image sources the RT60 calibration or a response of `rir_s` may enumerate
+/// (their cost grows with the cube of the decay's length over the room's size).
+pub const MAX_CALIBRATION_IMAGES: f64 = 5e7;
 
 /// A scene as written in its TOML file.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
@@ -227,22 +238,66 @@ impl Scene {
         self,
         preset: impl Fn(&str) -> Option<Vec<[f64; 3]>>,
     ) -> Result<PreparedScene, SimError> {
-        if self.fs < 1000 {
-            return Err(invalid("fs", format!("{} Hz is too low", self.fs)));
-        }
-        if !(self.clip_s.is_finite() && self.clip_s > 0.0) {
+        if !(1000..=MAX_FS).contains(&self.fs) {
             return Err(invalid(
-                "clip_s",
-                format!("{} s is not a positive duration", self.clip_s),
+                "fs",
+                format!("{} Hz is outside [1000, {MAX_FS}] Hz", self.fs),
             ));
         }
-        if !(self.speed_of_sound.is_finite() && self.speed_of_sound > 0.0) {
+        if !(self.clip_s.is_finite() && self.clip_s > 0.0 && self.clip_s <= MAX_CLIP_S) {
+            return Err(invalid(
+                "clip_s",
+                format!("{} s is not a duration in (0, {MAX_CLIP_S}] s", self.clip_s),
+            ));
+        }
+        if !(self.speed_of_sound.is_finite() && (100.0..=2000.0).contains(&self.speed_of_sound)) {
             return Err(invalid(
                 "speed_of_sound",
-                format!("{} m/s is not positive", self.speed_of_sound),
+                format!("{} m/s is outside [100, 2000] m/s", self.speed_of_sound),
             ));
         }
         let r = &self.room;
+        // Image sources within `reach` metres of travel (a sphere over the room's volume).
+        let volume: f64 = r.dims.iter().product();
+        let images = |reach: f64| 4.0 / 3.0 * std::f64::consts::PI * reach.powi(3) / volume;
+        if let Some(t) = self.rir_s {
+            if !(t.is_finite() && t > 0.0 && t <= MAX_RT60_S) {
+                return Err(invalid(
+                    "rir_s",
+                    format!("{t} s is not a length in (0, {MAX_RT60_S}] s"),
+                ));
+            }
+            let n = images(t * self.speed_of_sound);
+            if self.max_order.is_none() && volume > 0.0 && n > MAX_CALIBRATION_IMAGES {
+                return Err(invalid(
+                    "rir_s",
+                    format!(
+                        "{t} s in a room of {volume:.3} m^3 needs {n:.1e} image sources \
+                         (at most {MAX_CALIBRATION_IMAGES:.0e}); give a shorter rir_s or a max_order"
+                    ),
+                ));
+            }
+        }
+        if let Some(t) = r.rt60 {
+            if !(t.is_finite() && t > 0.0 && t <= MAX_RT60_S) {
+                return Err(invalid(
+                    "room.rt60",
+                    format!("{t} s is not a reverberation time in (0, {MAX_RT60_S}] s"),
+                ));
+            }
+            // The calibration enumerates every image within 1.2 RT60 of travel.
+            let images = images(1.2 * t * self.speed_of_sound);
+            if volume > 0.0 && images > MAX_CALIBRATION_IMAGES {
+                return Err(invalid(
+                    "room.rt60",
+                    format!(
+                        "{t} s in a room of {volume:.3} m^3 needs {images:.1e} image sources to \
+                         calibrate (at most {MAX_CALIBRATION_IMAGES:.0e}); give a shorter rt60 or \
+                         `absorption`"
+                    ),
+                ));
+            }
+        }
         let room = match (r.rt60, r.absorption) {
             (Some(t), None) => Room::with_rt60(r.dims, t, self.speed_of_sound)?,
             (None, Some(a)) => Room::new(r.dims, a)?,
@@ -288,6 +343,18 @@ impl Scene {
             }
         }
         let n = self.clip_samples();
+        if n.saturating_mul(self.sources.len()) > MAX_SIGNAL_SAMPLES {
+            return Err(invalid(
+                "clip_s",
+                format!(
+                    "{} sources of {n} samples each ({} s at {} Hz) exceed the simulator's \
+                     {MAX_SIGNAL_SAMPLES} samples of source signal",
+                    self.sources.len(),
+                    self.clip_s,
+                    self.fs
+                ),
+            ));
+        }
         let mut rng = StdRng::seed_from_u64(self.seed);
         let signals = self
             .sources
@@ -729,6 +796,25 @@ spacing = 0.5
                 "spacing = 0.5",
                 "spacing = 0.00001",
                 &["trajectory.spacing", "stops"],
+            ),
+            // Sizes a mutated scene once asked for (issue 13's mutation test): each is
+            // refused before anything is allocated or enumerated.
+            (
+                "absorption = [0.5, 0.5, 0.5, 0.5, 0.5, 0.5]",
+                "rt60 = 1600000000000.0",
+                &["room.rt60", "(0, 20] s"],
+            ),
+            (
+                "absorption = [0.5, 0.5, 0.5, 0.5, 0.5, 0.5]",
+                "rt60 = 12.0",
+                &["room.rt60", "image sources"],
+            ),
+            ("clip_s = 0.2", "clip_s = 1e9", &["clip_s", "(0, 60] s"]),
+            ("fs = 8000", "fs = 4000000000", &["fs", "384000"]),
+            (
+                "fs = 8000",
+                "fs = 384000\nrir_s = 19.0",
+                &["rir_s", "image sources"],
             ),
         ] {
             let e = refusal(&SCENE.replace(from, to), here);

@@ -100,7 +100,13 @@ pub fn read_wav(path: &Path) -> Result<Audio> {
             path: path.to_owned(),
         });
     }
-    let frames = declared as usize / n_ch;
+    // A header may declare more samples than the file holds (a recorder still writing, or a
+    // damaged header declaring gigabytes): reserve only what the file can hold, and let the
+    // read below find the truncation.
+    let sample_bytes = u64::from(spec.bits_per_sample.div_ceil(8).max(1));
+    let file_len = std::fs::metadata(path).map_or(u64::MAX, |m| m.len());
+    let fits = (file_len / sample_bytes).min(declared);
+    let frames = usize::try_from(fits).unwrap_or(usize::MAX) / n_ch;
     let mut channels = vec![Vec::with_capacity(frames); n_ch];
     let truncated = |read| Error::Truncated {
         path: path.to_owned(),
@@ -113,7 +119,7 @@ pub fn read_wav(path: &Path) -> Result<Audio> {
         // The two common formats are decoded in bulk: hound's per-sample iterator costs more
         // than all of the localisation that follows.
         let width = if int16 { 2 } else { 4 };
-        let mut bytes = Vec::with_capacity(declared as usize * width);
+        let mut bytes = Vec::with_capacity(usize::try_from(fits).unwrap_or(0) * width);
         let mut inner = reader.into_inner();
         std::io::Read::by_ref(&mut inner)
             .take(declared * width as u64)
@@ -253,6 +259,31 @@ mod tests {
         let e = read_wav(&p).unwrap_err();
         assert!(matches!(e, Error::Truncated { declared: 1000, .. }), "{e}");
         assert!(e.to_string().contains("cut.wav"));
+    }
+
+    #[test]
+    fn a_header_declaring_gigabytes_is_a_truncation_not_an_allocation() {
+        // Issue 13's mutation test found a data chunk size of 0xFFFF_FFF0 reserving 5 GB for
+        // a 19 kB file. What is reserved is now bounded by the file's size.
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("huge.wav");
+        write(&p, spec(16, hound::SampleFormat::Int), &[1; 1000]);
+        let mut bytes = std::fs::read(&p).unwrap();
+        let at = bytes.windows(4).position(|w| w == b"data").unwrap() + 4;
+        bytes[at..at + 4].copy_from_slice(&0xFFFF_FFF0u32.to_le_bytes());
+        std::fs::write(&p, &bytes).unwrap();
+        let e = read_wav(&p).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                Error::Truncated {
+                    declared: 0x7FFF_FFF8,
+                    read: 1000,
+                    ..
+                }
+            ),
+            "{e}"
+        );
     }
 
     #[test]

@@ -81,14 +81,21 @@ impl OccupancyMap {
     /// As [`OccupancyMap::load`].
     pub fn load_with_image(yaml: &Path, image: Option<&Path>) -> Result<Self, MapError> {
         let meta = read_meta(yaml)?;
-        let img_path = match image {
-            Some(p) => p.to_owned(),
-            None => resolve_image(yaml, &meta.image),
-        };
-        let bytes = std::fs::read(&img_path).map_err(|source| MapError::Io {
-            path: img_path.clone(),
-            source,
-        })?;
+        let bytes = match image {
+            Some(p) => std::fs::read(p).map_err(|source| MapError::Io {
+                path: p.to_owned(),
+                source,
+            }),
+            None => {
+                let named = resolve_image(yaml, &meta.image);
+                std::fs::read(&named).map_err(|source| MapError::Image {
+                    yaml: yaml.to_owned(),
+                    image: named,
+                    source,
+                })
+            }
+        }?;
+        let img_path = image.map_or_else(|| resolve_image(yaml, &meta.image), Path::to_owned);
         let (w, h, maxval, pixels) = parse_pgm(&bytes).map_err(|message| MapError::Pgm {
             path: img_path.clone(),
             message,
@@ -318,7 +325,9 @@ fn parse_yaml(text: &str) -> Result<Meta, String> {
         ));
     }
     Ok(Meta {
-        image: image.ok_or("missing key `image`")?,
+        image: image
+            .filter(|i| !i.trim().is_empty())
+            .ok_or("missing or empty key `image`")?,
         resolution,
         origin,
         negate,
@@ -370,7 +379,9 @@ fn parse_pgm(bytes: &[u8]) -> Result<(usize, usize, u16, Vec<u16>), String> {
         return Err(format!("bad header: {w} x {h}, maxval {maxval}"));
     }
     let n = w.checked_mul(h).ok_or("image too large")?;
-    let mut pixels = Vec::with_capacity(n);
+    // Every pixel takes at least one byte of the file: reserve no more than it holds, so a
+    // header declaring a huge image costs nothing before the check below refuses it.
+    let mut pixels = Vec::with_capacity(n.min(bytes.len()));
     if magic == "P5" {
         let data = &bytes[(pos + 1).min(bytes.len())..];
         let width = if maxval < 256 { 1 } else { 2 };

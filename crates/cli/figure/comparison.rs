@@ -1,76 +1,14 @@
-//! Figures as SVG, drawn with plotters: axes with units, a title and a legend on each, text
-//! as SVG text (no font files needed, and a reader or a test can find every label).
-//!
-//! The comparison's three: OSPA per method as box plots, DoA error against the source's
-//! distance, and the maps side by side.
+//! The method comparison's three figures: OSPA per method as box plots (which DoA source
+//! gives the best maps, and how the seeds spread), DoA error against the source's distance
+//! (where in range a method fails), and the maps side by side (what its errors look like).
 
 use std::path::Path;
 
-use anyhow::{Context, Result};
-use plotters::coord::Shift;
+use anyhow::Result;
 use plotters::prelude::*;
 
+use super::{colour, fail, legend, write_svg};
 use crate::compare::Report;
-
-/// Colours of successive rows (colour-blind-safe, Okabe & Ito).
-const PALETTE: [RGBColor; 8] = [
-    RGBColor(0, 114, 178),
-    RGBColor(213, 94, 0),
-    RGBColor(0, 158, 115),
-    RGBColor(204, 121, 167),
-    RGBColor(230, 159, 0),
-    RGBColor(86, 180, 233),
-    RGBColor(0, 0, 0),
-    RGBColor(240, 228, 66),
-];
-
-fn colour(i: usize) -> RGBColor {
-    PALETTE[i % PALETTE.len()]
-}
-
-/// A plotters error as ours (its drawing errors are `Debug` only).
-fn fail<E: std::fmt::Debug>(e: E) -> anyhow::Error {
-    anyhow::anyhow!("drawing failed: {e:?}")
-}
-
-/// Draws a `size`-pixel figure on a white ground with `draw` and writes it to `path` whole
-/// (a temporary file, then a rename).
-fn write_svg(
-    path: &Path,
-    size: (u32, u32),
-    draw: impl FnOnce(&DrawingArea<SVGBackend<'_>, Shift>) -> Result<()>,
-) -> Result<()> {
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
-        root.fill(&WHITE).map_err(fail)?;
-        draw(&root)?;
-        root.present().map_err(fail)?;
-    }
-    crate::output::write_atomic(path, svg.as_bytes())
-        .with_context(|| format!("figure {}", path.display()))
-}
-
-/// Draws the legend of `chart`'s labelled series at `pos` in a `font_px` font, on a light,
-/// framed box.
-fn legend<'a, DB, CT>(
-    chart: &mut ChartContext<'a, DB, CT>,
-    pos: SeriesLabelPosition,
-    font_px: u32,
-) -> Result<()>
-where
-    DB: DrawingBackend + 'a,
-    CT: CoordTranslate,
-{
-    chart
-        .configure_series_labels()
-        .position(pos)
-        .label_font(("sans-serif", font_px))
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .draw()
-        .map_err(fail)
-}
 
 /// Writes all three figures of `report` into `dir`: `ospa.svg`, `error_by_distance.svg`,
 /// `maps.svg`.

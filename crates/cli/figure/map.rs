@@ -1,0 +1,334 @@
+//! The map picture, like the paper's Fig. 7/8: the occupancy map, the robot's trajectory and
+//! stops (with headings), each source's particle cloud, the estimates with their 2-sigma
+//! ellipses, and the truth when it is known; world axes in metres (x right, y up, REP-103) at
+//! one scale in x and y.
+//!
+//! By default the figure is cropped to the region that holds the trajectory, the sources and
+//! the truth, with a margin: on a large map (arrangement II is about 15 x 12 m) the sources
+//! would otherwise be a few pixels wide. [`MapFigure::full_map`] draws the whole occupancy map.
+
+use anyhow::Result;
+use asm::map::{Cell, OccupancyMap};
+use asm::{MapResult, Pose};
+use plotters::coord::Shift;
+use plotters::prelude::*;
+
+use super::{Draw, colour, fail};
+
+/// Margin around the cropped region (m): room for the ellipses and the legend.
+const MARGIN_M: f64 = 0.8;
+/// Particles drawn per source at most (a cloud of thousands reads the same as one of a
+/// thousand, and keeps an SVG small).
+const MAX_PARTICLES: usize = 1000;
+
+/// What the map figure shows.
+pub struct MapFigure<'a> {
+    /// The title: data set, DoA source, variant, sources found, OSPA.
+    pub title: String,
+    /// The occupancy map.
+    pub map: &'a OccupancyMap,
+    /// The stops.
+    pub poses: &'a [Pose],
+    /// The mapper's answer.
+    pub result: &'a MapResult,
+    /// The true source positions, when known.
+    pub truth: Option<&'a [[f64; 2]]>,
+    /// The whole occupancy map instead of the region around the trajectory and sources.
+    pub full_map: bool,
+    /// Width of the figure (px); the height follows from the region's aspect.
+    pub width: u32,
+}
+
+/// World region `(x0, x1, y0, y1)` drawn.
+type Region = (f64, f64, f64, f64);
+
+impl MapFigure<'_> {
+    /// Font size scaled with the figure's width (16 px at 1000 px).
+    fn font(&self, base: u32) -> u32 {
+        (f64::from(base) * f64::from(self.width) / 1000.0)
+            .round()
+            .max(8.0) as u32
+    }
+
+    fn region(&self) -> Region {
+        let m = self.map;
+        let (ox, oy) = (m.origin()[0], m.origin()[1]);
+        let full = (
+            ox,
+            ox + m.width() as f64 * m.resolution(),
+            oy,
+            oy + m.height() as f64 * m.resolution(),
+        );
+        if self.full_map {
+            return full;
+        }
+        let pts = self
+            .poses
+            .iter()
+            .map(|p| [p.x, p.y])
+            .chain(self.truth.unwrap_or(&[]).iter().copied())
+            .chain(self.result.sources.iter().map(|s| [s.x, s.y]));
+        let (mut x0, mut x1, mut y0, mut y1) = (
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        );
+        for p in pts.filter(|p| p[0].is_finite() && p[1].is_finite()) {
+            x0 = x0.min(p[0]);
+            x1 = x1.max(p[0]);
+            y0 = y0.min(p[1]);
+            y1 = y1.max(p[1]);
+        }
+        if !x0.is_finite() {
+            return full;
+        }
+        (x0 - MARGIN_M, x1 + MARGIN_M, y0 - MARGIN_M, y1 + MARGIN_M)
+    }
+
+    /// Pixels around the plot: (left, right, top, bottom); the legend is on the right.
+    fn decoration(&self) -> (u32, u32, u32, u32) {
+        let f = self.font(16);
+        (f * 4 + 10, 20 + self.legend_width(), f * 3, f * 3 + 10)
+    }
+
+    /// Width of the legend column (px), outside the plot so that it hides nothing.
+    fn legend_width(&self) -> u32 {
+        self.font(13) * 13
+    }
+}
+
+impl Draw for MapFigure<'_> {
+    fn size(&self) -> (u32, u32) {
+        let (x0, x1, y0, y1) = self.region();
+        let (l, r, t, b) = self.decoration();
+        let plot_w = f64::from(self.width.saturating_sub(l + r).max(100));
+        let plot_h = (plot_w * (y1 - y0) / (x1 - x0)).clamp(100.0, 4.0 * plot_w);
+        (self.width, plot_h.round() as u32 + t + b)
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()> {
+        let (x0, x1, y0, y1) = self.region();
+        let (l, _, _, b) = self.decoration();
+        let small = self.font(13);
+        let (plot, side) = root.split_horizontally(root.dim_in_pixel().0 - self.legend_width());
+        let mut chart = ChartBuilder::on(&plot)
+            .caption(&self.title, ("sans-serif", self.font(18)))
+            .margin_right(20)
+            .margin_left(10)
+            .margin_top(5)
+            .x_label_area_size(b - 10)
+            .y_label_area_size(l - 10)
+            .build_cartesian_2d(x0..x1, y0..y1)
+            .map_err(fail)?;
+        chart
+            .configure_mesh()
+            .x_desc("x (m)")
+            .y_desc("y (m)")
+            .label_style(("sans-serif", small))
+            .axis_desc_style(("sans-serif", self.font(15)))
+            .light_line_style(WHITE.mix(0.0))
+            .bold_line_style(BLACK.mix(0.08))
+            .draw()
+            .map_err(fail)?;
+
+        // The occupancy map: unknown cells grey, occupied dark, free left white; one
+        // rectangle per run of equal cells in a row.
+        let m = self.map;
+        let res = m.resolution();
+        let (ox, oy) = (m.origin()[0], m.origin()[1]);
+        let col = |x: f64| ((x - ox) / res).floor().clamp(0.0, m.width() as f64) as usize;
+        let (i0, i1) = (col(x0), col(x1));
+        let row_of = |y: f64| {
+            let fr = ((y - oy) / res).floor().clamp(0.0, m.height() as f64) as usize;
+            m.height() - fr.min(m.height())
+        };
+        let (j0, j1) = (row_of(y1).saturating_sub(1), row_of(y0).min(m.height()));
+        let mut runs = Vec::new();
+        for j in j0..j1 {
+            let ytop = oy + (m.height() - j) as f64 * res;
+            let mut i = i0;
+            while i < i1.min(m.width()) {
+                let c = m.cell(i, j);
+                let start = i;
+                while i < i1.min(m.width()) && m.cell(i, j) == c {
+                    i += 1;
+                }
+                if c != Cell::Free {
+                    runs.push((c, ox + start as f64 * res, ox + i as f64 * res, ytop));
+                }
+            }
+        }
+        let occ = RGBColor(60, 60, 60);
+        let unk = RGBColor(215, 215, 215);
+        chart
+            .draw_series(runs.iter().map(|&(c, xa, xb, yt)| {
+                let fill = if c == Cell::Occupied { occ } else { unk };
+                Rectangle::new([(xa, yt), (xb, yt - res)], fill.filled())
+            }))
+            .map_err(fail)?;
+
+        // Particle clouds, one colour per source.
+        for (k, s) in self.result.sources.iter().enumerate() {
+            let c = colour(k);
+            let step = s.cluster.len().div_ceil(MAX_PARTICLES).max(1);
+            chart
+                .draw_series(
+                    s.cluster
+                        .iter()
+                        .step_by(step)
+                        .map(|p| Circle::new((p[0], p[1]), 1, c.mix(0.5).filled())),
+                )
+                .map_err(fail)?;
+        }
+
+        // The trajectory, its stops and headings.
+        let blue = RGBColor(40, 70, 200);
+        chart
+            .draw_series(LineSeries::new(
+                self.poses.iter().map(|p| (p.x, p.y)),
+                blue.stroke_width(2),
+            ))
+            .map_err(fail)?;
+        let tick = 0.04 * (x1 - x0).max(y1 - y0).clamp(2.0, 20.0) / 2.0;
+        chart
+            .draw_series(self.poses.iter().map(|p| {
+                PathElement::new(
+                    vec![
+                        (p.x, p.y),
+                        (p.x + tick * p.theta.cos(), p.y + tick * p.theta.sin()),
+                    ],
+                    blue.stroke_width(2),
+                )
+            }))
+            .map_err(fail)?;
+        chart
+            .draw_series(
+                self.poses
+                    .iter()
+                    .map(|p| Circle::new((p.x, p.y), 4, blue.filled())),
+            )
+            .map_err(fail)?;
+
+        // The truth.
+        if let Some(truth) = self.truth {
+            let green = RGBColor(0, 140, 60);
+            chart
+                .draw_series(
+                    truth
+                        .iter()
+                        .map(|t| Circle::new((t[0], t[1]), 8, green.stroke_width(2))),
+                )
+                .map_err(fail)?;
+        }
+
+        // Estimates and their 2-sigma ellipses.
+        let red = RGBColor(220, 20, 20);
+        for s in &self.result.sources {
+            chart
+                .draw_series(LineSeries::new(
+                    ellipse([s.x, s.y], s.covariance),
+                    red.stroke_width(1),
+                ))
+                .map_err(fail)?;
+        }
+        chart
+            .draw_series(
+                self.result
+                    .sources
+                    .iter()
+                    .map(|s| Cross::new((s.x, s.y), 6, red.stroke_width(2))),
+            )
+            .map_err(fail)?;
+        let mut entries = vec![
+            (Glyph::Box(occ), "occupied"),
+            (Glyph::Box(unk), "unknown"),
+            (Glyph::Line(blue), "trajectory"),
+            (Glyph::Dot(blue), "stop (heading tick)"),
+            (Glyph::Dot(colour(0)), "particles (colour"),
+            (Glyph::None, "per source)"),
+            (Glyph::Cross(red), "source found"),
+            (Glyph::Ring(red, 1), "2-sigma ellipse"),
+        ];
+        if self.truth.is_some() {
+            entries.push((Glyph::Ring(RGBColor(0, 140, 60), 2), "true source"));
+        }
+        legend_panel(&side, &entries, small)
+    }
+}
+
+/// The 2-sigma ellipse of covariance `cov` around `m`, as a closed polyline.
+fn ellipse(m: [f64; 2], cov: [[f64; 2]; 2]) -> Vec<(f64, f64)> {
+    let (a, b, d) = (cov[0][0], cov[0][1], cov[1][1]);
+    let l1 = asm::pf::max_eigenvalue(cov).max(0.0);
+    let l2 = (a + d - l1).max(0.0);
+    let ang = 0.5 * (2.0 * b).atan2(a - d);
+    let (r1, r2) = (2.0 * l1.sqrt(), 2.0 * l2.sqrt());
+    (0..=72)
+        .map(|k| {
+            let t = std::f64::consts::TAU * f64::from(k) / 72.0;
+            let (x, y) = (r1 * t.cos(), r2 * t.sin());
+            (
+                m[0] + x * ang.cos() - y * ang.sin(),
+                m[1] + x * ang.sin() + y * ang.cos(),
+            )
+        })
+        .collect()
+}
+
+/// Draws `fig` to `path` (PNG or SVG by the extension), whole.
+///
+/// # Errors
+/// As [`super::write`].
+pub fn map(path: &std::path::Path, fig: &MapFigure<'_>) -> Result<()> {
+    super::write(path, fig)
+}
+
+/// A legend entry's mark.
+#[derive(Clone, Copy)]
+enum Glyph {
+    Box(RGBColor),
+    Line(RGBColor),
+    Dot(RGBColor),
+    Cross(RGBColor),
+    Ring(RGBColor, u32),
+    None,
+}
+
+/// The legend as a column of entries, framed, at the top of `area`.
+fn legend_panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    entries: &[(Glyph, &str)],
+    font_px: u32,
+) -> Result<()> {
+    let line = (font_px * 3 / 2) as i32;
+    let (x0, y0) = (6i32, 40i32);
+    let w = area.dim_in_pixel().0 as i32 - 12;
+    let h = line * entries.len() as i32 + line / 2;
+    area.draw(&Rectangle::new([(x0, y0), (x0 + w, y0 + h)], BLACK))
+        .map_err(fail)?;
+    let style = ("sans-serif", font_px).into_font();
+    for (k, (g, label)) in entries.iter().enumerate() {
+        let y = y0 + line * k as i32 + line * 3 / 4;
+        let x = x0 + 8;
+        match *g {
+            Glyph::Box(c) => area.draw(&Rectangle::new([(x, y - 5), (x + 14, y + 5)], c.filled())),
+            Glyph::Line(c) => area.draw(&PathElement::new(
+                vec![(x, y), (x + 16, y)],
+                c.stroke_width(2),
+            )),
+            Glyph::Dot(c) => area.draw(&Circle::new((x + 7, y), 4, c.filled())),
+            Glyph::Cross(c) => area.draw(&Cross::new((x + 7, y), 5, c.stroke_width(2))),
+            Glyph::Ring(c, w) => area.draw(&Circle::new((x + 7, y), 6, c.stroke_width(w))),
+            Glyph::None => Ok(()),
+        }
+        .map_err(fail)?;
+        area.draw(&Text::new(
+            (*label).to_owned(),
+            (x + 24, y - font_px as i32 / 2),
+            style.clone(),
+        ))
+        .map_err(fail)?;
+    }
+    Ok(())
+}
