@@ -459,3 +459,87 @@ fn r13_a_map_yaml_with_a_quoted_hash_and_a_block_origin_is_read_as_yaml() {
     assert_eq!(v["sources"].as_array().unwrap().len(), 3, "{v}");
     assert!(v["ospa"]["total"].as_f64().unwrap() < 0.15, "{v}");
 }
+
+#[test]
+fn a_continuous_recording_cut_at_the_pose_times_maps_like_one_file_per_stop() {
+    // The stops' recordings end to end with 0.25 s of silence between them, one pose per
+    // stop with its start time: the windows are the stops' own samples, so the map is
+    // the per-stop data set's.
+    let dir = tempdir();
+    let root = path(&dir, "ds");
+    audio_dataset(&root, &AUDIO_TRUTH);
+    let long = path(&dir, "long.wav");
+    let mut spec = None;
+    let mut samples: Vec<i16> = Vec::new();
+    let mut times = String::from("t,x,y,theta_deg\n");
+    let poses = std::fs::read_to_string(root.join("pose/poses.csv")).unwrap();
+    for (k, pose) in poses.lines().enumerate() {
+        let mut r = hound::WavReader::open(root.join(format!("audio/sub{}.wav", k + 1))).unwrap();
+        let s = r.spec();
+        let frames = r.len() as usize / usize::from(s.channels);
+        let start = samples.len() / usize::from(s.channels);
+        times.push_str(&format!(
+            "{},{pose}\n",
+            start as f64 / f64::from(s.sample_rate)
+        ));
+        samples.extend(r.samples::<i16>().map(Result::unwrap));
+        samples.extend(std::iter::repeat_n(
+            0,
+            usize::from(s.channels) * (s.sample_rate as usize / 4),
+        ));
+        spec = Some((s, frames));
+    }
+    let (spec, frames) = spec.unwrap();
+    let mut w = hound::WavWriter::create(&long, spec).unwrap();
+    samples.iter().for_each(|&v| w.write_sample(v).unwrap());
+    w.finalize().unwrap();
+    let timed = path(&dir, "timed.csv");
+    std::fs::write(&timed, times).unwrap();
+    let window = format!("{}", frames as f64 / f64::from(spec.sample_rate));
+    let per_stop = json(&iasm(&[
+        "map",
+        "--dataset",
+        arg(&root),
+        "--num",
+        "2",
+        "--json",
+    ]));
+    let o = iasm(&[
+        "map",
+        "--map",
+        arg(&root.join("map/room.yaml")),
+        "--poses",
+        arg(&timed),
+        "--truth",
+        arg(&root.join("src_gt.txt")),
+        "--recording",
+        arg(&long),
+        "--window",
+        &window,
+        "--num",
+        "2",
+        "--json",
+    ]);
+    let continuous = json(&o);
+    assert_eq!(
+        continuous["sources"].as_array().unwrap().len(),
+        2,
+        "{continuous}"
+    );
+    assert_eq!(continuous["sources"], per_stop["sources"]);
+    // A pose whose time lies past the recording's end is named.
+    let late = std::fs::read_to_string(&timed).unwrap() + "999,1,0,0\n";
+    std::fs::write(&timed, late).unwrap();
+    let o = iasm(&[
+        "map",
+        "--map",
+        arg(&root.join("map/room.yaml")),
+        "--poses",
+        arg(&timed),
+        "--recording",
+        arg(&long),
+        "--num",
+        "2",
+    ]);
+    assert_clear_error(&o, &["long.wav", "pose 21", "999 s"]);
+}

@@ -8,3 +8,4 @@ mod regression;
 mod settings;
 mod simulate;
 mod util;
+mod watch;

@@ -76,6 +76,73 @@ pub enum Command {
     /// Every SSL method side by side on one data set: DoA score, errors by distance,
     /// recall, map OSPA over many seeds, speed; the published tables as extra rows.
     Compare(CompareArgs),
+    /// Map while the robot records: follow a data set folder as recordings and poses
+    /// appear, localise each new recording and update the map stop by stop; or replay a
+    /// finished data set as if recorded live (--replay) and write the OSPA-per-stop curve.
+    Watch(WatchArgs),
+}
+
+/// `iasm watch`.
+#[derive(Debug, Clone, Args)]
+pub struct WatchArgs {
+    /// The data set folder being written: map/ (needed from the start), audio/*.wav (one
+    /// per stop, natural order), pose/ (a table with a row per stop), src_gt* (optional).
+    pub dir: PathBuf,
+    /// Pose table to follow instead of the first one in DIR/pose/ (the formats of `iasm map
+    /// --poses`).
+    #[arg(long, value_name = "FILE")]
+    pub poses: Option<PathBuf>,
+    /// Unit of theta in the pose table.
+    #[arg(long, value_enum, default_value_t = AngleUnit::Deg)]
+    pub theta_unit: AngleUnit,
+    /// Seed of the particle filter.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Write the map as JSON here after every stop (atomically: a reader never sees half a
+    /// file).
+    #[arg(long, value_name = "FILE")]
+    pub out: Option<PathBuf>,
+    /// Draw the map here after every stop: PNG or SVG by the extension (atomically).
+    #[arg(long, value_name = "FILE", visible_alias = "figure")]
+    pub png: Option<PathBuf>,
+    /// How the map is drawn.
+    #[command(flatten)]
+    pub figure: FigureArgs,
+    /// End after this many stops (default: on Ctrl-C; with --replay, at the data set's end).
+    #[arg(long, value_name = "K")]
+    pub stops: Option<usize>,
+    /// Replay the finished data set in DIR stop by stop, as if recorded live.
+    #[arg(long)]
+    pub replay: bool,
+    /// Write the curve here: one CSV row per stop (stop, file, DoAs, sources, OSPA and its
+    /// parts when the truth is known, ms of SSL and of mapping, whether a full map ran).
+    #[arg(long, value_name = "FILE")]
+    pub curve: Option<PathBuf>,
+    /// Plot the curve here (PNG or SVG) [default: beside --curve, as .svg].
+    #[arg(long, value_name = "FILE")]
+    pub plot: Option<PathBuf>,
+    /// How often to look for new files when no notification comes (ms).
+    #[arg(long, default_value_t = 500, value_name = "MS")]
+    pub poll_ms: u64,
+    /// A recording that stays unreadable and unchanged this long is an error (s).
+    #[arg(long, default_value_t = 30.0, value_name = "S")]
+    pub give_up_s: f64,
+    /// OSPA cutoff c (m), when the truth is known.
+    #[arg(long, default_value_t = 1.0)]
+    pub ospa_c: f64,
+    /// OSPA order p.
+    #[arg(long, default_value_t = 1.0)]
+    pub ospa_p: f64,
+    /// Refine each source by bearing least squares (see `iasm map --refine`).
+    #[arg(long)]
+    pub refine: bool,
+    /// Map from scratch at every stop, as the authors' online program does (a baseline to
+    /// measure the incremental mapper against).
+    #[arg(long)]
+    pub recompute: bool,
+    /// The settings.
+    #[command(flatten)]
+    pub settings: SettingsArgs,
 }
 
 /// `iasm compare`.
@@ -222,6 +289,15 @@ pub struct InputArgs {
     /// Ground-truth source positions (overrides the data set's src_gt*).
     #[arg(long, value_name = "FILE")]
     pub truth: Option<PathBuf>,
+    /// One continuous multichannel WAV instead of one per stop: a window of --window
+    /// seconds is cut from each pose's time, and the pose table has a time per row (plain
+    /// t, x, y, theta columns, or a header naming t/time/stamp/%time beside the pose
+    /// columns above).
+    #[arg(long, value_name = "WAV", conflicts_with_all = ["doas", "audio"])]
+    pub recording: Option<PathBuf>,
+    /// Seconds of a continuous recording used from each pose's time.
+    #[arg(long, value_name = "S", default_value_t = 3.0, requires = "recording")]
+    pub window: f64,
     /// Refine each source by bearing least squares over the DoAs it explains (not in the
     /// paper; see `asm::IasmConfig::refine`).
     #[arg(long)]
@@ -252,6 +328,8 @@ impl InputArgs {
             doas: self.doas.clone(),
             audio: self.audio.clone(),
             truth: self.truth.clone(),
+            recording: self.recording.clone(),
+            window_s: self.window,
         }
     }
 }

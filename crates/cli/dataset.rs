@@ -74,12 +74,28 @@ pub type Table = Vec<Vec<Option<f64>>>;
 /// # Errors
 /// If the file cannot be read or holds a non-numeric cell below the header.
 pub fn read_table(path: &Path) -> Result<Table> {
+    read_table_from(path, None)
+}
+
+/// Whether `path` names a workbook (read with calamine) rather than a CSV text.
+fn is_workbook(path: &Path) -> bool {
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    matches!(ext.as_str(), "xlsx" | "xls" | "xlsm" | "ods")
+}
+
+/// [`read_table`], with the CSV's text given instead of read when `text` is `Some`.
+fn read_table_from(path: &Path, text: Option<&str>) -> Result<Table> {
     let ext = path
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
     let raw: Vec<Vec<String>> = if matches!(ext.as_str(), "xlsx" | "xls" | "xlsm" | "ods") {
         read_workbook(path)?
+    } else if let Some(text) = text {
+        csv_lines(text).map(split_cells).collect()
     } else {
         let text = std::fs::read_to_string(path)
             .with_context(|| format!("reading table {}", path.display()))?;
@@ -183,16 +199,17 @@ enum Heading {
 /// A header that names some columns but lacks x, y or a heading (the message names the
 /// missing column and the header), or a row whose named cells are not numbers.
 pub fn read_named_poses(path: &Path, theta_in_radians: bool) -> Result<Option<Vec<Pose>>> {
-    let ext = path
-        .extension()
-        .map(|e| e.to_string_lossy().to_ascii_lowercase())
-        .unwrap_or_default();
-    if matches!(ext.as_str(), "xlsx" | "xls" | "xlsm" | "ods") {
+    if is_workbook(path) {
         return Ok(None);
     }
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("reading table {}", path.display()))?;
-    let mut lines = csv_lines(&text);
+    named_poses_from(path, &text, theta_in_radians)
+}
+
+/// [`read_named_poses`] on the text of `path`.
+fn named_poses_from(path: &Path, text: &str, theta_in_radians: bool) -> Result<Option<Vec<Pose>>> {
+    let mut lines = csv_lines(text);
     let Some(first) = lines.next() else {
         return Ok(None);
     };
@@ -298,7 +315,138 @@ pub fn read_poses(path: &Path, theta_in_radians: bool) -> Result<Vec<Pose>> {
     if let Some(poses) = read_named_poses(path, theta_in_radians)? {
         return Ok(poses);
     }
-    let rows = read_table(path)?;
+    poses_from_rows(path, read_table(path)?, theta_in_radians)
+}
+
+/// The poses of a table that may still be growing (a robot appending a row per stop): for
+/// a CSV, only its complete lines (up to the last newline: a recorder may be writing the
+/// next one), and no error for a table with none yet; a workbook is read whole.
+///
+/// # Errors
+/// As [`read_poses`], for the complete lines.
+pub fn read_poses_so_far(path: &Path, theta_in_radians: bool) -> Result<Vec<Pose>> {
+    if is_workbook(path) {
+        return read_poses(path, theta_in_radians);
+    }
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("reading table {}", path.display()))?;
+    let complete = &text[..text.rfind('\n').map_or(0, |i| i + 1)];
+    if csv_lines(complete).nth(1).is_none() {
+        // Nothing yet, or only a first line that may be a header.
+        let one = csv_lines(complete).next();
+        if one.is_none_or(|l| split_cells(l).iter().any(|c| parse_cell(c).is_err())) {
+            return Ok(Vec::new());
+        }
+    }
+    if let Some(poses) = named_poses_from(path, complete, theta_in_radians)? {
+        return Ok(poses);
+    }
+    poses_from_rows(
+        path,
+        read_table_from(path, Some(complete))?,
+        theta_in_radians,
+    )
+}
+
+/// Reads a pose table with a time stamp per row, for a continuous recording: plain columns
+/// `t, x, y, theta` (t in seconds from the recording's start; theta in degrees unless
+/// `theta_in_radians`), or a CSV whose header names a time column (`t`, `time`, `stamp`,
+/// `timestamp` or `%time`) beside the pose columns [`read_named_poses`] knows.
+///
+/// # Errors
+/// A table that cannot be read, a row without a finite time or pose (named), or times
+/// that go backwards.
+pub fn read_timed_poses(path: &Path, theta_in_radians: bool) -> Result<Vec<(f64, Pose)>> {
+    let named = if is_workbook(path) {
+        None
+    } else {
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("reading table {}", path.display()))?;
+        named_poses_from(path, &text, theta_in_radians)?.map(|poses| (text, poses))
+    };
+    let timed: Vec<(f64, Pose)> = if let Some((text, poses)) = named {
+        let mut lines = csv_lines(&text);
+        let header: Vec<String> = lines
+            .next()
+            .map(split_cells)
+            .unwrap_or_default()
+            .iter()
+            .map(|c| c.to_ascii_lowercase())
+            .collect();
+        let col = header
+            .iter()
+            .position(|h| matches!(h.as_str(), "t" | "time" | "stamp" | "timestamp" | "%time"))
+            .with_context(|| {
+                format!(
+                    "{}: the header names no time column (t, time, stamp, timestamp or %time; header: {})",
+                    path.display(),
+                    header.join(", ")
+                )
+            })?;
+        lines
+            .zip(poses)
+            .enumerate()
+            .map(|(r, (line, pose))| {
+                let t = split_cells(line)
+                    .get(col)
+                    .and_then(|v| v.parse::<f64>().ok())
+                    .filter(|v| v.is_finite())
+                    .with_context(|| {
+                        format!(
+                            "{}: row {}: the time is not a finite number",
+                            path.display(),
+                            r + 2
+                        )
+                    })?;
+                Ok((t, pose))
+            })
+            .collect::<Result<_>>()?
+    } else {
+        let rows = read_table(path)?;
+        rows.iter()
+            .enumerate()
+            .map(|(r, row)| {
+                let get = |c: usize, what: &str| {
+                    row.get(c).copied().flatten().with_context(|| {
+                        format!(
+                            "{}: row {}: {what} is missing or not a finite number (a timed pose \
+                             table has t, x, y, theta)",
+                            path.display(),
+                            r + 1
+                        )
+                    })
+                };
+                let (t, x, y, th) = (get(0, "t")?, get(1, "x")?, get(2, "y")?, get(3, "theta")?);
+                Ok((
+                    t,
+                    if theta_in_radians {
+                        Pose::new(x, y, th)
+                    } else {
+                        Pose::from_degrees(x, y, th)
+                    },
+                ))
+            })
+            .collect::<Result<_>>()?
+    };
+    ensure!(
+        !timed.is_empty(),
+        "{}: the pose table is empty",
+        path.display()
+    );
+    if let Some(r) = timed.windows(2).position(|w| w[1].0 < w[0].0) {
+        bail!(
+            "{}: the time goes backwards at pose {} ({} s after {} s)",
+            path.display(),
+            r + 2,
+            timed[r + 1].0,
+            timed[r].0
+        );
+    }
+    Ok(timed)
+}
+
+/// Poses from a table's rows of x, y, theta.
+fn poses_from_rows(path: &Path, rows: Table, theta_in_radians: bool) -> Result<Vec<Pose>> {
     ensure!(
         !rows.is_empty(),
         "{}: the pose table is empty",

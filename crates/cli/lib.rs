@@ -12,6 +12,7 @@
 //! - [`score`]: the DoA score against known sources.
 //! - [`compare`]: every SSL method side by side on one data set, DoAs to maps.
 //! - [`figure`]: every figure (the map picture, the comparison's plots), PNG or SVG.
+//! - [`online`]: mapping while the robot records (a session, a folder follower).
 //! - [`output`]: files and folders written whole (temporary name, then rename).
 //! - [`args`]: the command line, and its conversion into settings and inputs.
 //!
@@ -23,6 +24,7 @@ pub mod cmd;
 pub mod compare;
 pub mod dataset;
 pub mod figure;
+pub mod online;
 pub mod output;
 pub mod pipeline;
 pub mod scenes;
@@ -73,6 +75,7 @@ pub fn run(cli: &args::Cli) -> anyhow::Result<Outcome> {
             set_threads(a.threads);
             cmd::compare::run(a)
         }
+        args::Command::Watch(a) => cmd::watch::run(a),
     }
 }
 

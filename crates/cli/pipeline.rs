@@ -29,6 +29,7 @@ use serde::Serialize;
 use sim::scene::PreparedScene;
 use ssl::{Audio, Doa, Localizer, MicArray, Scratch, SslConfig};
 
+use crate::dataset::read_timed_poses;
 use crate::dataset::{Dataset, Table, first_with_ext, list_files, load_map, read_poses};
 use crate::dataset::{read_sources, read_table};
 use crate::score::{DoaScore, score_doas};
@@ -89,6 +90,69 @@ pub fn localise_files(
     out
 }
 
+/// One window of `window_s` seconds of `audio` from each time in `times` (s from its
+/// start), for a continuous recording with a pose per time; a window that runs past the
+/// end is cut short there.
+///
+/// # Errors
+/// A window that starts at or beyond the end, or is shorter than 0.1 s; named by its
+/// pose's number.
+pub fn cut_windows(audio: &Audio, times: &[f64], window_s: f64) -> Result<Vec<Audio>> {
+    ensure!(
+        window_s.is_finite() && window_s > 0.0,
+        "the window must be a positive duration (got {window_s} s)"
+    );
+    let fs = f64::from(audio.sample_rate());
+    let n = audio.num_samples();
+    times
+        .iter()
+        .enumerate()
+        .map(|(k, &t)| {
+            ensure!(
+                t.is_finite() && t >= 0.0,
+                "pose {}: time {t} s is not a time in the recording",
+                k + 1
+            );
+            let a = (t * fs).round() as usize;
+            let b = ((t + window_s) * fs).round().min(n as f64) as usize;
+            ensure!(
+                a < n && (b - a) as f64 >= 0.1 * fs,
+                "pose {}: the window at {t} s holds {:.3} s of the {:.3}-s recording",
+                k + 1,
+                b.saturating_sub(a) as f64 / fs,
+                n as f64 / fs
+            );
+            Ok(Audio::new(
+                audio.sample_rate(),
+                audio.channels().iter().map(|c| c[a..b].to_vec()).collect(),
+            )?)
+        })
+        .collect()
+}
+
+/// The DoAs of each of `windows` (in order, in parallel), with one localizer.
+///
+/// # Errors
+/// A window the array or the SSL settings cannot take.
+pub fn localise_audio(
+    windows: &[Audio],
+    array: &MicArray,
+    config: &SslConfig,
+) -> Result<Vec<Vec<Doa>>> {
+    let Some(first) = windows.first() else {
+        return Ok(Vec::new());
+    };
+    let loc = Localizer::new(array, first.sample_rate(), config)?;
+    windows
+        .par_iter()
+        .enumerate()
+        .map_init(Scratch::default, |scratch, (k, w)| {
+            loc.locate_with_scratch(w, scratch)
+                .with_context(|| format!("window {}", k + 1))
+        })
+        .collect()
+}
+
 /// A DoA table from ranked DoAs per recording: azimuths (degrees), `n` columns, `None`
 /// where fewer were found.
 pub fn doa_table<'a>(rows: impl IntoIterator<Item = &'a [Doa]>, n: usize) -> Table {
@@ -114,6 +178,11 @@ pub struct SurveyInputs {
     pub audio: Option<PathBuf>,
     /// Ground-truth source positions.
     pub truth: Option<PathBuf>,
+    /// One continuous recording instead of one per stop: cut into a window of `window_s`
+    /// seconds from each pose's time stamp (the pose table then has t, x, y, theta).
+    pub recording: Option<PathBuf>,
+    /// The window per pose of a continuous recording (s).
+    pub window_s: f64,
 }
 
 /// What one robot run gives the mapper.
@@ -167,7 +236,14 @@ impl Survey {
                 .with_context(|| format!("{}: no pose table in pose/", d.root.display()))?,
             (None, None) => bail!("give --dataset DIR or --poses FILE"),
         };
-        let poses = read_poses(&pose_path, inputs.theta_in_radians)?;
+        let timed = match &inputs.recording {
+            Some(_) => Some(read_timed_poses(&pose_path, inputs.theta_in_radians)?),
+            None => None,
+        };
+        let poses = match &timed {
+            Some(t) => t.iter().map(|p| p.1).collect(),
+            None => read_poses(&pose_path, inputs.theta_in_radians)?,
+        };
         let truth_path = inputs
             .truth
             .clone()
@@ -175,6 +251,22 @@ impl Survey {
         let truth = truth_path.as_deref().map(read_sources).transpose()?;
         let (doas_deg, doa_source) = if let Some(given) = doas {
             given
+        } else if let (Some(rec), Some(timed)) = (&inputs.recording, &timed) {
+            let audio = ssl::read_wav(rec)?;
+            let times: Vec<f64> = timed.iter().map(|p| p.0).collect();
+            let windows = cut_windows(&audio, &times, inputs.window_s).with_context(|| {
+                format!(
+                    "cutting {} at the times of {}",
+                    rec.display(),
+                    pose_path.display()
+                )
+            })?;
+            let rows = localise_audio(&windows, &settings.mic_array()?, &settings.ssl)
+                .with_context(|| format!("localising {}", rec.display()))?;
+            (
+                doa_table(rows.iter().map(|r| &r[..]), settings.ssl.num_peaks),
+                format!("ssl:{}", settings.ssl.method),
+            )
         } else if let Some(t) = &inputs.doas {
             (
                 first_columns(read_table(t)?, settings.iasm.num_doas, t),

@@ -8,6 +8,7 @@
 //! - [`dbscan`]: grid-indexed DBSCAN that is fastest where particle clouds are densest.
 //! - [`assoc`]: the paper's implicit association of DoAs with a new source.
 //! - [`mapper`]: I-ASM itself, the Filtering-Clustering-Implicit-Associating loop.
+//! - [`online`]: the same, one stop at a time while the robot drives.
 //! - [`ospa`]: the OSPA metric with its localisation and cardinality parts.
 //!
 //! # Example
@@ -36,9 +37,11 @@ pub mod dbscan;
 pub mod error;
 pub mod map;
 pub mod mapper;
+pub mod online;
 pub mod ospa;
 pub mod pf;
 
 pub use error::{ConfigError, Error, MapError, Result};
 pub use geom::{Pose, wrap_rad};
 pub use mapper::{IasmConfig, MapResult, Mapper, Profile, Round, Source, Variant};
+pub use online::{OnlineMapper, StopUpdate};

@@ -414,6 +414,21 @@ impl Mapper {
         &self.config
     }
 
+    /// The association range `gamma` (rad).
+    pub(crate) fn gamma(&self) -> f64 {
+        self.gamma
+    }
+
+    /// The DoA standard deviation (rad).
+    pub(crate) fn sigma(&self) -> f64 {
+        self.sigma
+    }
+
+    /// The particle likelihood.
+    pub(crate) fn likelihood(&self) -> &Likelihood {
+        &self.lik
+    }
+
     /// Maps the sources heard from `poses`, given each stop's DoAs (array-frame azimuths,
     /// rad, strongest first, at most `N`), with randomness from `rng`: filtering rounds
     /// ([`Mapper::round`]) until `retries + 1` fail in a row or `max_rounds` have run, then
@@ -429,13 +444,27 @@ impl Mapper {
         rng: &mut impl Rng,
     ) -> Result<MapResult> {
         let mut bearings = self.world_bearings(poses, doas_rad)?;
+        Ok(self.run_bearings(poses, &mut bearings, rng))
+    }
+
+    /// [`Mapper::run`] on checked world bearings ([`Mapper::world_bearings`]), which are
+    /// left holding the DoAs no source explains.
+    ///
+    /// # Panics
+    /// If `poses` and `bearings` differ in length.
+    pub fn run_bearings(
+        &self,
+        poses: &[Pose],
+        bearings: &mut [Vec<f64>],
+        rng: &mut impl Rng,
+    ) -> MapResult {
         let c = &self.config;
         let mut sources: Vec<Source> = Vec::new();
         let mut rounds = 0;
         let mut failed = 0;
         while rounds < c.max_rounds {
             rounds += 1;
-            match self.round(poses, &mut bearings, rounds, rng) {
+            match self.round(poses, bearings, rounds, rng) {
                 Round::Found(s) => {
                     failed = 0;
                     sources.push(s);
@@ -461,12 +490,12 @@ impl Mapper {
                 }
             }
         }
-        Ok(MapResult {
+        MapResult {
             sources,
             rounds,
             particles: self.m,
             unexplained: bearings.iter().map(Vec::len).sum(),
-        })
+        }
     }
 
     /// Checks the inputs and turns every DoA into a world bearing, `wrap(azimuth + theta)`,
@@ -748,7 +777,7 @@ pub fn fit_bearings(start: [f64; 2], rays: &[Ray], sigma: f64) -> Option<([f64; 
 
 /// Repeatedly merges the closest pair of sources nearer than `dist` into their mean;
 /// returns the indices of the sources that absorbed others.
-fn merge_close(sources: &mut Vec<Source>, dist: f64) -> Vec<usize> {
+pub(crate) fn merge_close(sources: &mut Vec<Source>, dist: f64) -> Vec<usize> {
     let mut merged: Vec<usize> = Vec::new();
     loop {
         let mut best: Option<(usize, usize, f64)> = None;

@@ -10,3 +10,4 @@ pub mod map;
 pub mod regress;
 pub mod simulate;
 pub mod ssl;
+pub mod watch;

@@ -6,6 +6,7 @@
 //! | [`comparison()`]: `ospa.svg` | `iasm compare --out` | which DoA source gives the best maps, and how the seeds spread |
 //! | [`comparison()`]: `error_by_distance.svg` | `iasm compare --out` | at what range a method's DoAs fail |
 //! | [`comparison()`]: `maps.svg` | `iasm compare --out` | what each method's errors look like on the map |
+//! | [`curve()`] | `iasm watch --replay --curve` | how fast the map converges as the robot moves |
 //!
 //! A figure goes to SVG or PNG by its file's extension. SVG keeps text as text (a reader or
 //! a test finds every label); PNG rasterises it with an embedded DejaVu Sans through
@@ -14,6 +15,7 @@
 //! rename).
 
 mod comparison;
+mod curve;
 mod map;
 
 use std::path::Path;
@@ -24,6 +26,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 pub use comparison::{comparison, error_by_distance, maps, ospa_boxes};
+pub use curve::{Curve, curve};
 pub use map::{MapFigure, map};
 
 /// Colours of successive rows or sources (colour-blind-safe, Okabe & Ito).

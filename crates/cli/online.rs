@@ -1,0 +1,357 @@
+//! Mapping while the robot records: a [`Session`] localises each new recording and adds it
+//! to an [`asm::OnlineMapper`] as the next stop; a [`Follower`] finds the next complete
+//! recording and its pose in a folder that a recorder is still writing.
+//!
+//! `iasm watch` is these two in a loop (woken by file-system notifications, with polling
+//! as the fallback); `iasm watch --replay` feeds a finished data set through the same
+//! session, stop by stop, and writes the curve the authors' online program records.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use anyhow::{Context, Result, bail};
+use asm::map::OccupancyMap;
+use asm::ospa::{Ospa, ospa};
+use asm::{MapResult, Mapper, OnlineMapper, Pose};
+use serde::Serialize;
+use ssl::{Audio, Localizer, MicArray, Scratch, SslConfig};
+
+use crate::dataset::{list_files, read_poses_so_far};
+use crate::settings::Settings;
+
+/// What one stop did, one row of the curve.
+#[derive(Clone, Debug, Serialize)]
+pub struct StopRecord {
+    /// The stop's number (from 1).
+    pub stop: usize,
+    /// The recording's file name.
+    pub file: String,
+    /// DoAs the SSL returned.
+    pub doas: usize,
+    /// Sources on the map after the stop.
+    pub sources: usize,
+    /// OSPA of the map against the truth, when it is known.
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub ospa: Option<Ospa>,
+    /// Milliseconds to read and localise the recording.
+    pub ssl_ms: f64,
+    /// Milliseconds to update the map.
+    pub map_ms: f64,
+    /// Whether the stop ran a full map (see [`asm::online`]).
+    pub full_map: bool,
+}
+
+/// The SSL front end and the online mapper, fed one recording at a time.
+pub struct Session {
+    array: MicArray,
+    ssl: SslConfig,
+    localizers: Vec<Localizer>,
+    scratch: Scratch,
+    mapper: OnlineMapper,
+    truth: Option<Vec<[f64; 2]>>,
+    ospa_c: f64,
+    ospa_p: f64,
+    poses: Vec<Pose>,
+    recompute: bool,
+}
+
+impl Session {
+    /// A session mapping on `map` with `settings`, seeded by `seed`; OSPA (cutoff `ospa_c`
+    /// m, order `ospa_p`) against `truth` when given.
+    ///
+    /// # Errors
+    /// Refused settings or a map with no room for particles.
+    pub fn new(
+        map: &OccupancyMap,
+        settings: &Settings,
+        seed: u64,
+        truth: Option<Vec<[f64; 2]>>,
+        ospa_c: f64,
+        ospa_p: f64,
+    ) -> Result<Self> {
+        Ok(Self {
+            array: settings.mic_array()?,
+            ssl: settings.ssl.clone(),
+            localizers: Vec::new(),
+            scratch: Scratch::default(),
+            mapper: OnlineMapper::new(Mapper::new(map, &settings.iasm)?, seed),
+            truth,
+            ospa_c,
+            ospa_p,
+            poses: Vec::new(),
+            recompute: false,
+        })
+    }
+
+    /// Maps every stop from scratch, over all the stops so far, as the authors' online
+    /// program does: the baseline the incremental mapper is measured against.
+    pub fn recompute_every_stop(mut self) -> Self {
+        self.recompute = true;
+        self
+    }
+
+    /// The DoAs of one recording (azimuths in degrees, strongest first).
+    ///
+    /// # Errors
+    /// A recording the array or the SSL settings cannot take.
+    pub fn localise(&mut self, audio: &Audio) -> Result<Vec<f64>> {
+        let fs = audio.sample_rate();
+        let i = match self.localizers.iter().position(|l| l.sample_rate() == fs) {
+            Some(i) => i,
+            None => {
+                self.localizers
+                    .push(Localizer::new(&self.array, fs, &self.ssl)?);
+                self.localizers.len() - 1
+            }
+        };
+        Ok(self.localizers[i]
+            .locate_with_scratch(audio, &mut self.scratch)?
+            .iter()
+            .map(|d| d.azimuth_deg)
+            .collect())
+    }
+
+    /// Localises `audio` (the recording `name`, heard at `pose`) and adds it as the next
+    /// stop.
+    ///
+    /// # Errors
+    /// As [`Session::localise`], or a pose the mapper refuses; named.
+    pub fn add_recording(&mut self, name: &str, pose: Pose, audio: &Audio) -> Result<StopRecord> {
+        let t0 = Instant::now();
+        let doas = self
+            .localise(audio)
+            .with_context(|| format!("localising {name}"))?;
+        let ssl_ms = 1e3 * t0.elapsed().as_secs_f64();
+        let mut r = self.add_doas(name, pose, &doas)?;
+        r.ssl_ms = ssl_ms;
+        Ok(r)
+    }
+
+    /// Adds a stop whose DoAs (degrees, array frame) are already known.
+    ///
+    /// # Errors
+    /// A non-finite pose or more DoAs than N, naming the stop.
+    pub fn add_doas(&mut self, name: &str, pose: Pose, doas_deg: &[f64]) -> Result<StopRecord> {
+        let t0 = Instant::now();
+        let rad: Vec<f64> = doas_deg.iter().map(|a| a.to_radians()).collect();
+        let n = self.mapper.mapper().config().num_doas;
+        let u = self
+            .mapper
+            .add_stop(pose, &rad[..rad.len().min(n)])
+            .with_context(|| format!("stop {} ({name})", self.poses.len() + 1))?;
+        self.poses.push(pose);
+        if self.recompute {
+            self.mapper.consolidate();
+        }
+        let map_ms = 1e3 * t0.elapsed().as_secs_f64();
+        Ok(StopRecord {
+            stop: u.stop + 1,
+            file: name.to_owned(),
+            doas: doas_deg.len(),
+            sources: u.sources,
+            ospa: self.ospa(&self.mapper.map()),
+            ssl_ms: 0.0,
+            map_ms,
+            full_map: u.full,
+        })
+    }
+
+    /// Ends the run with a full map over every stop (what `iasm map` gives on the same
+    /// DoAs and seed), and returns it.
+    pub fn finish(&mut self) -> MapResult {
+        self.mapper.consolidate();
+        self.mapper.map()
+    }
+
+    /// The current map.
+    pub fn map(&self) -> MapResult {
+        self.mapper.map()
+    }
+
+    /// The stops so far.
+    pub fn poses(&self) -> &[Pose] {
+        &self.poses
+    }
+
+    /// The truth, when known.
+    pub fn truth(&self) -> Option<&[[f64; 2]]> {
+        self.truth.as_deref()
+    }
+
+    /// The OSPA of `map` against the truth, when it is known.
+    pub fn ospa(&self, map: &MapResult) -> Option<Ospa> {
+        self.truth
+            .as_ref()
+            .map(|t| ospa(&map.positions(), t, self.ospa_c, self.ospa_p))
+    }
+}
+
+/// The curve as CSV: one row per stop, the stop number first.
+pub fn curve_csv(records: &[StopRecord]) -> String {
+    let mut s = String::from(
+        "stop,file,doas,sources,ospa_m,localisation_m,cardinality_m,ssl_ms,map_ms,full_map\n",
+    );
+    for r in records {
+        let o = |f: fn(&Ospa) -> f64| {
+            r.ospa
+                .as_ref()
+                .map_or(String::new(), |o| format!("{:.4}", f(o)))
+        };
+        s.push_str(&format!(
+            "{},{},{},{},{},{},{},{:.2},{:.2},{}\n",
+            r.stop,
+            r.file,
+            r.doas,
+            r.sources,
+            o(|o| o.total),
+            o(|o| o.localization),
+            o(|o| o.cardinality),
+            r.ssl_ms,
+            r.map_ms,
+            u8::from(r.full_map)
+        ));
+    }
+    s
+}
+
+/// What [`Follower::poll`] found.
+pub enum Next {
+    /// The next stop: its recording, read whole, and its pose.
+    Ready {
+        /// The WAV file.
+        file: PathBuf,
+        /// Its samples.
+        audio: Audio,
+        /// The robot's pose there.
+        pose: Pose,
+    },
+    /// Nothing to do yet, and why.
+    Waiting(String),
+}
+
+/// Follows a data set folder that a recorder is writing: `audio/*.wav` in natural order,
+/// one per stop, and a pose table with a row per stop (`pose/*.csv` or the file given).
+///
+/// A recording is taken when it reads whole: a WAV whose header declares more samples than
+/// the file holds yet (or none, as a recorder that patches the header at the end leaves
+/// it), or that is not yet a WAV at all, is retried at the next call, not refused; only
+/// one that stays unreadable and unchanged for `give_up` is an error. Its pose is the
+/// table's row of the same number, read from complete lines only; a table that lags
+/// behind the recordings is waited for.
+pub struct Follower {
+    root: PathBuf,
+    poses: Option<PathBuf>,
+    theta_in_radians: bool,
+    done: usize,
+    give_up: Duration,
+    /// For the recording being waited on: its size and when that size was first seen.
+    seen: HashMap<PathBuf, (u64, Instant)>,
+}
+
+impl Follower {
+    /// Follows `root`: its `audio/` and, unless `poses` is given, the first table in its
+    /// `pose/` (found when it appears). Theta is in degrees unless `theta_in_radians`.
+    pub fn new(
+        root: &Path,
+        poses: Option<PathBuf>,
+        theta_in_radians: bool,
+        give_up: Duration,
+    ) -> Self {
+        Self {
+            root: root.to_owned(),
+            poses,
+            theta_in_radians,
+            done: 0,
+            give_up,
+            seen: HashMap::new(),
+        }
+    }
+
+    /// Stops taken so far.
+    pub fn done(&self) -> usize {
+        self.done
+    }
+
+    /// The folder followed for recordings.
+    pub fn audio_dir(&self) -> PathBuf {
+        self.root.join("audio")
+    }
+
+    fn pose_table(&self) -> Option<PathBuf> {
+        if let Some(p) = &self.poses {
+            return Some(p.clone());
+        }
+        let mut v: Vec<PathBuf> = std::fs::read_dir(self.root.join("pose"))
+            .ok()?
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| {
+                p.is_file()
+                    && p.extension().is_some_and(|e| {
+                        matches!(e.to_string_lossy().as_ref(), "csv" | "xlsx" | "txt")
+                    })
+            })
+            .collect();
+        v.sort();
+        v.into_iter().next()
+    }
+
+    /// The next stop if its recording and pose are both complete.
+    ///
+    /// # Errors
+    /// A recording that stays unreadable for `give_up` without changing, or a pose table
+    /// whose complete lines are malformed; named.
+    pub fn poll(&mut self) -> Result<Next> {
+        let dir = self.audio_dir();
+        if !dir.is_dir() {
+            return Ok(Next::Waiting(format!(
+                "{} does not exist yet",
+                dir.display()
+            )));
+        }
+        let files = list_files(&dir, "wav")?;
+        let Some(file) = files.get(self.done).cloned() else {
+            return Ok(Next::Waiting("no new recording".into()));
+        };
+        let size = std::fs::metadata(&file).map_or(0, |m| m.len());
+        let since = match self.seen.get(&file) {
+            Some(&(s, t)) if s == size => t,
+            _ => {
+                let now = Instant::now();
+                self.seen.insert(file.clone(), (size, now));
+                now
+            }
+        };
+        let audio = match ssl::read_wav(&file) {
+            Ok(a) if std::fs::metadata(&file).map_or(0, |m| m.len()) == size => a,
+            Ok(_) => return Ok(Next::Waiting(format!("{} is growing", file.display()))),
+            Err(e) => {
+                if since.elapsed() >= self.give_up {
+                    bail!(
+                        "{e} (unchanged for {:.0} s: not a recording being written)",
+                        self.give_up.as_secs_f64()
+                    );
+                }
+                return Ok(Next::Waiting(format!(
+                    "{} is not complete yet",
+                    file.display()
+                )));
+            }
+        };
+        let Some(table) = self.pose_table() else {
+            return Ok(Next::Waiting("no pose table yet".into()));
+        };
+        let poses = read_poses_so_far(&table, self.theta_in_radians)?;
+        let Some(&pose) = poses.get(self.done) else {
+            return Ok(Next::Waiting(format!(
+                "{} has {} poses; waiting for stop {}",
+                table.display(),
+                poses.len(),
+                self.done + 1
+            )));
+        };
+        self.seen.remove(&file);
+        self.done += 1;
+        Ok(Next::Ready { file, audio, pose })
+    }
+}

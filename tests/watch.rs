@@ -1,0 +1,289 @@
+//! `iasm watch` through the binary: a finished data set replayed stop by stop, and a folder
+//! that is written while the command follows it (a recording in two halves, a pose table
+//! lagging behind the audio).
+
+use std::io::Read;
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use crate::util::*;
+
+#[test]
+fn a_replay_writes_one_curve_row_per_stop_and_ends_on_the_batch_map() {
+    let dir = tempdir();
+    let root = path(&dir, "ds");
+    audio_dataset(&root, &AUDIO_TRUTH);
+    let (curve, out, plot) = (
+        path(&dir, "curve.csv"),
+        path(&dir, "map.json"),
+        path(&dir, "curve.svg"),
+    );
+    let o = iasm(&[
+        "watch",
+        arg(&root),
+        "--replay",
+        "--num",
+        "2",
+        "--seed",
+        "3",
+        "--curve",
+        arg(&curve),
+        "--out",
+        arg(&out),
+    ]);
+    assert!(o.status.success(), "{}", show(&o));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(
+        stdout.lines().filter(|l| l.starts_with("stop ")).count(),
+        20
+    );
+    // The curve: a header and 20 rows, stops 1..20 in order, OSPA known at each.
+    let text = std::fs::read_to_string(&curve).unwrap();
+    let rows: Vec<Vec<&str>> = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    assert_eq!(rows.len(), 20);
+    for (k, r) in rows.iter().enumerate() {
+        assert_eq!(r[0], (k + 1).to_string());
+        assert_eq!(r[1], format!("sub{}.wav", k + 1));
+        assert!(r[4].parse::<f64>().is_ok(), "{r:?}");
+    }
+    // The map converges: the last row has both sources, far better than the first.
+    let ospa = |r: &Vec<&str>| r[4].parse::<f64>().unwrap();
+    assert_eq!(rows[19][3], "2");
+    assert!(ospa(&rows[19]) < 0.2 && ospa(&rows[0]) >= 0.9, "{text}");
+    // The final map is the batch map of the same DoAs and seed.
+    let fin = json_file(&out);
+    assert_eq!(fin["final_map"], true);
+    assert_eq!(fin["stops"], 20);
+    let batch = json(&iasm(&[
+        "map",
+        "--dataset",
+        arg(&root),
+        "--num",
+        "2",
+        "--seed",
+        "3",
+        "--json",
+    ]));
+    assert_eq!(fin["sources"], batch["sources"]);
+    assert_eq!(fin["ospa"]["total"], batch["ospa"]["total"]);
+    // The plot beside the curve, with its axes and title.
+    let texts = svg_texts(&plot);
+    for want in [
+        "stop",
+        "OSPA (m)",
+        "the map after each stop",
+        "a full map ran",
+    ] {
+        assert!(
+            texts.iter().any(|t| t.contains(want)),
+            "{want:?} in {texts:?}"
+        );
+    }
+}
+
+fn json_file(p: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
+}
+
+/// Waits until `cond` holds, up to `secs`.
+fn wait_for(secs: f64, what: &str, mut cond: impl FnMut() -> bool) {
+    let t0 = Instant::now();
+    while !cond() {
+        assert!(
+            t0.elapsed().as_secs_f64() < secs,
+            "timed out waiting for {what}"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+/// The `stops` of the map JSON at `p`, if it is there (it is always whole: written through
+/// a temporary file and a rename).
+fn stops_in(p: &Path) -> Option<u64> {
+    let text = std::fs::read_to_string(p).ok()?;
+    let v: serde_json::Value = serde_json::from_str(&text).expect("a whole JSON file");
+    v["stops"].as_u64()
+}
+
+fn spawn_watch(root: &Path, out: &Path, stops: usize) -> Child {
+    Command::new(env!("CARGO_BIN_EXE_iasm"))
+        .args([
+            "watch",
+            arg(root),
+            "--num",
+            "2",
+            "--stops",
+            &stops.to_string(),
+            "--out",
+            arg(out),
+            "--poll-ms",
+            "50",
+            "--give-up-s",
+            "20",
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("the iasm binary runs")
+}
+
+fn finish(mut child: Child) -> (String, String) {
+    let t0 = Instant::now();
+    loop {
+        if child.try_wait().unwrap().is_some() {
+            break;
+        }
+        if t0.elapsed() > Duration::from_secs(60) {
+            let _ = child.kill();
+            panic!("iasm watch did not end");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let status = child.wait().unwrap();
+    let (mut out, mut err) = (String::new(), String::new());
+    child
+        .stdout
+        .take()
+        .unwrap()
+        .read_to_string(&mut out)
+        .unwrap();
+    child
+        .stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut err)
+        .unwrap();
+    assert!(status.success(), "{status:?}\n{out}\n{err}");
+    (out, err)
+}
+
+/// A complete data set to copy from, and an empty folder with only its map and truth.
+fn source_and_live(dir: &tempfile::TempDir) -> (std::path::PathBuf, std::path::PathBuf) {
+    let src = path(dir, "src");
+    audio_dataset(&src, &AUDIO_TRUTH);
+    let live = path(dir, "live");
+    std::fs::create_dir_all(live.join("map")).unwrap();
+    for f in ["map/room.yaml", "map/room.pgm", "src_gt.txt"] {
+        std::fs::copy(src.join(f), live.join(f)).unwrap();
+    }
+    (src, live)
+}
+
+#[test]
+fn recordings_written_one_by_one_are_mapped_as_they_arrive() {
+    let dir = tempdir();
+    let (src, live) = source_and_live(&dir);
+    let out = path(&dir, "map.json");
+    let child = spawn_watch(&live, &out, 20);
+    let poses: Vec<String> = std::fs::read_to_string(src.join("pose/poses.csv"))
+        .unwrap()
+        .lines()
+        .map(str::to_owned)
+        .collect();
+    std::fs::create_dir_all(live.join("audio")).unwrap();
+    std::fs::create_dir_all(live.join("pose")).unwrap();
+    let mut table = String::new();
+    for k in 1..=20 {
+        table.push_str(&poses[k - 1]);
+        table.push('\n');
+        std::fs::write(live.join("pose/poses.csv"), &table).unwrap();
+        let wav = std::fs::read(src.join(format!("audio/sub{k}.wav"))).unwrap();
+        let dest = live.join(format!("audio/sub{k}.wav"));
+        if k == 6 {
+            // Written in two halves with a pause: the first half is a WAV whose header
+            // declares more samples than are there yet, retried rather than refused.
+            std::fs::write(&dest, &wav[..wav.len() / 2]).unwrap();
+            std::thread::sleep(Duration::from_millis(400));
+            assert!(
+                stops_in(&out).unwrap_or(0) <= 5,
+                "stop 6 must wait for its second half"
+            );
+            std::fs::write(&dest, &wav).unwrap();
+        } else {
+            std::fs::write(&dest, &wav).unwrap();
+        }
+        if k == 4 || k == 12 {
+            // The maps that appear follow the recordings.
+            wait_for(20.0, &format!("the map after stop {k}"), || {
+                stops_in(&out) == Some(k as u64)
+            });
+        }
+    }
+    let (stdout, _) = finish(child);
+    let lines: Vec<&str> = stdout.lines().filter(|l| l.starts_with("stop ")).collect();
+    assert_eq!(lines.len(), 20, "{stdout}");
+    for (k, l) in lines.iter().enumerate() {
+        assert!(l.contains(&format!("sub{}.wav", k + 1)), "{l}");
+    }
+    let fin = json_file(&out);
+    assert_eq!(
+        (fin["stops"].as_u64(), fin["final_map"].as_bool()),
+        (Some(20), Some(true))
+    );
+    assert_eq!(fin["sources"].as_array().unwrap().len(), 2, "{fin}");
+    assert!(fin["ospa"]["total"].as_f64().unwrap() < 0.2, "{fin}");
+}
+
+#[test]
+fn a_pose_table_lagging_one_stop_behind_loses_nothing() {
+    let dir = tempdir();
+    let (src, live) = source_and_live(&dir);
+    let out = path(&dir, "map.json");
+    let child = spawn_watch(&live, &out, 12);
+    let poses: Vec<String> = std::fs::read_to_string(src.join("pose/poses.csv"))
+        .unwrap()
+        .lines()
+        .map(str::to_owned)
+        .collect();
+    std::fs::create_dir_all(live.join("audio")).unwrap();
+    std::fs::create_dir_all(live.join("pose")).unwrap();
+    let mut table = String::new();
+    for k in 1..=12 {
+        // The recording of stop k first; the pose of stop k - 1 only now, and the next
+        // pose half-written (no newline yet): it must not be read as a pose.
+        std::fs::copy(
+            src.join(format!("audio/sub{k}.wav")),
+            live.join(format!("audio/sub{k}.wav")),
+        )
+        .unwrap();
+        if k > 1 {
+            table.push_str(&poses[k - 2]);
+            table.push('\n');
+        }
+        let partial = &poses[k - 1][..poses[k - 1].len() / 2];
+        std::fs::write(live.join("pose/poses.csv"), format!("{table}{partial}")).unwrap();
+        std::thread::sleep(Duration::from_millis(120));
+        // The map never runs ahead of the complete poses.
+        assert!(stops_in(&out).unwrap_or(0) < k as u64);
+    }
+    table.push_str(&poses[11]);
+    table.push('\n');
+    std::fs::write(live.join("pose/poses.csv"), &table).unwrap();
+    let (stdout, _) = finish(child);
+    assert_eq!(
+        stdout.lines().filter(|l| l.starts_with("stop ")).count(),
+        12
+    );
+    let fin = json_file(&out);
+    assert_eq!(fin["stops"], 12);
+    // Every stop mapped with its own pose: the same map as the whole data set's first 12.
+    let o = iasm(&[
+        "watch",
+        arg(&src),
+        "--replay",
+        "--num",
+        "2",
+        "--stops",
+        "12",
+        "--out",
+        arg(&path(&dir, "replayed.json")),
+    ]);
+    assert!(o.status.success(), "{}", show(&o));
+    let replayed = json_file(&path(&dir, "replayed.json"));
+    assert_eq!(fin["sources"], replayed["sources"]);
+}
