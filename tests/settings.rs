@@ -44,6 +44,7 @@ variant = "wdp"
 refine = false
 min_observations = 4
 densest_fallback = true
+vote_min_stops = 6
 "#;
 
 // See: issue 8
