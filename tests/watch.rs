@@ -174,19 +174,24 @@ fn source_and_live(dir: &tempfile::TempDir) -> (std::path::PathBuf, std::path::P
     (src, live)
 }
 
+/// The complete data set's pose rows, and the followed folder's audio/ and pose/ made.
+fn pose_lines(src: &Path, live: &Path) -> Vec<String> {
+    std::fs::create_dir_all(live.join("audio")).unwrap();
+    std::fs::create_dir_all(live.join("pose")).unwrap();
+    std::fs::read_to_string(src.join("pose/poses.csv"))
+        .unwrap()
+        .lines()
+        .map(str::to_owned)
+        .collect()
+}
+
 #[test]
 fn recordings_written_one_by_one_are_mapped_as_they_arrive() {
     let dir = tempdir();
     let (src, live) = source_and_live(&dir);
     let out = path(&dir, "map.json");
     let child = spawn_watch(&live, &out, 20);
-    let poses: Vec<String> = std::fs::read_to_string(src.join("pose/poses.csv"))
-        .unwrap()
-        .lines()
-        .map(str::to_owned)
-        .collect();
-    std::fs::create_dir_all(live.join("audio")).unwrap();
-    std::fs::create_dir_all(live.join("pose")).unwrap();
+    let poses = pose_lines(&src, &live);
     let mut table = String::new();
     for k in 1..=20 {
         table.push_str(&poses[k - 1]);
@@ -235,13 +240,7 @@ fn a_pose_table_lagging_one_stop_behind_loses_nothing() {
     let (src, live) = source_and_live(&dir);
     let out = path(&dir, "map.json");
     let child = spawn_watch(&live, &out, 12);
-    let poses: Vec<String> = std::fs::read_to_string(src.join("pose/poses.csv"))
-        .unwrap()
-        .lines()
-        .map(str::to_owned)
-        .collect();
-    std::fs::create_dir_all(live.join("audio")).unwrap();
-    std::fs::create_dir_all(live.join("pose")).unwrap();
+    let poses = pose_lines(&src, &live);
     let mut table = String::new();
     for k in 1..=12 {
         // The recording of stop k first; the pose of stop k - 1 only now, and the next

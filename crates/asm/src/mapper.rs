@@ -620,19 +620,8 @@ impl Mapper {
         let mut est = est;
         let mut refined = false;
         if self.config.refine
-            && let Some((p, kept)) = fit_bearings(est, &rays, self.sigma)
+            && let Some(p) = refit(est, &mut rays, self.sigma, bearings)
         {
-            // The rays the fit dropped belong to something else: give them back.
-            let mut keep = vec![false; rays.len()];
-            kept.iter().for_each(|&i| keep[i] = true);
-            let mut k = keep.iter();
-            rays.retain(|r| {
-                let kept = *k.next().expect("one flag per ray");
-                if !kept {
-                    bearings[r.stop].push(r.bearing);
-                }
-                kept
-            });
             (est, refined) = (p, true);
         }
         let needed = if fallback {
@@ -771,20 +760,7 @@ impl Mapper {
             return None;
         }
         let mut rays = crate::assoc::associate(q, poses, bearings, self.gamma);
-        let mut est = q;
-        if let Some((p, kept)) = fit_bearings(q, &rays, self.sigma) {
-            let mut keep = vec![false; rays.len()];
-            kept.iter().for_each(|&i| keep[i] = true);
-            let mut k = keep.iter();
-            rays.retain(|r| {
-                let kept = *k.next().expect("one flag per ray");
-                if !kept {
-                    bearings[r.stop].push(r.bearing);
-                }
-                kept
-            });
-            est = p;
-        }
+        let est = refit(q, &mut rays, self.sigma, bearings).unwrap_or(q);
         if rays.len() < need {
             for r in rays {
                 bearings[r.stop].push(r.bearing);
@@ -882,6 +858,29 @@ pub fn largest_cluster(dbscan: &Dbscan, particles: &[[f64; 2]]) -> Option<Vec<[f
             .map(|(p, _)| *p)
             .collect(),
     )
+}
+
+/// [`fit_bearings`] from `start`, with the rays the fit drops taken out of `rays` and
+/// given back to `bearings` (they belong to something else); the fitted position, or
+/// `None` (and `rays` untouched) when there is no fit.
+pub(crate) fn refit(
+    start: [f64; 2],
+    rays: &mut Vec<Ray>,
+    sigma: f64,
+    bearings: &mut [Vec<f64>],
+) -> Option<[f64; 2]> {
+    let (p, kept) = fit_bearings(start, rays, sigma)?;
+    let mut keep = vec![false; rays.len()];
+    kept.iter().for_each(|&i| keep[i] = true);
+    let mut k = keep.iter();
+    rays.retain(|r| {
+        let kept = *k.next().expect("one flag per ray");
+        if !kept {
+            bearings[r.stop].push(r.bearing);
+        }
+        kept
+    });
+    Some(p)
 }
 
 /// The position that minimises the squared wrapped angles between `rays` and the bearings

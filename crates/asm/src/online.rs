@@ -35,7 +35,7 @@ use rand::rngs::StdRng;
 
 use crate::Pose;
 use crate::error::{Error, Result};
-use crate::mapper::{MapResult, Mapper, Round, Source, Variant, fit_bearings, merge_close};
+use crate::mapper::{MapResult, Mapper, Round, Source, Variant, fit_bearings, merge_close, refit};
 use crate::pf::{ParticleFilter, covariance, mean};
 
 /// What one stop changed.
@@ -225,18 +225,7 @@ impl OnlineMapper {
                     }
                 }
             }
-            if refine && let Some((p, kept)) = fit_bearings([s.x, s.y], &rays, sigma) {
-                let mut keep = vec![false; rays.len()];
-                kept.iter().for_each(|&k| keep[k] = true);
-                let mut flags = keep.iter();
-                let pool = &mut self.pool;
-                rays.retain(|r| {
-                    let kept = *flags.next().expect("one flag per ray");
-                    if !kept {
-                        pool[r.stop].push(r.bearing);
-                    }
-                    kept
-                });
+            if refine && let Some(p) = refit([s.x, s.y], &mut rays, sigma, &mut self.pool) {
                 (s.x, s.y, s.refined) = (p[0], p[1], true);
             }
             if rays.len() < needed {
