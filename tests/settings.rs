@@ -25,6 +25,7 @@ mvdr_loading = 0.2
 mvdr_freq_smoothing = 1
 music_sources = 3
 music_freq_smoothing = 1
+music_coarse = true
 
 [iasm]
 density_d = 8.0

@@ -205,6 +205,14 @@ pub struct SslConfig {
     /// steering phase of a 0.24-m array changes by at most 0.4 rad, which blurs but does
     /// not move a peak, and the evaluation costs a fifth as much.
     pub music_freq_smoothing: usize,
+    /// MUSIC and NormMUSIC: search the grid coarse-to-fine (every other azimuth at every
+    /// other elevation, then the full grid around the `6 N` strongest local maxima of each
+    /// block, the rest interpolated) instead of steering every direction: 1.65x faster
+    /// (NormMUSIC 40 -> 24 ms per 3-s recording). Default: false. Why: measured, the maps
+    /// move both ways (arrangement II 0.145 -> 0.143 m, rows_ten 0.195 -> 0.164, but
+    /// speech_two_rt05 0.017 -> 0.104): a weak source's peak that is not among a block's
+    /// refined maxima is pooled at its interpolated height, below its own.
+    pub music_coarse: bool,
 }
 
 impl Default for SslConfig {
@@ -229,6 +237,7 @@ impl Default for SslConfig {
             mvdr_freq_smoothing: 2,
             music_sources: None,
             music_freq_smoothing: 2,
+            music_coarse: false,
         }
     }
 }

@@ -56,18 +56,21 @@ pub(crate) fn estimator(
     let c = config.speed_of_sound;
     let lags = || Arc::new(PairLags::new(array, grid, fs, c, bins.clone(), frame_len));
     let music = |normalise| {
-        Box::new(music::Music::new(
-            array,
-            grid,
-            fs,
-            c,
-            bins.clone(),
-            frame_len,
-            config.music_sources,
-            config.num_peaks,
-            config.music_freq_smoothing,
-            normalise,
-        ))
+        Box::new(
+            music::Music::new(
+                array,
+                grid,
+                fs,
+                c,
+                bins.clone(),
+                frame_len,
+                config.music_sources,
+                config.num_peaks,
+                config.music_freq_smoothing,
+                normalise,
+            )
+            .coarse_search(grid, config.music_coarse),
+        )
     };
     match config.method {
         Method::GccPhat => Box::new(gcc_phat::GccPhat::new(lags())),

@@ -72,6 +72,33 @@ pub struct Music {
     step_re: Vec<f32>,
     step_im: Vec<f32>,
     normalise: bool,
+    /// The coarse-to-fine plan, when the grid is searched so (see [`Music::coarse_search`]).
+    coarse: Option<Coarse>,
+}
+
+/// The coarse-to-fine search: a thinned grid searched everywhere, the full grid around the
+/// coarse spectrum's strongest local maxima, and the rest interpolated.
+#[derive(Clone, Debug)]
+struct Coarse {
+    n_az: usize,
+    /// Fine azimuth cells per coarse one.
+    az_stride: usize,
+    /// Fine elevation indices searched coarsely, ascending, the first and last included.
+    els: Vec<usize>,
+    /// The coarse directions' fine indices, coarse-elevation-major.
+    dirs: Vec<usize>,
+    /// Their steering tables ([`Tables`]' layout).
+    start_re: Vec<f32>,
+    start_im: Vec<f32>,
+    step_re: Vec<f32>,
+    step_im: Vec<f32>,
+    /// For each fine elevation: the bracketing coarse elevations and the weight of the
+    /// upper one.
+    el_bracket: Vec<(usize, usize, f32)>,
+    /// For each fine azimuth: the bracketing coarse azimuths and the weight of the second.
+    az_bracket: Vec<(usize, usize, f32)>,
+    /// Local maxima refined per block.
+    candidates: usize,
 }
 
 /// Working memory of the subspace estimators (part of [`crate::Scratch`]).
@@ -82,6 +109,19 @@ pub(crate) struct SubspaceScratch {
     a_im: Vec<f32>,
     /// Per group and direction, `|E^H a|^2`, then the group's pseudo-spectrum.
     proj: Vec<f32>,
+    /// The same for the directions refined by the coarse-to-fine search.
+    proj_fine: Vec<f32>,
+    /// Those directions, a mark per grid direction, and their steering tables.
+    fine_dirs: Vec<usize>,
+    fine_mark: Vec<bool>,
+    fine_tables: [Vec<f32>; 4],
+    /// Per coarse direction, the summed spectrum; per refined direction, the same.
+    coarse_sum: Vec<f32>,
+    fine_sum: Vec<f32>,
+    /// The coarse spectrum interpolated along azimuth, per coarse elevation.
+    rows: Vec<f32>,
+    /// The coarse spectrum's local maxima: value, coarse elevation, coarse azimuth.
+    peaks: Vec<(f32, usize, usize)>,
     /// The projected-on eigenvectors of every group: group-major, then vector, then mic.
     vec_re: Vec<f32>,
     vec_im: Vec<f32>,
@@ -150,6 +190,87 @@ impl Music {
             step_re,
             step_im,
             normalise,
+            coarse: None,
+        }
+    }
+
+    /// Searches `grid` coarse-to-fine when `on` (and the grid is fine enough to thin: at
+    /// least 72 azimuths, an even number): every other azimuth at every other elevation
+    /// (the first and last kept) everywhere, the full grid within one coarse cell of the
+    /// coarse spectrum's strongest local maxima (`6 N`, at least 12), and the rest
+    /// interpolated bilinearly from the coarse cells. About a third of the directions are
+    /// steered. See [`crate::SslConfig::music_coarse`] for what it costs the maps.
+    #[must_use]
+    pub(crate) fn coarse_search(mut self, grid: &DirectionGrid, on: bool) -> Self {
+        let n_az = grid.num_azimuths();
+        let n_el = grid.elevations().len();
+        if !on || n_az < 72 || !n_az.is_multiple_of(2) {
+            self.coarse = None;
+            return self;
+        }
+        let mut els: Vec<usize> = (0..n_el).step_by(2).collect();
+        if els.last() != Some(&(n_el - 1)) {
+            els.push(n_el - 1);
+        }
+        let az_stride = 2;
+        let dirs: Vec<usize> = els
+            .iter()
+            .flat_map(|&e| (0..n_az).step_by(az_stride).map(move |a| e * n_az + a))
+            .collect();
+        let [start_re, start_im, step_re, step_im] = self.gather(&dirs);
+        let el_bracket = (0..n_el)
+            .map(|e| {
+                let hi = els.iter().position(|&c| c >= e).expect("the last is kept");
+                if els[hi] == e || hi == 0 {
+                    (hi, hi, 0.0)
+                } else {
+                    let lo = hi - 1;
+                    let t = (e - els[lo]) as f32 / (els[hi] - els[lo]) as f32;
+                    (lo, hi, t)
+                }
+            })
+            .collect();
+        let caz = n_az / az_stride;
+        let az_bracket = (0..n_az)
+            .map(|a| {
+                let (i0, r) = (a / az_stride, a % az_stride);
+                (i0, (i0 + 1) % caz, r as f32 / az_stride as f32)
+            })
+            .collect();
+        self.coarse = Some(Coarse {
+            n_az,
+            az_bracket,
+            az_stride,
+            els,
+            dirs,
+            start_re,
+            start_im,
+            step_re,
+            step_im,
+            el_bracket,
+            candidates: (6 * self.sources).max(12),
+        });
+        self
+    }
+
+    /// The steering tables of directions `dirs` (in that order), chunk-major.
+    fn gather(&self, dirs: &[usize]) -> [Vec<f32>; 4] {
+        let mut out: [Vec<f32>; 4] = Default::default();
+        self.gather_into(dirs, &mut out);
+        out
+    }
+
+    fn gather_into(&self, dirs: &[usize], out: &mut [Vec<f32>; 4]) {
+        let m = self.mics;
+        let len = dirs.len().div_ceil(W) * W * m;
+        let src = [&self.start_re, &self.start_im, &self.step_re, &self.step_im];
+        for (o, t) in out.iter_mut().zip(src) {
+            let o = zeroed(o, len);
+            for (j, &d) in dirs.iter().enumerate() {
+                for mic in 0..m {
+                    o[((j / W) * m + mic) * W + j % W] = t[((d / W) * m + mic) * W + d % W];
+                }
+            }
         }
     }
 
@@ -177,17 +298,33 @@ impl Music {
         let n = self.centres.len() * dim * m;
         let (vr, vi) = (zeroed(&mut s.vec_re, n), zeroed(&mut s.vec_im, n));
         let mut cov = DMatrix::<Complex<f32>>::zeros(m, m);
+        // The block's frames, per microphone, so that the sums below index plain slices.
+        let rows: Vec<Vec<&[Complex32]>> = frames
+            .clone()
+            .map(|f| (0..m).map(|i| stft.frame(f, i)).collect())
+            .collect();
+        let mut acc = vec![Complex32::default(); m * m];
+        let mut x = vec![Complex32::default(); m];
         for (k, &c) in self.centres.iter().enumerate() {
-            cov.fill(Complex::default());
+            acc.fill(Complex32::default());
             let band = c.saturating_sub(self.smoothing)..(c + self.smoothing + 1).min(self.n_bins);
-            for f in frames.clone() {
+            for frame in &rows {
                 for b in band.clone() {
+                    for (xi, ch) in x.iter_mut().zip(frame) {
+                        *xi = ch[b];
+                    }
                     for i in 0..m {
-                        let xi = stft.frame(f, i)[b];
+                        let xi = x[i];
+                        let row = &mut acc[i * m..(i + 1) * m];
                         for j in i..m {
-                            cov[(i, j)] += xi * stft.frame(f, j)[b].conj();
+                            row[j] += xi * x[j].conj();
                         }
                     }
+                }
+            }
+            for i in 0..m {
+                for j in i..m {
+                    cov[(i, j)] = acc[i * m + j];
                 }
             }
             // Scale to unit trace (the decomposition does not care, f32 does), then mirror.
@@ -250,43 +387,222 @@ impl SpectrumEstimator for Music {
         assert_eq!(out.len(), self.n_dirs, "one value per direction");
         let s = &mut scratch.subspace;
         let (dim, signal) = self.subspaces(stft, frames, s);
-        let (m, nd, ng) = (self.mics, self.n_dirs, self.centres.len());
-        let nd_pad = nd.div_ceil(W) * W;
-        let SubspaceScratch {
-            a_re,
-            a_im,
-            proj,
-            vec_re,
-            vec_im,
-        } = s;
-        zeroed(a_re, m * W);
-        zeroed(a_im, m * W);
-        let proj = zeroed(proj, ng * nd_pad);
+        match &self.coarse {
+            None => self.exhaustive(dim, signal, out, s),
+            Some(c) => self.coarse_to_fine(c, dim, signal, out, s),
+        }
+    }
+}
+
+impl Music {
+    /// Every group's pseudo-spectrum `1 / |E_n^H a|^2` (floored) on the `n` directions of
+    /// `tables`, into `proj` (group-major, each group padded to whole chunks).
+    #[allow(clippy::too_many_arguments)]
+    fn pseudo(
+        &self,
+        tables: &Tables,
+        n: usize,
+        dim: usize,
+        signal: bool,
+        vec: (&[f32], &[f32]),
+        a: (&mut Vec<f32>, &mut Vec<f32>),
+        proj: &mut Vec<f32>,
+    ) -> usize {
+        let (m, ng) = (self.mics, self.centres.len());
+        let n_pad = n.div_ceil(W) * W;
+        let a_re = zeroed(a.0, m * W);
+        let a_im = zeroed(a.1, m * W);
+        let proj = zeroed(proj, ng * n_pad);
+        steer_all(tables, vec.0, vec.1, m, dim, ng, a_re, a_im, proj);
+        // |E_n^H a|^2 / |a|^2 with |a|^2 = M.
+        // Branch-free, so that the loop runs on whole vectors.
+        let inv_m = 1.0 / m as f32;
+        let (a0, a1) = if signal { (1.0, -inv_m) } else { (0.0, inv_m) };
+        for v in proj.iter_mut() {
+            *v = 1.0 / (a0 + a1 * *v).max(FLOOR);
+        }
+        n_pad
+    }
+
+    /// A group's weight in the sum: NormMUSIC divides by its largest value (`max`).
+    fn group_scale(&self, max: f32) -> f32 {
+        let norm = 1.0 / self.centres.len() as f32;
+        if self.normalise {
+            norm / max.max(f32::MIN_POSITIVE)
+        } else {
+            norm * FLOOR
+        }
+    }
+
+    /// Every direction of the grid steered.
+    fn exhaustive(&self, dim: usize, signal: bool, out: &mut [f32], s: &mut SubspaceScratch) {
+        let nd = self.n_dirs;
         let tables = Tables {
             start_re: &self.start_re,
             start_im: &self.start_im,
             step_re: &self.step_re,
             step_im: &self.step_im,
         };
-        steer_all(&tables, vec_re, vec_im, m, dim, ng, a_re, a_im, proj);
-        // |E_n^H a|^2 / |a|^2 with |a|^2 = M; the padding past nd is left out.
+        let SubspaceScratch {
+            a_re,
+            a_im,
+            proj,
+            vec_re,
+            vec_im,
+            ..
+        } = s;
+        let nd_pad = self.pseudo(
+            &tables,
+            nd,
+            dim,
+            signal,
+            (vec_re, vec_im),
+            (a_re, a_im),
+            proj,
+        );
         out.fill(0.0);
-        let inv_m = 1.0 / m as f32;
-        let norm = 1.0 / ng as f32;
-        for p in proj.chunks_exact_mut(nd_pad) {
-            let p = &mut p[..nd];
-            for v in p.iter_mut() {
-                let noise = if signal { 1.0 - *v * inv_m } else { *v * inv_m };
-                *v = 1.0 / noise.max(FLOOR);
-            }
-            let scale = if self.normalise {
-                norm / p.iter().copied().fold(f32::MIN_POSITIVE, f32::max)
-            } else {
-                norm * FLOOR
-            };
-            for (o, v) in out.iter_mut().zip(p.iter()) {
+        for p in proj.chunks_exact(nd_pad) {
+            let p = &p[..nd];
+            let scale = self.group_scale(p.iter().copied().fold(0.0, f32::max));
+            for (o, v) in out.iter_mut().zip(p) {
                 *o += v * scale;
             }
+        }
+    }
+
+    /// The coarse-to-fine search (see [`Music::coarse_search`]).
+    fn coarse_to_fine(
+        &self,
+        c: &Coarse,
+        dim: usize,
+        signal: bool,
+        out: &mut [f32],
+        s: &mut SubspaceScratch,
+    ) {
+        let nc = c.dirs.len();
+        let coarse = Tables {
+            start_re: &c.start_re,
+            start_im: &c.start_im,
+            step_re: &c.step_re,
+            step_im: &c.step_im,
+        };
+        let nc_pad = self.pseudo(
+            &coarse,
+            nc,
+            dim,
+            signal,
+            (&s.vec_re, &s.vec_im),
+            (&mut s.a_re, &mut s.a_im),
+            &mut s.proj,
+        );
+        // The coarse spectrum with each group scaled by its coarse maximum: enough to rank
+        // the local maxima.
+        let sum = zeroed(&mut s.coarse_sum, nc);
+        for p in s.proj.chunks_exact(nc_pad) {
+            let p = &p[..nc];
+            let scale = self.group_scale(p.iter().copied().fold(0.0, f32::max));
+            for (o, v) in sum.iter_mut().zip(p) {
+                *o += v * scale;
+            }
+        }
+        let (caz, cel) = (c.n_az / c.az_stride, c.els.len());
+        let at = |j: usize, i: usize| sum[j * caz + i];
+        let peaks = &mut s.peaks;
+        peaks.clear();
+        for j in 0..cel {
+            let (j0, j1) = (j.saturating_sub(1), (j + 1).min(cel - 1));
+            for i in 0..caz {
+                let v = at(j, i);
+                let (il, ir) = (
+                    if i == 0 { caz - 1 } else { i - 1 },
+                    if i + 1 == caz { 0 } else { i + 1 },
+                );
+                // A local maximum: nothing around it (azimuth wraps) is larger.
+                let top = (j0..=j1)
+                    .all(|jj| at(jj, il) <= v && at(jj, ir) <= v && (jj == j || at(jj, i) <= v));
+                if top {
+                    peaks.push((v, j, i));
+                }
+            }
+        }
+        peaks.sort_by(|a, b| b.0.total_cmp(&a.0));
+        peaks.truncate(c.candidates);
+        // The full grid within one coarse cell of each.
+        let n_el = c.el_bracket.len();
+        let mark = zeroed(&mut s.fine_mark, self.n_dirs);
+        s.fine_dirs.clear();
+        for &(_, j, i) in peaks.iter() {
+            let e_lo = if j == 0 { 0 } else { c.els[j - 1] };
+            let e_hi = if j + 1 < cel { c.els[j + 1] } else { n_el - 1 };
+            let a0 = i * c.az_stride;
+            for e in e_lo..=e_hi {
+                for da in 0..=2 * c.az_stride {
+                    let a = (a0 + c.n_az + da - c.az_stride) % c.n_az;
+                    let d = e * c.n_az + a;
+                    if !mark[d] {
+                        mark[d] = true;
+                        s.fine_dirs.push(d);
+                    }
+                }
+            }
+        }
+        let nf = s.fine_dirs.len();
+        self.gather_into(&s.fine_dirs, &mut s.fine_tables);
+        let [fr, fi, sr, si] = &s.fine_tables;
+        let fine = Tables {
+            start_re: fr,
+            start_im: fi,
+            step_re: sr,
+            step_im: si,
+        };
+        let nf_pad = self.pseudo(
+            &fine,
+            nf,
+            dim,
+            signal,
+            (&s.vec_re, &s.vec_im),
+            (&mut s.a_re, &mut s.a_im),
+            &mut s.proj_fine,
+        );
+        // Final sums, each group scaled by its largest value over both sets.
+        let sum = zeroed(&mut s.coarse_sum, nc);
+        out.fill(0.0);
+        let fine_sum = zeroed(&mut s.fine_sum, nf);
+        for (pc, pf) in s
+            .proj
+            .chunks_exact(nc_pad)
+            .zip(s.proj_fine.chunks_exact(nf_pad))
+        {
+            let (pc, pf) = (&pc[..nc], &pf[..nf]);
+            let max = pc.iter().chain(pf).copied().fold(0.0, f32::max);
+            let scale = self.group_scale(max);
+            for (o, v) in sum.iter_mut().zip(pc) {
+                *o += v * scale;
+            }
+            for (o, v) in fine_sum.iter_mut().zip(pf) {
+                *o += v * scale;
+            }
+        }
+        // Everywhere: linear in azimuth along each coarse elevation, then in elevation.
+        let rows = zeroed(&mut s.rows, cel * c.n_az);
+        for (j, row) in rows.chunks_exact_mut(c.n_az).enumerate() {
+            let cs = &sum[j * caz..(j + 1) * caz];
+            for (o, &(i0, i1, u)) in row.iter_mut().zip(&c.az_bracket) {
+                *o = cs[i0] + (cs[i1] - cs[i0]) * u;
+            }
+        }
+        for (e, &(lo, hi, t)) in c.el_bracket.iter().enumerate() {
+            let (rl, rh) = (
+                &rows[lo * c.n_az..(lo + 1) * c.n_az],
+                &rows[hi * c.n_az..(hi + 1) * c.n_az],
+            );
+            for ((o, &l), &h) in out[e * c.n_az..(e + 1) * c.n_az].iter_mut().zip(rl).zip(rh) {
+                *o = l + (h - l) * t;
+            }
+        }
+        // Where refined: the values themselves.
+        for (&d, &v) in s.fine_dirs.iter().zip(fine_sum.iter()) {
+            out[d] = v;
         }
     }
 }
