@@ -515,6 +515,13 @@ fn ground_truth_reader_survives_mutations() {
     );
 }
 
+/// An array file (TOML or JSON by the extension) through the `ssl` crate's reader.
+fn read_array(p: &Path) -> Result<(), String> {
+    ssl::MicArray::from_file(p)
+        .map(drop)
+        .map_err(|e| e.to_string())
+}
+
 #[test]
 fn array_file_readers_survive_mutations() {
     let dir = tempdir();
@@ -526,11 +533,7 @@ fn array_file_readers_survive_mutations() {
         vec![toml],
         true,
         ALLOC_SLACK,
-        |p| {
-            ssl::MicArray::from_file(p)
-                .map(drop)
-                .map_err(|e| e.to_string())
-        },
+        read_array,
     );
     let json = r#"{"name": "square", "positions": [[0.03, 0.03, 0.0], [-0.03, 0.03, 0.0], [-0.03, -0.03, 0.0], [0.03, -0.03, 0.0]]}"#;
     fuzz(
@@ -540,11 +543,7 @@ fn array_file_readers_survive_mutations() {
         vec![json.into()],
         true,
         ALLOC_SLACK,
-        |p| {
-            ssl::MicArray::from_file(p)
-                .map(drop)
-                .map_err(|e| e.to_string())
-        },
+        read_array,
     );
 }
 

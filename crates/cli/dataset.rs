@@ -88,11 +88,7 @@ fn is_workbook(path: &Path) -> bool {
 
 /// [`read_table`], with the CSV's text given instead of read when `text` is `Some`.
 fn read_table_from(path: &Path, text: Option<&str>) -> Result<Table> {
-    let ext = path
-        .extension()
-        .map(|e| e.to_string_lossy().to_ascii_lowercase())
-        .unwrap_or_default();
-    let raw: Vec<Vec<String>> = if matches!(ext.as_str(), "xlsx" | "xls" | "xlsm" | "ods") {
+    let raw: Vec<Vec<String>> = if is_workbook(path) {
         read_workbook(path)?
     } else if let Some(text) = text {
         csv_lines(text).map(split_cells).collect()
@@ -331,12 +327,13 @@ pub fn read_poses_so_far(path: &Path, theta_in_radians: bool) -> Result<Vec<Pose
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("reading table {}", path.display()))?;
     let complete = &text[..text.rfind('\n').map_or(0, |i| i + 1)];
-    if csv_lines(complete).nth(1).is_none() {
-        // Nothing yet, or only a first line that may be a header.
-        let one = csv_lines(complete).next();
-        if one.is_none_or(|l| split_cells(l).iter().any(|c| parse_cell(c).is_err())) {
-            return Ok(Vec::new());
-        }
+    let mut lines = csv_lines(complete);
+    let first = lines.next();
+    if lines.next().is_none()
+        && first.is_none_or(|l| split_cells(l).iter().any(|c| parse_cell(c).is_err()))
+    {
+        // Nothing yet, or only a first line that is a header.
+        return Ok(Vec::new());
     }
     if let Some(poses) = named_poses_from(path, complete, theta_in_radians)? {
         return Ok(poses);

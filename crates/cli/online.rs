@@ -322,6 +322,20 @@ impl Follower {
                 now
             }
         };
+        // The pose first: reading a recording whose pose has not come yet would be repeated
+        // at every look until it does.
+        let Some(table) = self.pose_table() else {
+            return Ok(Next::Waiting("no pose table yet".into()));
+        };
+        let poses = read_poses_so_far(&table, self.theta_in_radians)?;
+        let Some(&pose) = poses.get(self.done) else {
+            return Ok(Next::Waiting(format!(
+                "{} has {} poses; waiting for stop {}",
+                table.display(),
+                poses.len(),
+                self.done + 1
+            )));
+        };
         let audio = match ssl::read_wav(&file) {
             Ok(a) if std::fs::metadata(&file).map_or(0, |m| m.len()) == size => a,
             Ok(_) => return Ok(Next::Waiting(format!("{} is growing", file.display()))),
@@ -337,18 +351,6 @@ impl Follower {
                     file.display()
                 )));
             }
-        };
-        let Some(table) = self.pose_table() else {
-            return Ok(Next::Waiting("no pose table yet".into()));
-        };
-        let poses = read_poses_so_far(&table, self.theta_in_radians)?;
-        let Some(&pose) = poses.get(self.done) else {
-            return Ok(Next::Waiting(format!(
-                "{} has {} poses; waiting for stop {}",
-                table.display(),
-                poses.len(),
-                self.done + 1
-            )));
         };
         self.seen.remove(&file);
         self.done += 1;

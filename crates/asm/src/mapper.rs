@@ -369,6 +369,8 @@ impl MapResult {
 pub struct Mapper {
     config: IasmConfig,
     cells: Vec<[f64; 2]>,
+    /// The known cells' bounding box `(x0, x1, y0, y1)` (m): where the vote looks.
+    bounds: (f64, f64, f64, f64),
     m: usize,
     lik: Likelihood,
     dbscan: Dbscan,
@@ -408,6 +410,15 @@ impl Mapper {
         if m == 0 {
             return Err(Error::EmptyMap);
         }
+        let mut bounds = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+        for c in &cells {
+            bounds = (
+                bounds.0.min(c[0]),
+                bounds.1.max(c[0]),
+                bounds.2.min(c[1]),
+                bounds.3.max(c[1]),
+            );
+        }
         let sigma = config.sigma_deg.to_radians();
         let beta = (config.variant != Variant::Wdp).then_some(config.beta_m);
         let dbscan = DbscanParams {
@@ -418,6 +429,7 @@ impl Mapper {
         Ok(Self {
             config: config.clone(),
             cells,
+            bounds,
             m,
             lik: Likelihood::new(sigma, beta),
             dbscan,
@@ -512,21 +524,25 @@ impl Mapper {
                 sources.push(s);
             }
         }
-        let merged = merge_close(&mut sources, c.merge_dist_m);
-        if c.refine {
-            // A merged source holds the rays of two fits: fit them together.
-            for &i in &merged {
-                let s = &mut sources[i];
-                if let Some((p, _)) = fit_bearings([s.x, s.y], &s.rays, self.sigma) {
-                    (s.x, s.y, s.refined) = (p[0], p[1], true);
-                }
-            }
-        }
+        self.merge(&mut sources);
         MapResult {
             sources,
             rounds,
             particles: self.m,
             unexplained: bearings.iter().map(Vec::len).sum(),
+        }
+    }
+
+    /// Merges estimates closer than [`IasmConfig::merge_dist_m`] into their mean and, with
+    /// [`IasmConfig::refine`], refits each merged one: it holds the rays of two fits.
+    pub(crate) fn merge(&self, sources: &mut Vec<Source>) {
+        for i in merge_close(sources, self.config.merge_dist_m) {
+            let s = &mut sources[i];
+            if self.config.refine
+                && let Some((p, _)) = fit_bearings([s.x, s.y], &s.rays, self.sigma)
+            {
+                (s.x, s.y, s.refined) = (p[0], p[1], true);
+            }
         }
     }
 
@@ -697,10 +713,7 @@ impl Mapper {
         if live < need {
             return None;
         }
-        let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
-        for c in &self.cells {
-            (x0, x1, y0, y1) = (x0.min(c[0]), x1.max(c[0]), y0.min(c[1]), y1.max(c[1]));
-        }
+        let (x0, x1, y0, y1) = self.bounds;
         let rays: Vec<([f64; 2], f64, usize)> = bearings
             .iter()
             .enumerate()
@@ -708,7 +721,6 @@ impl Mapper {
             .map(|(k, b)| (poses[k].position(), b, k))
             .collect();
         let gate = 2.0 * self.sigma;
-        let min_cross = 10f64.to_radians().sin();
         // The stops with a remaining DoA within the gate of the bearing to `q`, and the
         // sum of their squared misses.
         let support = |q: [f64; 2]| -> (usize, f64) {
@@ -729,23 +741,16 @@ impl Mapper {
         };
         let mut best: Option<([f64; 2], usize, f64)> = None;
         for (i, &(pa, a, ka)) in rays.iter().enumerate() {
-            let ua = [a.cos(), a.sin()];
             for &(pb, b, kb) in &rays[i + 1..] {
                 if ka == kb {
                     continue;
                 }
-                let ub = [b.cos(), b.sin()];
-                let cross = ua[0] * ub[1] - ua[1] * ub[0];
-                if cross.abs() < min_cross {
+                let Some((q, t, u)) = crossing(pa, a, pb, b) else {
                     continue;
-                }
-                let (dx, dy) = (pb[0] - pa[0], pb[1] - pa[1]);
-                let t = (dx * ub[1] - dy * ub[0]) / cross;
-                let u = (dx * ua[1] - dy * ua[0]) / cross;
+                };
                 if t < 0.3 || u < 0.3 {
                     continue;
                 }
-                let q = [pa[0] + t * ua[0], pa[1] + t * ua[1]];
                 if !(x0..=x1).contains(&q[0]) || !(y0..=y1).contains(&q[1]) {
                     continue;
                 }
@@ -772,17 +777,9 @@ impl Mapper {
         let mut cloud = Vec::new();
         for (i, ra) in rays.iter().enumerate() {
             for rb in &rays[i + 1..] {
-                let (ua, ub) = (
-                    [ra.bearing.cos(), ra.bearing.sin()],
-                    [rb.bearing.cos(), rb.bearing.sin()],
-                );
-                let cross = ua[0] * ub[1] - ua[1] * ub[0];
-                if cross.abs() < min_cross {
+                let Some((q, _, _)) = crossing(ra.from, ra.bearing, rb.from, rb.bearing) else {
                     continue;
-                }
-                let (dx, dy) = (rb.from[0] - ra.from[0], rb.from[1] - ra.from[1]);
-                let t = (dx * ub[1] - dy * ub[0]) / cross;
-                let q = [ra.from[0] + t * ua[0], ra.from[1] + t * ua[1]];
+                };
                 if (q[0] - est[0]).hypot(q[1] - est[1]) < 1.0 {
                     cloud.push(q);
                 }
@@ -803,6 +800,21 @@ impl Mapper {
             refined: true,
         })
     }
+}
+
+/// Where the line from `pa` at bearing `a` meets the line from `pb` at bearing `b` (rad),
+/// with the distances along each (negative behind its start); `None` when they cross at
+/// less than 10 degrees, where the crossing is ill-conditioned.
+fn crossing(pa: [f64; 2], a: f64, pb: [f64; 2], b: f64) -> Option<([f64; 2], f64, f64)> {
+    let (ua, ub) = ([a.cos(), a.sin()], [b.cos(), b.sin()]);
+    let cross = ua[0] * ub[1] - ua[1] * ub[0];
+    if cross.abs() < 10f64.to_radians().sin() {
+        return None;
+    }
+    let (dx, dy) = (pb[0] - pa[0], pb[1] - pa[1]);
+    let t = (dx * ub[1] - dy * ub[0]) / cross;
+    let u = (dx * ua[1] - dy * ua[0]) / cross;
+    Some(([pa[0] + t * ua[0], pa[1] + t * ua[1]], t, u))
 }
 
 /// Stops a source found by the densest-cell fallback must explain.

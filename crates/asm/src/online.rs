@@ -35,7 +35,7 @@ use rand::rngs::StdRng;
 
 use crate::Pose;
 use crate::error::{Error, Result};
-use crate::mapper::{MapResult, Mapper, Round, Source, Variant, fit_bearings, merge_close, refit};
+use crate::mapper::{MapResult, Mapper, Round, Source, Variant, refit};
 use crate::pf::{ParticleFilter, covariance, mean};
 
 /// What one stop changed.
@@ -150,7 +150,7 @@ impl OnlineMapper {
             if !self.pool[stop].is_empty() || returned {
                 self.search(&mut update);
             }
-            self.merge();
+            self.mapper.merge(&mut self.sources);
         }
         update.sources = self.sources.len();
         Ok(update)
@@ -247,10 +247,8 @@ impl OnlineMapper {
     /// Filtering rounds over the pool until one fails (or `max_rounds` have run at this
     /// stop): the next full map searches with the batch mapper's retries.
     fn search(&mut self, update: &mut StopUpdate) {
-        let c = self.mapper.config();
-        let (retries, max_rounds) = (0, c.max_rounds);
+        let max_rounds = self.mapper.config().max_rounds;
         let last = self.poses.len() - 1;
-        let mut failed = 0;
         while update.rounds < max_rounds {
             update.rounds += 1;
             self.rounds += 1;
@@ -260,45 +258,19 @@ impl OnlineMapper {
             {
                 // Everything the earlier stops' DoAs could show was searched at those stops:
                 // a source new at this stop explains one of its DoAs. One that does not is
-                // another draw landing on old clutter; its DoAs go back.
-                Round::Found(s) if !s.rays.iter().any(|r| r.stop == last) => {
-                    for r in s.rays {
-                        self.pool[r.stop].push(r.bearing);
-                    }
-                    failed += 1;
-                    if failed > retries {
-                        break;
-                    }
-                }
-                Round::Found(s) => {
-                    failed = 0;
+                // another draw landing on old clutter; its DoAs go back, and the round failed.
+                Round::Found(s) if s.rays.iter().any(|r| r.stop == last) => {
                     update.found += 1;
                     self.sources.push(s);
                 }
-                Round::NoCluster | Round::NothingExplained | Round::Clutter => {
-                    failed += 1;
-                    if failed > retries {
-                        break;
+                Round::Found(s) => {
+                    for r in s.rays {
+                        self.pool[r.stop].push(r.bearing);
                     }
+                    break;
                 }
+                Round::NoCluster | Round::NothingExplained | Round::Clutter => break,
             }
-        }
-    }
-
-    /// Merges sources closer than [`IasmConfig::merge_dist_m`], refitting merged ones.
-    ///
-    /// [`IasmConfig::merge_dist_m`]: crate::IasmConfig::merge_dist_m
-    fn merge(&mut self) {
-        let c = self.mapper.config();
-        let merged = merge_close(&mut self.sources, c.merge_dist_m);
-        for &i in &merged {
-            let s = &mut self.sources[i];
-            if c.refine
-                && let Some((p, _)) = fit_bearings([s.x, s.y], &s.rays, self.mapper.sigma())
-            {
-                (s.x, s.y, s.refined) = (p[0], p[1], true);
-            }
-            s.observations = s.rays.len();
         }
     }
 

@@ -257,46 +257,53 @@ impl Scene {
             ));
         }
         let r = &self.room;
-        // Image sources within `reach` metres of travel (a sphere over the room's volume).
+        // Refuses a time `t` (s) for `field` unless in (0, MAX_RT60_S] and its `travel`
+        // (metres of sound per second of it) reaches at most MAX_CALIBRATION_IMAGES image
+        // sources (a sphere over the room's volume).
         let volume: f64 = r.dims.iter().product();
-        let images = |reach: f64| 4.0 / 3.0 * std::f64::consts::PI * reach.powi(3) / volume;
-        if let Some(t) = self.rir_s {
+        let check_time = |field: &str, what: &str, t: f64, travel: f64, hint: &str| {
             if !(t.is_finite() && t > 0.0 && t <= MAX_RT60_S) {
                 return Err(invalid(
-                    "rir_s",
-                    format!("{t} s is not a length in (0, {MAX_RT60_S}] s"),
+                    field,
+                    format!("{t} s is not {what} in (0, {MAX_RT60_S}] s"),
                 ));
             }
-            let n = images(t * self.speed_of_sound);
-            if self.max_order.is_none() && volume > 0.0 && n > MAX_CALIBRATION_IMAGES {
+            let n = 4.0 / 3.0 * std::f64::consts::PI * (t * travel).powi(3) / volume;
+            if volume > 0.0 && n > MAX_CALIBRATION_IMAGES {
                 return Err(invalid(
-                    "rir_s",
+                    field,
                     format!(
                         "{t} s in a room of {volume:.3} m^3 needs {n:.1e} image sources \
-                         (at most {MAX_CALIBRATION_IMAGES:.0e}); give a shorter rir_s or a max_order"
+                         (at most {MAX_CALIBRATION_IMAGES:.0e}); {hint}"
                     ),
                 ));
             }
+            Ok(())
+        };
+        if let Some(t) = self.rir_s {
+            // With a max_order, the response stops at that order whatever its length.
+            let travel = if self.max_order.is_none() {
+                self.speed_of_sound
+            } else {
+                0.0
+            };
+            check_time(
+                "rir_s",
+                "a length",
+                t,
+                travel,
+                "give a shorter rir_s or a max_order",
+            )?;
         }
         if let Some(t) = r.rt60 {
-            if !(t.is_finite() && t > 0.0 && t <= MAX_RT60_S) {
-                return Err(invalid(
-                    "room.rt60",
-                    format!("{t} s is not a reverberation time in (0, {MAX_RT60_S}] s"),
-                ));
-            }
             // The calibration enumerates every image within 1.2 RT60 of travel.
-            let images = images(1.2 * t * self.speed_of_sound);
-            if volume > 0.0 && images > MAX_CALIBRATION_IMAGES {
-                return Err(invalid(
-                    "room.rt60",
-                    format!(
-                        "{t} s in a room of {volume:.3} m^3 needs {images:.1e} image sources to \
-                         calibrate (at most {MAX_CALIBRATION_IMAGES:.0e}); give a shorter rt60 or \
-                         `absorption`"
-                    ),
-                ));
-            }
+            check_time(
+                "room.rt60",
+                "a reverberation time",
+                t,
+                1.2 * self.speed_of_sound,
+                "the RT60 calibration enumerates them; give a shorter rt60 or `absorption`",
+            )?;
         }
         let room = match (r.rt60, r.absorption) {
             (Some(t), None) => Room::with_rt60(r.dims, t, self.speed_of_sound)?,

@@ -81,21 +81,18 @@ impl OccupancyMap {
     /// As [`OccupancyMap::load`].
     pub fn load_with_image(yaml: &Path, image: Option<&Path>) -> Result<Self, MapError> {
         let meta = read_meta(yaml)?;
-        let bytes = match image {
-            Some(p) => std::fs::read(p).map_err(|source| MapError::Io {
-                path: p.to_owned(),
-                source,
-            }),
-            None => {
-                let named = resolve_image(yaml, &meta.image);
-                std::fs::read(&named).map_err(|source| MapError::Image {
-                    yaml: yaml.to_owned(),
-                    image: named,
-                    source,
-                })
-            }
-        }?;
         let img_path = image.map_or_else(|| resolve_image(yaml, &meta.image), Path::to_owned);
+        let bytes = std::fs::read(&img_path).map_err(|source| match image {
+            Some(_) => MapError::Io {
+                path: img_path.clone(),
+                source,
+            },
+            None => MapError::Image {
+                yaml: yaml.to_owned(),
+                image: img_path.clone(),
+                source,
+            },
+        })?;
         let (w, h, maxval, pixels) = parse_pgm(&bytes).map_err(|message| MapError::Pgm {
             path: img_path.clone(),
             message,

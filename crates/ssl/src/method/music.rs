@@ -85,9 +85,8 @@ struct Coarse {
     az_stride: usize,
     /// Fine elevation indices searched coarsely, ascending, the first and last included.
     els: Vec<usize>,
-    /// The coarse directions' fine indices, coarse-elevation-major.
-    dirs: Vec<usize>,
-    /// Their steering tables ([`Tables`]' layout).
+    /// The steering tables of the coarse directions, coarse-elevation-major ([`Tables`]'
+    /// layout).
     start_re: Vec<f32>,
     start_im: Vec<f32>,
     step_re: Vec<f32>,
@@ -217,7 +216,9 @@ impl Music {
             .iter()
             .flat_map(|&e| (0..n_az).step_by(az_stride).map(move |a| e * n_az + a))
             .collect();
-        let [start_re, start_im, step_re, step_im] = self.gather(&dirs);
+        let mut tables: [Vec<f32>; 4] = Default::default();
+        self.gather_into(&dirs, &mut tables);
+        let [start_re, start_im, step_re, step_im] = tables;
         let el_bracket = (0..n_el)
             .map(|e| {
                 let hi = els.iter().position(|&c| c >= e).expect("the last is kept");
@@ -242,7 +243,6 @@ impl Music {
             az_bracket,
             az_stride,
             els,
-            dirs,
             start_re,
             start_im,
             step_re,
@@ -253,13 +253,7 @@ impl Music {
         self
     }
 
-    /// The steering tables of directions `dirs` (in that order), chunk-major.
-    fn gather(&self, dirs: &[usize]) -> [Vec<f32>; 4] {
-        let mut out: [Vec<f32>; 4] = Default::default();
-        self.gather_into(dirs, &mut out);
-        out
-    }
-
+    /// The steering tables of directions `dirs` (in that order), chunk-major, into `out`.
     fn gather_into(&self, dirs: &[usize], out: &mut [Vec<f32>; 4]) {
         let m = self.mics;
         let len = dirs.len().div_ceil(W) * W * m;
@@ -298,33 +292,17 @@ impl Music {
         let n = self.centres.len() * dim * m;
         let (vr, vi) = (zeroed(&mut s.vec_re, n), zeroed(&mut s.vec_im, n));
         let mut cov = DMatrix::<Complex<f32>>::zeros(m, m);
-        // The block's frames, per microphone, so that the sums below index plain slices.
-        let rows: Vec<Vec<&[Complex32]>> = frames
-            .clone()
-            .map(|f| (0..m).map(|i| stft.frame(f, i)).collect())
-            .collect();
-        let mut acc = vec![Complex32::default(); m * m];
-        let mut x = vec![Complex32::default(); m];
         for (k, &c) in self.centres.iter().enumerate() {
-            acc.fill(Complex32::default());
+            cov.fill(Complex::default());
             let band = c.saturating_sub(self.smoothing)..(c + self.smoothing + 1).min(self.n_bins);
-            for frame in &rows {
+            for f in frames.clone() {
                 for b in band.clone() {
-                    for (xi, ch) in x.iter_mut().zip(frame) {
-                        *xi = ch[b];
-                    }
                     for i in 0..m {
-                        let xi = x[i];
-                        let row = &mut acc[i * m..(i + 1) * m];
+                        let xi = stft.frame(f, i)[b];
                         for j in i..m {
-                            row[j] += xi * x[j].conj();
+                            cov[(i, j)] += xi * stft.frame(f, j)[b].conj();
                         }
                     }
-                }
-            }
-            for i in 0..m {
-                for j in i..m {
-                    cov[(i, j)] = acc[i * m + j];
                 }
             }
             // Scale to unit trace (the decomposition does not care, f32 does), then mirror.
@@ -424,6 +402,20 @@ impl Music {
         n_pad
     }
 
+    /// `out` = the sum over groups of the first `n` values of each group's pseudo-spectrum
+    /// in `proj` (groups `n_pad` apart), each scaled by [`Music::group_scale`] of its own
+    /// largest.
+    fn sum_groups(&self, proj: &[f32], n_pad: usize, n: usize, out: &mut [f32]) {
+        out.fill(0.0);
+        for p in proj.chunks_exact(n_pad) {
+            let p = &p[..n];
+            let scale = self.group_scale(p.iter().copied().fold(0.0, f32::max));
+            for (o, v) in out.iter_mut().zip(p) {
+                *o += v * scale;
+            }
+        }
+    }
+
     /// A group's weight in the sum: NormMUSIC divides by its largest value (`max`).
     fn group_scale(&self, max: f32) -> f32 {
         let norm = 1.0 / self.centres.len() as f32;
@@ -460,14 +452,7 @@ impl Music {
             (a_re, a_im),
             proj,
         );
-        out.fill(0.0);
-        for p in proj.chunks_exact(nd_pad) {
-            let p = &p[..nd];
-            let scale = self.group_scale(p.iter().copied().fold(0.0, f32::max));
-            for (o, v) in out.iter_mut().zip(p) {
-                *o += v * scale;
-            }
-        }
+        self.sum_groups(proj, nd_pad, nd, out);
     }
 
     /// The coarse-to-fine search (see [`Music::coarse_search`]).
@@ -479,7 +464,8 @@ impl Music {
         out: &mut [f32],
         s: &mut SubspaceScratch,
     ) {
-        let nc = c.dirs.len();
+        let (caz, cel) = (c.n_az / c.az_stride, c.els.len());
+        let nc = caz * cel;
         let coarse = Tables {
             start_re: &c.start_re,
             start_im: &c.start_im,
@@ -498,14 +484,7 @@ impl Music {
         // The coarse spectrum with each group scaled by its coarse maximum: enough to rank
         // the local maxima.
         let sum = zeroed(&mut s.coarse_sum, nc);
-        for p in s.proj.chunks_exact(nc_pad) {
-            let p = &p[..nc];
-            let scale = self.group_scale(p.iter().copied().fold(0.0, f32::max));
-            for (o, v) in sum.iter_mut().zip(p) {
-                *o += v * scale;
-            }
-        }
-        let (caz, cel) = (c.n_az / c.az_stride, c.els.len());
+        self.sum_groups(&s.proj, nc_pad, nc, sum);
         let at = |j: usize, i: usize| sum[j * caz + i];
         let peaks = &mut s.peaks;
         peaks.clear();
@@ -566,7 +545,6 @@ impl Music {
         );
         // Final sums, each group scaled by its largest value over both sets.
         let sum = zeroed(&mut s.coarse_sum, nc);
-        out.fill(0.0);
         let fine_sum = zeroed(&mut s.fine_sum, nf);
         for (pc, pf) in s
             .proj
