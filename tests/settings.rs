@@ -46,6 +46,8 @@ refine = false
 min_observations = 4
 densest_fallback = true
 vote_min_stops = 6
+absence_ratio = 2.0
+min_range_m = 0.25
 "#;
 
 // See: issue 8

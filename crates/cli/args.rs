@@ -208,8 +208,9 @@ pub struct SettingsArgs {
     #[arg(long)]
     pub pooling: Option<Pooling>,
     /// I-ASM profile: paper (the paper's algorithm exactly, Table I) or robust (bearing
-    /// refinement, three observing stops per source) [default: robust, or the settings
-    /// file's].
+    /// refinement, three observing stops per source, a vote for missed sources, no source
+    /// on the robot's path or contradicted by stops that heard nothing) [default: robust,
+    /// or the settings file's].
     #[arg(long)]
     pub profile: Option<Profile>,
 }

@@ -150,6 +150,13 @@ impl OnlineMapper {
             if !self.pool[stop].is_empty() || returned {
                 self.search(&mut update);
             }
+            // As the batch mapper does before its merge.
+            self.mapper.drop_implausible(
+                &mut self.sources,
+                &self.poses,
+                &self.bearings,
+                &mut self.pool,
+            );
             self.mapper.merge(&mut self.sources);
         }
         update.sources = self.sources.len();
@@ -241,7 +248,13 @@ impl OnlineMapper {
         let mut k = dissolved.iter();
         self.sources
             .retain(|_| !*k.next().expect("one flag per source"));
-        (taken, dissolved.contains(&true))
+        let contradicted = self.mapper.drop_implausible(
+            &mut self.sources,
+            &self.poses,
+            &self.bearings,
+            &mut self.pool,
+        );
+        (taken, dissolved.contains(&true) || contradicted > 0)
     }
 
     /// Filtering rounds over the pool until one fails (or `max_rounds` have run at this
