@@ -80,6 +80,8 @@ fn r8_map_honours_every_field_of_the_settings_file() {
     assert_eq!(v["ssl"], want["ssl"], "{v}");
     assert_eq!(v["params"], want["iasm"], "{v}");
     assert_eq!(v["array"], "iasm6");
+    // Sources the path and absence checks removed are reported, not hidden.
+    assert!(v["removed_sources"].is_u64(), "{v}");
     // The settings were used, not only echoed: no source was refined, each explains at
     // least 4 stops, and the two sources were found from DoAs localised with them.
     let sources = v["sources"].as_array().unwrap();

@@ -411,6 +411,10 @@ pub struct MapResult {
     pub particles: usize,
     /// DoAs that no source explained.
     pub unexplained: usize,
+    /// Sources that the rounds or the vote found and [`Mapper::drop_implausible`] removed
+    /// (on the robot's path, or contradicted by stops that heard nothing); their DoAs
+    /// count as unexplained.
+    pub removed: usize,
 }
 
 impl MapResult {
@@ -582,13 +586,14 @@ impl Mapper {
                 sources.push(s);
             }
         }
-        self.drop_implausible(&mut sources, poses, &heard, bearings);
+        let removed = self.drop_implausible(&mut sources, poses, &heard, bearings);
         self.merge(&mut sources);
         MapResult {
             sources,
             rounds,
             particles: self.m,
             unexplained: bearings.iter().map(Vec::len).sum(),
+            removed,
         }
     }
 
@@ -1247,6 +1252,59 @@ mod tests {
             left.iter().map(Vec::len).collect::<Vec<_>>(),
             [1, 0, 0, 0, 1, 1, 0, 0, 0]
         );
+    }
+
+    #[test]
+    fn a_map_reports_the_ghost_it_removed_that_no_absence_check_keeps() {
+        // The stops of `ghost_survey`, the talker heard from all; a ghost at (4, 1) heard
+        // from stops 0-2, 7 and 8 (3-4 m away) and missed by stops 3-6 (1-2.2 m away),
+        // whose rows hold one DoA of N = 3.
+        let (mapper, poses, _, _) = ghost_survey(&[]);
+        let (talker, ghost) = ([4.0, -3.0], [4.0, 1.0]);
+        let doas: Vec<Vec<f64>> = poses
+            .iter()
+            .enumerate()
+            .map(|(k, p)| {
+                let mut row = vec![p.bearing_to(talker)];
+                if !(3..7).contains(&k) {
+                    row.push(p.bearing_to(ghost));
+                }
+                row
+            })
+            .collect();
+        let map = OccupancyMap::new(220, 160, 0.05, [-1.0, -4.0], vec![Cell::Free; 220 * 160]);
+        let unchecked = Mapper::new(
+            &map,
+            &IasmConfig {
+                num_doas: 3,
+                absence_ratio: 0.0,
+                ..IasmConfig::default()
+            },
+        )
+        .unwrap();
+        for seed in 0..5 {
+            // Headings are 0: the DoAs are the world bearings.
+            let robust = mapper
+                .run(&poses, &doas, &mut StdRng::seed_from_u64(seed))
+                .unwrap();
+            let found = robust.positions();
+            assert_eq!(found.len(), 1, "seed {seed}: {found:?}");
+            assert!(
+                (found[0][0] - 4.0).hypot(found[0][1] + 3.0) < 0.05,
+                "{found:?}"
+            );
+            assert_eq!((robust.removed, robust.unexplained), (1, 5), "seed {seed}");
+            let p = unchecked
+                .run(&poses, &doas, &mut StdRng::seed_from_u64(seed))
+                .unwrap();
+            let near = |q: &[f64; 2]| (q[0] - ghost[0]).hypot(q[1] - ghost[1]) < 0.3;
+            assert!(
+                p.positions().iter().any(near),
+                "seed {seed}: {:?}",
+                p.positions()
+            );
+            assert_eq!(p.removed, 0);
+        }
     }
 
     #[test]

@@ -68,6 +68,8 @@ pub struct OnlineMapper {
     pool: Vec<Vec<f64>>,
     sources: Vec<Source>,
     rounds: usize,
+    /// Sources removed by [`Mapper::drop_implausible`] in the last full map and since.
+    removed: usize,
     /// Stops at which the next full map runs.
     next_full: usize,
     /// The stop count of the last full map (0: none yet).
@@ -90,6 +92,7 @@ impl OnlineMapper {
             pool: Vec::new(),
             sources: Vec::new(),
             rounds: 0,
+            removed: 0,
             next_full: FIRST_FULL,
             last_full: 0,
             rng: StdRng::seed_from_u64(seed ^ 0x0e11_0e11),
@@ -151,7 +154,7 @@ impl OnlineMapper {
                 self.search(&mut update);
             }
             // As the batch mapper does before its merge.
-            self.mapper.drop_implausible(
+            self.removed += self.mapper.drop_implausible(
                 &mut self.sources,
                 &self.poses,
                 &self.bearings,
@@ -176,6 +179,7 @@ impl OnlineMapper {
         self.pool = pool;
         self.rounds += r.rounds;
         self.sources = r.sources;
+        self.removed = r.removed;
         self.last_full = self.poses.len();
         r.rounds
     }
@@ -254,6 +258,7 @@ impl OnlineMapper {
             &self.bearings,
             &mut self.pool,
         );
+        self.removed += contradicted;
         (taken, dissolved.contains(&true) || contradicted > 0)
     }
 
@@ -294,6 +299,7 @@ impl OnlineMapper {
             rounds: self.rounds,
             particles: self.mapper.num_particles(),
             unexplained: self.pool.iter().map(Vec::len).sum(),
+            removed: self.removed,
         }
     }
 }

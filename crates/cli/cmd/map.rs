@@ -33,6 +33,8 @@ struct MapReport<'a> {
     rounds: usize,
     particles: usize,
     unexplained_doas: usize,
+    /// Sources found and removed as impossible (see `asm::MapResult::removed`).
+    removed_sources: usize,
     sources: &'a [asm::Source],
     ospa: Option<OspaReport>,
 }
@@ -80,6 +82,7 @@ pub fn run(a: &MapArgs) -> Result<Outcome> {
         rounds: result.rounds,
         particles: result.particles,
         unexplained_doas: result.unexplained,
+        removed_sources: result.removed,
         sources: &result.sources,
         ospa: o,
     };
@@ -140,6 +143,12 @@ pub fn run(a: &MapArgs) -> Result<Outcome> {
         1e3 * dt,
         a.seed
     );
+    if result.removed > 0 {
+        println!(
+            "  {} more found and removed: on the robot's path, or contradicted by stops that heard nothing there (see asm::IasmConfig::min_range_m, absence_ratio)",
+            result.removed
+        );
+    }
     println!(
         "{:>3} {:>8} {:>8} {:>6} {:>9} {:>9} {:>6}",
         "#", "x (m)", "y (m)", "DoAs", "particles", "2σ (m)", "round"
