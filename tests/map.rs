@@ -54,6 +54,54 @@ fn map_from_a_doa_table_finds_every_source() {
     assert_eq!(saved, v);
 }
 
+#[test]
+fn a_truth_surveyed_in_another_frame_is_told_from_a_bad_map() {
+    // The truth the map is scored against, surveyed in a frame 5 % larger, turned 3
+    // degrees and shifted: the map is as good as before, and the report says so.
+    let dir = tempdir();
+    let root = dataset(&dir);
+    let (k, r, t) = (1.05f64, 3f64.to_radians(), [0.1, -0.12]);
+    let gt: String = TRUTH
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let (s, c) = r.sin_cos();
+            let (x, y) = (
+                k * (c * p[0] - s * p[1]) + t[0],
+                k * (s * p[0] + c * p[1]) + t[1],
+            );
+            format!("s{} [{x}, {y}, 0]\n", i + 1)
+        })
+        .collect();
+    let moved = path(&dir, "moved_gt.txt");
+    std::fs::write(&moved, gt).unwrap();
+    let map = |truth: &Path| {
+        json(&iasm(&[
+            "map",
+            "--dataset",
+            arg(&root),
+            "--doas",
+            arg(&root.join("doas.csv")),
+            "--num",
+            "3",
+            "--truth",
+            arg(truth),
+            "--json",
+        ]))
+    };
+    let own = map(&root.join("src_gt.txt"));
+    let v = map(&moved);
+    let f = &v["alignment"];
+    let num = |key: &str| f[key].as_f64().unwrap();
+    assert_eq!(f["pairs"], 3, "{v}");
+    assert!(num("mean_before_m") > 0.15, "{v}");
+    assert!((num("scale") - k).abs() < 0.02, "{v}");
+    assert!((num("rotation_rad").to_degrees() - 3.0).abs() < 0.5, "{v}");
+    // After the transform, what is left is the map's own error, as against its own truth.
+    let own_error = own["alignment"]["mean_before_m"].as_f64().unwrap();
+    assert!(num("mean_after_m") < own_error + 0.02, "{v}\n{own}");
+}
+
 /// The numeric tick labels of an SVG figure.
 fn ticks(texts: &[String]) -> Vec<f64> {
     texts.iter().filter_map(|t| t.parse().ok()).collect()

@@ -390,6 +390,26 @@ pub struct VariantStats {
     pub runs: Vec<f64>,
     /// Every run's number of sources, by seed.
     pub sources: Vec<usize>,
+    /// The mean distance of matched sources from the truth, before and after each run's
+    /// best similarity transform of the map onto the truth, and the transforms' mean scale
+    /// and rotation (degrees): a diagnostic of the data's frames (`asm::align`). `None`
+    /// when no run matched three sources.
+    pub aligned: Option<AlignedStats>,
+}
+
+/// The runs' [`asm::align::Alignment`]s, averaged.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct AlignedStats {
+    /// Runs with a transform (three matched sources or more).
+    pub runs: usize,
+    /// Mean distance of matched sources from the truth (m).
+    pub mean_before_m: f64,
+    /// The same after each run's transform (m).
+    pub mean_after_m: f64,
+    /// Mean scale of the transforms.
+    pub scale: f64,
+    /// Mean rotation of the transforms (degrees).
+    pub rotation_deg: f64,
 }
 
 /// The paper's Monte Carlo evaluation: `runs` seeded maps (seeds `seed0..seed0 + runs`) of
@@ -420,13 +440,18 @@ pub fn evaluate(
                 ..base.clone()
             };
             let mapper = Mapper::new(&survey.map, &config)?;
-            let res: Vec<(Ospa, usize)> = (0..runs as u64)
+            let res: Vec<Run> = (0..runs as u64)
                 .into_par_iter()
                 .map(|s| {
                     let mut rng = StdRng::seed_from_u64(seed0 + s);
                     let r = mapper.run(&survey.poses, &doas_rad, &mut rng)?;
                     bar.inc(1);
-                    Ok((ospa(&r.positions(), truth, c, p), r.sources.len()))
+                    let found = r.positions();
+                    Ok((
+                        ospa(&found, truth, c, p),
+                        r.sources.len(),
+                        asm::align::align(&found, truth, c),
+                    ))
                 })
                 .collect::<Result<_>>()?;
             Ok(summarise(v, &res, truth.len(), seed0))
@@ -436,8 +461,24 @@ pub fn evaluate(
     out
 }
 
-fn summarise(variant: Variant, res: &[(Ospa, usize)], truth: usize, seed0: u64) -> VariantStats {
+/// One run's OSPA, source count and alignment.
+type Run = (Ospa, usize, Option<asm::align::Alignment>);
+
+fn summarise(variant: Variant, res: &[Run], truth: usize, seed0: u64) -> VariantStats {
     let n = res.len() as f64;
+    let fits: Vec<_> = res.iter().filter_map(|r| r.2).collect();
+    let k = fits.len() as f64;
+    let aligned = (!fits.is_empty()).then(|| AlignedStats {
+        runs: fits.len(),
+        mean_before_m: fits.iter().map(|f| f.mean_before_m).sum::<f64>() / k,
+        mean_after_m: fits.iter().map(|f| f.mean_after_m).sum::<f64>() / k,
+        scale: fits.iter().map(|f| f.scale).sum::<f64>() / k,
+        rotation_deg: fits
+            .iter()
+            .map(|f| f.rotation_rad.to_degrees())
+            .sum::<f64>()
+            / k,
+    });
     let runs: Vec<f64> = res.iter().map(|r| r.0.total).collect();
     let mut sorted = runs.clone();
     sorted.sort_by(f64::total_cmp);
@@ -464,6 +505,7 @@ fn summarise(variant: Variant, res: &[(Ospa, usize)], truth: usize, seed0: u64) 
                 .map_or(0, |(i, _)| i as u64),
         runs,
         sources: res.iter().map(|r| r.1).collect(),
+        aligned,
     }
 }
 

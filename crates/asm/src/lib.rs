@@ -10,6 +10,7 @@
 //! - [`mapper`]: I-ASM itself, the Filtering-Clustering-Implicit-Associating loop.
 //! - [`online`]: the same, one stop at a time while the robot drives.
 //! - [`ospa`]: the OSPA metric with its localisation and cardinality parts.
+//! - [`align`]: how far a map lies from the truth once their frames agree (a diagnostic).
 //!
 //! # Example
 //!
@@ -32,6 +33,7 @@
 //! frame, whose `x` axis is the robot's heading. All randomness comes from the caller's
 //! `Rng`: the same seed gives the same map.
 
+pub mod align;
 pub mod assoc;
 pub mod dbscan;
 pub mod error;

@@ -62,6 +62,15 @@ pub fn ospa(est: &[[f64; 2]], truth: &[[f64; 2]], c: f64, p: f64) -> Ospa {
 /// The least total cost of assigning each row to a distinct column (`rows <= cols`):
 /// the Hungarian algorithm with potentials.
 pub fn min_assignment(cost: &[Vec<f64>]) -> f64 {
+    assignment(cost)
+        .iter()
+        .enumerate()
+        .map(|(i, &j)| cost[i][j])
+        .sum()
+}
+
+/// The column assigned to each row by [`min_assignment`]'s optimal assignment.
+pub fn assignment(cost: &[Vec<f64>]) -> Vec<usize> {
     let n = cost.len();
     let m = cost.first().map_or(0, Vec::len);
     assert!(n <= m, "rows must not outnumber columns");
@@ -113,10 +122,11 @@ pub fn min_assignment(cost: &[Vec<f64>]) -> f64 {
             }
         }
     }
-    (1..=m)
-        .filter(|&j| p[j] != 0)
-        .map(|j| cost[p[j] - 1][j - 1])
-        .sum()
+    let mut column = vec![0; n];
+    for j in (1..=m).filter(|&j| p[j] != 0) {
+        column[p[j] - 1] = j - 1;
+    }
+    column
 }
 
 #[cfg(test)]

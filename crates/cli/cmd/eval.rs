@@ -86,6 +86,16 @@ pub fn run(a: &EvalArgs) -> Result<Outcome> {
                 s.worst_seed
             );
         }
+        if let Some(f) = stats
+            .iter()
+            .find(|s| s.variant == Variant::Ca)
+            .and_then(|s| s.aligned)
+        {
+            println!(
+                "CA: matched sources {:.3} m from the truth, {:.3} m after each run's best similarity transform of the map (mean scale {:.3}, rotation {:+.2}°; {} runs): much less means the poses' and the truth's frames disagree",
+                f.mean_before_m, f.mean_after_m, f.scale, f.rotation_deg, f.runs
+            );
+        }
     }
     let ca = stats
         .iter()

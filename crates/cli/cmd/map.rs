@@ -37,6 +37,10 @@ struct MapReport<'a> {
     removed_sources: usize,
     sources: &'a [asm::Source],
     ospa: Option<OspaReport>,
+    /// The map against the truth after the best similarity transform (a diagnostic of the
+    /// data's frames; see `asm::align`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    alignment: Option<asm::align::Alignment>,
 }
 
 #[derive(Clone, Copy, Serialize)]
@@ -72,6 +76,10 @@ pub fn run(a: &MapArgs) -> Result<Outcome> {
             c: a.report.ospa_c,
             value,
         });
+    let alignment = survey
+        .truth
+        .as_deref()
+        .and_then(|t| asm::align::align(&result.positions(), t, a.report.ospa_c));
     let report = MapReport {
         schema_version: SCHEMA_VERSION,
         doas: &survey.doa_source,
@@ -85,6 +93,7 @@ pub fn run(a: &MapArgs) -> Result<Outcome> {
         removed_sources: result.removed,
         sources: &result.sources,
         ospa: o,
+        alignment,
     };
     if let Some(out) = &a.out {
         crate::output::write_atomic(out, serde_json::to_string_pretty(&report)?.as_bytes())?;
@@ -170,6 +179,18 @@ pub fn run(a: &MapArgs) -> Result<Outcome> {
         println!(
             "OSPA (p = {}, c = {} m): {:.3} m (localisation {:.3}, cardinality {:.3})",
             o.p, o.c, o.value.total, o.value.localization, o.value.cardinality
+        );
+    }
+    if let Some(f) = alignment {
+        println!(
+            "Matched sources {:.3} m from the truth; {:.3} m after the best similarity transform of the map (scale {:.3}, rotation {:+.2}°, shift ({:+.3}, {:+.3}) m; {} pairs): much less means the poses' and the truth's frames disagree",
+            f.mean_before_m,
+            f.mean_after_m,
+            f.scale,
+            f.rotation_rad.to_degrees(),
+            f.shift[0],
+            f.shift[1],
+            f.pairs
         );
     }
     Ok(Outcome::Success)
