@@ -1174,6 +1174,40 @@ mod tests {
         (map, poses, doas)
     }
 
+    /// A mapper of the ghost surveys' open 11 x 8 m room, N = 3, otherwise `config`.
+    fn ghost_mapper(config: IasmConfig) -> Mapper {
+        let map = OccupancyMap::new(220, 160, 0.05, [-1.0, -4.0], vec![Cell::Free; 220 * 160]);
+        Mapper::new(
+            &map,
+            &IasmConfig {
+                num_doas: 3,
+                ..config
+            },
+        )
+        .unwrap()
+    }
+
+    /// Every stop hears `talker`; the stops `hears_ghost` picks hear `ghost` too (exact
+    /// world bearings).
+    fn rows(
+        poses: &[Pose],
+        talker: [f64; 2],
+        ghost: [f64; 2],
+        hears_ghost: impl Fn(usize) -> bool,
+    ) -> Vec<Vec<f64>> {
+        poses
+            .iter()
+            .enumerate()
+            .map(|(k, p)| {
+                let mut row = vec![p.bearing_to(talker)];
+                if hears_ghost(k) {
+                    row.push(p.bearing_to(ghost));
+                }
+                row
+            })
+            .collect()
+    }
+
     /// A mapped source at `q` explaining the DoAs of `stops` (exact bearings).
     fn heard_from(q: [f64; 2], poses: &[Pose], stops: &[usize]) -> Source {
         let rays: Vec<Ray> = stops
@@ -1202,28 +1236,13 @@ mod tests {
     /// it), while stops 1-3, 1.5-1.8 m from it, report one DoA less than N and nothing
     /// near its bearing. `full` stops among 1-3 report a third DoA pointing elsewhere.
     fn ghost_survey(full: &[usize]) -> (Mapper, Vec<Pose>, Vec<Vec<f64>>, Vec<Source>) {
-        let map = OccupancyMap::new(220, 160, 0.05, [-1.0, -4.0], vec![Cell::Free; 220 * 160]);
-        let config = IasmConfig {
-            num_doas: 3,
-            ..IasmConfig::default()
-        };
-        let mapper = Mapper::new(&map, &config).unwrap();
+        let mapper = ghost_mapper(IasmConfig::default());
         let poses: Vec<Pose> = (0..9).map(|i| Pose::new(i as f64, 0.0, 0.0)).collect();
         let (talker, ghost) = ([4.0, -3.0], [2.0, 1.5]);
-        let heard: Vec<Vec<f64>> = poses
-            .iter()
-            .enumerate()
-            .map(|(k, p)| {
-                let mut row = vec![p.bearing_to(talker)];
-                if [0, 4, 5].contains(&k) {
-                    row.push(p.bearing_to(ghost));
-                }
-                if full.contains(&k) {
-                    row.extend([std::f64::consts::PI, 0.0]);
-                }
-                row
-            })
-            .collect();
+        let mut heard = rows(&poses, talker, ghost, |k| [0, 4, 5].contains(&k));
+        for &k in full {
+            heard[k].extend([std::f64::consts::PI, 0.0]);
+        }
         let sources = vec![
             heard_from(talker, &poses, &(0..9).collect::<Vec<_>>()),
             heard_from(ghost, &poses, &[0, 4, 5]),
@@ -1261,27 +1280,11 @@ mod tests {
         // whose rows hold one DoA of N = 3.
         let (mapper, poses, _, _) = ghost_survey(&[]);
         let (talker, ghost) = ([4.0, -3.0], [4.0, 1.0]);
-        let doas: Vec<Vec<f64>> = poses
-            .iter()
-            .enumerate()
-            .map(|(k, p)| {
-                let mut row = vec![p.bearing_to(talker)];
-                if !(3..7).contains(&k) {
-                    row.push(p.bearing_to(ghost));
-                }
-                row
-            })
-            .collect();
-        let map = OccupancyMap::new(220, 160, 0.05, [-1.0, -4.0], vec![Cell::Free; 220 * 160]);
-        let unchecked = Mapper::new(
-            &map,
-            &IasmConfig {
-                num_doas: 3,
-                absence_ratio: 0.0,
-                ..IasmConfig::default()
-            },
-        )
-        .unwrap();
+        let doas = rows(&poses, talker, ghost, |k| !(3..7).contains(&k));
+        let unchecked = ghost_mapper(IasmConfig {
+            absence_ratio: 0.0,
+            ..IasmConfig::default()
+        });
         for seed in 0..5 {
             // Headings are 0: the DoAs are the world bearings.
             let robust = mapper
@@ -1324,8 +1327,7 @@ mod tests {
         );
         // The paper's algorithm knows no absences.
         let (_, poses, heard, mut sources) = ghost_survey(&[]);
-        let map = OccupancyMap::new(220, 160, 0.05, [-1.0, -4.0], vec![Cell::Free; 220 * 160]);
-        let paper = Mapper::new(&map, &IasmConfig::profile(Profile::Paper)).unwrap();
+        let paper = ghost_mapper(IasmConfig::profile(Profile::Paper));
         assert_eq!(
             paper.drop_implausible(&mut sources, &poses, &heard, &mut left),
             0
