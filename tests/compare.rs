@@ -89,6 +89,12 @@ fn compare_reports_every_method_and_the_published_table() {
     let lines: Vec<&str> = csv.lines().collect();
     assert_eq!(lines.len(), 4, "{csv}");
     assert!(lines[0].starts_with("name,kind,doa_score"), "{csv}");
+    // Two sources cannot fix a frame: the alignment column is there and empty.
+    assert!(
+        lines[0].contains(",ms_per_recording,aligned_mean_m"),
+        "{csv}"
+    );
+    assert!(rows.iter().all(|x| x["ospa"]["aligned"].is_null()), "{r}");
     assert!(lines[2].starts_with("normmusic,ssl,"), "{csv}");
 }
 

@@ -261,7 +261,7 @@ pub fn to_csv(r: &Report) -> String {
         })
         .unwrap_or_default();
     let mut out = String::from(
-        "name,kind,doa_score,doa_hits,doa_total,mean_hit_error_deg,recall_3m,ospa_mean,ospa_median,ospa_worst,ospa_localization,ospa_cardinality,right_count,mean_sources,ms_per_recording",
+        "name,kind,doa_score,doa_hits,doa_total,mean_hit_error_deg,recall_3m,ospa_mean,ospa_median,ospa_worst,ospa_localization,ospa_cardinality,right_count,mean_sources,ms_per_recording,aligned_mean_m",
     );
     for b in &bands {
         out.push_str(&format!(",err_deg_{}", b.replace(' ', "")));
@@ -277,7 +277,7 @@ pub fn to_csv(r: &Report) -> String {
     for row in &r.rows {
         let o = &row.ospa;
         out.push_str(&format!(
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             row.name,
             row.kind,
             num(row.doa.score),
@@ -293,6 +293,7 @@ pub fn to_csv(r: &Report) -> String {
             num(o.right_count),
             num(o.mean_sources),
             row.ms_per_recording.map(num).unwrap_or_default(),
+            o.aligned.map(|a| num(a.mean_after_m)).unwrap_or_default(),
         ));
         for b in &row.diagnostics.bands {
             out.push(',');

@@ -58,7 +58,7 @@ fn print_table(r: &Report, secs: f64) {
         secs
     );
     println!(
-        "{:<24} {:>6} {:>7} {:>9} {:>9} {:>8} {:>8} {:>7} {:>7} {:>7} {:>9}",
+        "{:<24} {:>6} {:>7} {:>9} {:>9} {:>8} {:>8} {:>8} {:>7} {:>7} {:>7} {:>9}",
         "DoA source",
         "score",
         "recall",
@@ -66,6 +66,7 @@ fn print_table(r: &Report, secs: f64) {
         "OSPA mean",
         "median",
         "worst",
+        "aligned",
         "loc.",
         "card.",
         "right",
@@ -86,7 +87,7 @@ fn print_table(r: &Report, secs: f64) {
         };
         let o = &row.ospa;
         println!(
-            "{:<24} {:>6.3} {:>7.3} {:>9} {:>9.3} {:>8.3} {:>8.3} {:>7.3} {:>7.3} {:>6.0}% {:>9}",
+            "{:<24} {:>6.3} {:>7.3} {:>9} {:>9.3} {:>8.3} {:>8.3} {:>8} {:>7.3} {:>7.3} {:>6.0}% {:>9}",
             row.name,
             row.doa.score,
             row.diagnostics.recall_3m,
@@ -98,6 +99,8 @@ fn print_table(r: &Report, secs: f64) {
             o.mean,
             o.median,
             o.worst,
+            o.aligned
+                .map_or_else(|| "-".to_owned(), |a| format!("{:.3}", a.mean_after_m)),
             o.mean_localization,
             o.mean_cardinality,
             100.0 * o.right_count,
@@ -105,4 +108,7 @@ fn print_table(r: &Report, secs: f64) {
                 .map_or_else(|| "-".to_owned(), |v| format!("{v:.1}"))
         );
     }
+    println!(
+        "aligned: the matched sources' mean distance from the truth after each map's best similarity transform onto it (asm::align), free of any disagreement between the poses' and the truth's frames"
+    );
 }
