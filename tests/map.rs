@@ -261,6 +261,11 @@ fn eval_reports_every_variant() {
         .collect();
     let right = counts.iter().filter(|&&c| c == 3).count() as f64 / 4.0;
     assert_eq!(ca["right_count"].as_f64().unwrap(), right, "{v}");
+    // The frame fit: exact bearings in one frame leave the map where it was.
+    let fit = &ca["aligned"];
+    assert_eq!(fit["runs"], 4, "{v}");
+    assert!(fit["mean_after_m"].as_f64().unwrap() <= fit["mean_before_m"].as_f64().unwrap() + 1e-9);
+    assert!((fit["scale"].as_f64().unwrap() - 1.0).abs() < 0.02, "{v}");
     // An impossible bound fails with status 1.
     let o = iasm(&[
         "eval",
@@ -276,6 +281,25 @@ fn eval_reports_every_variant() {
         "0.0",
     ]);
     assert_eq!(o.status.code(), Some(1), "{}", show(&o));
+    let aligned = |bound: &str| {
+        iasm(&[
+            "eval",
+            "--dataset",
+            arg(&root),
+            "--doas",
+            arg(&root.join("doas.csv")),
+            "--num",
+            "3",
+            "--runs",
+            "2",
+            "--max-aligned",
+            bound,
+        ])
+    };
+    assert!(aligned("0.5").status.success());
+    let o = aligned("0.0");
+    assert_eq!(o.status.code(), Some(1), "{}", show(&o));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--max-aligned"));
 }
 
 #[test]

@@ -411,6 +411,12 @@ pub struct EvalArgs {
     /// Exit with status 1 if CA's mean OSPA is above this (m).
     #[arg(long, value_name = "M")]
     pub max_mean_ospa: Option<f64>,
+    /// Exit with status 1 if CA's matched sources lie further than this (m, mean over the
+    /// runs) from the truth after each map's best similarity transform onto it, or if no
+    /// run matched three sources: the map's own accuracy, whatever the poses' and the
+    /// truth's frames.
+    #[arg(long, value_name = "M")]
+    pub max_aligned: Option<f64>,
     /// Exit with status 1 unless WS and WDP both have a higher mean OSPA than CA.
     #[arg(long)]
     pub expect_ablation: bool,

@@ -111,6 +111,22 @@ pub fn run(a: &EvalArgs) -> Result<Outcome> {
         );
         failed = true;
     }
+    if let Some(max) = a.max_aligned {
+        match ca.aligned {
+            Some(f) if f.mean_after_m <= max => {}
+            Some(f) => {
+                eprintln!(
+                    "FAIL: CA's matched sources lie {:.3} m from the truth after the frame fit, above --max-aligned {max}",
+                    f.mean_after_m
+                );
+                failed = true;
+            }
+            None => {
+                eprintln!("FAIL: --max-aligned: no run matched three sources to the truth");
+                failed = true;
+            }
+        }
+    }
     if a.expect_ablation {
         for s in stats.iter().filter(|s| s.variant != Variant::Ca) {
             if s.mean <= ca.mean {
