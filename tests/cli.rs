@@ -72,6 +72,30 @@ fn ssl_dataset_writes_a_table_in_natural_order_and_scores_it() {
 }
 
 #[test]
+fn ssl_scores_against_another_truth_when_given_one() {
+    // The same recordings scored against a truth on the far side of the robot: no hit.
+    let dir = tempdir();
+    let root = synthetic_dataset(&dir);
+    let elsewhere = path(&dir, "elsewhere.txt");
+    std::fs::write(&elsewhere, "s1 [-40.0, -25.0, 0]\n").unwrap();
+    let score = |extra: &[&str]| {
+        let mut args = vec![
+            "ssl",
+            "--dataset",
+            arg(&root),
+            "--num",
+            "1",
+            "--score",
+            "--json",
+        ];
+        args.extend_from_slice(extra);
+        json(&iasm(&args))["ours"]["hits"].as_u64().unwrap()
+    };
+    assert_eq!(score(&[]), 3);
+    assert_eq!(score(&["--truth", arg(&elsewhere)]), 0);
+}
+
+#[test]
 fn a_missed_threshold_exits_with_status_1() {
     let dir = tempdir();
     let root = synthetic_dataset(&dir);

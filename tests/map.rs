@@ -100,6 +100,37 @@ fn a_truth_surveyed_in_another_frame_is_told_from_a_bad_map() {
     // After the transform, what is left is the map's own error, as against its own truth.
     let own_error = own["alignment"]["mean_before_m"].as_f64().unwrap();
     assert!(num("mean_after_m") < own_error + 0.02, "{v}\n{own}");
+    // The truth moved back into the map's frame is where it was surveyed from.
+    let back = path(&dir, "back.txt");
+    let o = iasm(&[
+        "map",
+        "--dataset",
+        arg(&root),
+        "--doas",
+        arg(&root.join("doas.csv")),
+        "--num",
+        "3",
+        "--truth",
+        arg(&moved),
+        "--write-aligned-truth",
+        arg(&back),
+    ]);
+    assert!(o.status.success(), "{}", show(&o));
+    let text = std::fs::read_to_string(&back).unwrap();
+    let got: Vec<Vec<f64>> = text
+        .lines()
+        .map(|l| {
+            let inner = &l[l.find('[').unwrap() + 1..l.find(']').unwrap()];
+            inner
+                .split(',')
+                .map(|v| v.trim().parse().unwrap())
+                .collect()
+        })
+        .collect();
+    assert_eq!(got.len(), 3, "{text}");
+    for (g, t) in got.iter().zip(&TRUTH) {
+        assert!((g[0] - t[0]).hypot(g[1] - t[1]) < 0.05, "{text}");
+    }
 }
 
 /// The numeric tick labels of an SVG figure.

@@ -371,6 +371,14 @@ pub struct MapArgs {
     /// Draw the map here: PNG or SVG by the file's extension (axes in metres, legend, title).
     #[arg(long, value_name = "FILE", visible_alias = "figure")]
     pub png: Option<PathBuf>,
+    /// Write the truth moved into the map's frame here (the inverse of the best similarity
+    /// transform of the map onto the truth; the src_gt text format), to score DoAs against
+    /// with `iasm ssl --score --truth FILE`: where the poses' and the truth's frames
+    /// disagree, the DoAs are then judged in the frame they were heard in. Fit it to a map
+    /// from other DoAs than those you score (e.g. a published table), or the score is
+    /// partly of the fit.
+    #[arg(long, value_name = "FILE")]
+    pub write_aligned_truth: Option<PathBuf>,
     /// How the map is drawn.
     #[command(flatten)]
     pub figure: FigureArgs,
@@ -459,6 +467,11 @@ pub struct SslArgs {
     /// the recall of sources within 3 m.
     #[arg(long)]
     pub by_distance: bool,
+    /// With --score: ground-truth source positions to score against instead of the data
+    /// set's src_gt* (e.g. the truth moved into the poses' frame by `iasm map
+    /// --write-aligned-truth`).
+    #[arg(long, value_name = "FILE")]
+    pub truth: Option<PathBuf>,
     /// With --score: exit with status 1 if the score is below this.
     #[arg(long, value_name = "SCORE")]
     pub min_score: Option<f64>,

@@ -38,6 +38,13 @@ pub struct Alignment {
 }
 
 impl Alignment {
+    /// Where the inverse transform takes a true position: the truth in the map's frame.
+    pub fn invert(&self, q: [f64; 2]) -> [f64; 2] {
+        let (s, c) = self.rotation_rad.sin_cos();
+        let (x, y) = (q[0] - self.shift[0], q[1] - self.shift[1]);
+        [(c * x + s * y) / self.scale, (-s * x + c * y) / self.scale]
+    }
+
     /// Where the transform takes a map position.
     pub fn apply(&self, p: [f64; 2]) -> [f64; 2] {
         let (s, c) = self.rotation_rad.sin_cos();
@@ -161,9 +168,11 @@ mod tests {
         assert!(fit.mean_before_m > 0.1, "{fit:?}");
         assert_abs_diff_eq!(fit.mean_after_m, 0.0, epsilon = 1e-12);
         for (e, p) in est.iter().zip(&TRUTH) {
-            let q = fit.apply(*e);
+            let (q, back) = (fit.apply(*e), fit.invert(*p));
             assert_abs_diff_eq!(q[0], p[0], epsilon = 1e-12);
             assert_abs_diff_eq!(q[1], p[1], epsilon = 1e-12);
+            assert_abs_diff_eq!(back[0], e[0], epsilon = 1e-12);
+            assert_abs_diff_eq!(back[1], e[1], epsilon = 1e-12);
         }
     }
 

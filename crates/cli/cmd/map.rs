@@ -101,6 +101,24 @@ pub fn run(a: &MapArgs) -> Result<Outcome> {
     if let Some(csv) = &a.csv {
         write_sources_csv(csv, &result)?;
     }
+    if let Some(path) = &a.write_aligned_truth {
+        let (Some(truth), Some(fit)) = (survey.truth.as_deref(), alignment) else {
+            anyhow::bail!(
+                "--write-aligned-truth {}: the map needs the truth and three sources matched to it within c = {} m",
+                path.display(),
+                a.report.ospa_c
+            );
+        };
+        let text: String = truth
+            .iter()
+            .enumerate()
+            .map(|(i, &q)| {
+                let [x, y] = fit.invert(q);
+                format!("s{} [{x:.4}, {y:.4}, 0]\n", i + 1)
+            })
+            .collect();
+        crate::output::write_atomic(path, text.as_bytes())?;
+    }
     if let Some(png) = &a.png {
         let name = |p: &Path| {
             p.file_name().map_or_else(

@@ -85,10 +85,13 @@ pub fn run(args: &SslArgs) -> Result<Outcome> {
         .poses
         .as_ref()
         .with_context(|| format!("--score: {} has no pose table in pose/", dir.display()))?;
-    let sources_path = ds
-        .sources
-        .as_ref()
-        .with_context(|| format!("--score: {} has no src_gt* ground truth", dir.display()))?;
+    let sources_path = match &args.truth {
+        Some(t) => t,
+        None => ds
+            .sources
+            .as_ref()
+            .with_context(|| format!("--score: {} has no src_gt* ground truth", dir.display()))?,
+    };
     let poses = read_poses(poses_path, false)?;
     let sources = read_sources(sources_path)?;
     let n = config.num_peaks;
