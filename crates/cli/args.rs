@@ -207,6 +207,10 @@ pub struct SettingsArgs {
     /// Block pooling: max or mean.
     #[arg(long)]
     pub pooling: Option<Pooling>,
+    /// With max pooling: keep the mean of each direction's K largest block values
+    /// (1, the default, is the plain maximum; see `ssl::SslConfig::pool_top`).
+    #[arg(long, value_name = "K")]
+    pub pool_top: Option<usize>,
     /// I-ASM profile: paper (the paper's algorithm exactly, Table I) or robust (bearing
     /// refinement, three observing stops per source, a vote for missed sources, no source
     /// on the robot's path or contradicted by stops that heard nothing) [default: robust,
@@ -242,6 +246,9 @@ impl SettingsArgs {
         }
         if let Some(v) = self.pooling {
             s.ssl.pooling = v;
+        }
+        if let Some(v) = self.pool_top {
+            s.ssl.pool_top = v;
         }
         s.validate()?;
         Ok(s)

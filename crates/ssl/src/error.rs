@@ -56,6 +56,9 @@ pub enum ConfigError {
     /// A block must hold at least one frame.
     #[error("block of {0} frames: must be at least 1")]
     BlockFrames(usize),
+    /// Max pooling must average at least the one best block.
+    #[error("pool_top of {0} blocks: must be at least 1")]
+    PoolTop(usize),
     /// Peak separation outside `[0, 180]` degrees.
     #[error("minimum peak separation {0} degrees must be in [0, 180]")]
     MinSeparation(f64),

@@ -276,3 +276,61 @@ fn one_source_gives_one_doa_when_n_is_set_high() {
         }
     }
 }
+
+/// A source heard for 50 ms (about one block), 6 dB louder, beside one heard throughout:
+/// max pooling keeps the burst's block, as high as the steady source's best; averaging each direction's 4 best blocks
+/// (`pool_top = 4`) keeps the steady source first and halves the burst's height.
+#[test]
+fn averaging_the_best_blocks_lets_a_one_block_burst_fade() {
+    let array = MicArray::default();
+    let n = FS as usize; // 1 s
+    let (steady, burst) = (40.0, -100.0);
+    let mics = |az: f64, seed: u64| {
+        let wave: PlaneWave = (az, 0.0, Signal::Noise).into();
+        farfield::render(array.positions(), &[wave], FS, n, C, None, seed)
+    };
+    let (a, b) = (mics(steady, SEED), mics(burst, SEED + 1));
+    let on = (n / 2)..(n / 2 + FS as usize / 20);
+    let channels: Vec<Vec<f32>> = a
+        .iter()
+        .zip(&b)
+        .map(|(x, y)| {
+            (0..n)
+                .map(|i| (0.1 * (x[i] + if on.contains(&i) { 2.0 * y[i] } else { 0.0 })) as f32)
+                .collect()
+        })
+        .collect();
+    let audio = Audio::new(FS, channels).unwrap();
+    for method in Method::PAPER {
+        let burst_height = |pool_top: usize| {
+            let config = SslConfig {
+                method,
+                num_peaks: 4,
+                min_relative: 0.0,
+                pool_top,
+                ..SslConfig::default()
+            };
+            let doas = Localizer::new(&array, FS, &config)
+                .unwrap()
+                .locate(&audio)
+                .unwrap();
+            assert!(
+                wrap_deg(doas[0].azimuth_deg - steady).abs() < 2.0,
+                "{method}, pool_top {pool_top}: the steady source is not first: {doas:?}"
+            );
+            doas.iter()
+                .find(|d| wrap_deg(d.azimuth_deg - burst).abs() < 3.0)
+                .map_or(0.0, |d| d.relative)
+        };
+        let (max, top4) = (burst_height(1), burst_height(4));
+        assert!(
+            max > 0.45,
+            "{method}: max pooling keeps the burst at {max:.2}"
+        );
+        // The burst's frames fall in at most two blocks: averaged over four, at most half.
+        assert!(
+            top4 < 0.6 * max,
+            "{method}: 4 best blocks keep the burst at {top4:.2} (max pooling {max:.2})"
+        );
+    }
+}
