@@ -15,6 +15,7 @@ az_step_deg = 2.0
 elevation = { min_deg = -30.0, max_deg = 30.0, step_deg = 15.0 }
 block_frames = 3
 pooling = "mean"
+pool_top = 2
 num_peaks = 2
 min_sep_deg = 15.0
 min_relative = 0.2
