@@ -224,18 +224,22 @@ impl Localizer {
         let mut pooled = vec![0.0f32; self.grid.len()];
         let mut block = std::mem::take(&mut scratch.block);
         block.resize(self.grid.len(), 0.0);
-        // Max pooling keeps each direction's `k` largest block values, largest first.
-        let k = match self.config.pooling {
-            Pooling::Max => self.config.pool_top.min(kept).max(1),
-            Pooling::Mean => 1,
+        // Max pooling keeps each direction's `k` largest block values, largest first (k = 1:
+        // the plain maximum), and pools their mean.
+        let k = self.config.pool_top.min(kept).max(1);
+        let mut top = match self.config.pooling {
+            Pooling::Max => vec![f32::NEG_INFINITY; pooled.len() * k],
+            Pooling::Mean => Vec::new(),
         };
-        let mut top = vec![f32::NEG_INFINITY; if k > 1 { pooled.len() * k } else { 0 }];
-        let mut first = true;
         for b in (0..n_blocks).filter(|&b| keep[b]) {
             self.estimator
                 .estimate_into(&spec, frames(b), &mut block, scratch);
             match self.config.pooling {
-                Pooling::Max if k > 1 => {
+                // The plain maximum as one vectorisable pass.
+                Pooling::Max if k == 1 => {
+                    top.iter_mut().zip(&block).for_each(|(t, &v)| *t = t.max(v))
+                }
+                Pooling::Max => {
                     for (t, &v) in top.chunks_exact_mut(k).zip(&block) {
                         if v > t[k - 1] {
                             let mut i = k - 1;
@@ -247,19 +251,13 @@ impl Localizer {
                         }
                     }
                 }
-                Pooling::Max if first => pooled.copy_from_slice(&block),
-                Pooling::Max => pooled
-                    .iter_mut()
-                    .zip(&block)
-                    .for_each(|(p, &v)| *p = p.max(v)),
                 Pooling::Mean => pooled
                     .iter_mut()
                     .zip(&block)
                     .for_each(|(p, &v)| *p += v / kept as f32),
             }
-            first = false;
         }
-        if k > 1 {
+        if self.config.pooling == Pooling::Max {
             for (p, t) in pooled.iter_mut().zip(top.chunks_exact(k)) {
                 *p = t.iter().sum::<f32>() / k as f32;
             }

@@ -278,8 +278,8 @@ fn one_source_gives_one_doa_when_n_is_set_high() {
 }
 
 /// A source heard for 50 ms (about one block), 6 dB louder, beside one heard throughout:
-/// max pooling keeps the burst's block, as high as the steady source's best; averaging each direction's 4 best blocks
-/// (`pool_top = 4`) keeps the steady source first and halves the burst's height.
+/// max pooling keeps the burst's block high; averaging each direction's 4 best blocks
+/// (`pool_top = 4`) keeps the steady source first and the burst under 0.6 of that height.
 #[test]
 fn averaging_the_best_blocks_lets_a_one_block_burst_fade() {
     let array = MicArray::default();
@@ -327,7 +327,7 @@ fn averaging_the_best_blocks_lets_a_one_block_burst_fade() {
             max > 0.45,
             "{method}: max pooling keeps the burst at {max:.2}"
         );
-        // The burst's frames fall in at most two blocks: averaged over four, at most half.
+        // The burst's frames fall in at most two blocks: averaged over four, about half.
         assert!(
             top4 < 0.6 * max,
             "{method}: 4 best blocks keep the burst at {top4:.2} (max pooling {max:.2})"
