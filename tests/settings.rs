@@ -19,6 +19,7 @@ pool_top = 2
 num_peaks = 2
 min_sep_deg = 15.0
 min_relative = 0.2
+dominance_blocks = 3
 decay_gate_db = 12.0
 decay_window_s = 0.4
 speed_of_sound = 340.0

@@ -219,8 +219,25 @@ impl Localizer {
         let n_blocks = (nf / self.config.block_frames).max(1);
         // Blocks split the frames as evenly as possible and cover all of them.
         let frames = |b: usize| b * nf / n_blocks..(b + 1) * nf / n_blocks;
-        let keep = self.decay_gate(&spec, n_blocks, &frames);
+        let dominance = self.config.dominance_blocks > 0;
+        let energy = if dominance || self.config.decay_gate_db > 0.0 {
+            block_energies(&spec, n_blocks, &frames)
+        } else {
+            Vec::new()
+        };
+        let keep = self.gate(&energy, n_blocks, nf);
         let kept = keep.iter().filter(|&&k| k).count();
+        // Per azimuth cell, the blocks whose strongest direction lies there (see
+        // `SslConfig::dominance_blocks`). A block holding half the energy of the one before
+        // or less is the room's decay, and one more than `decay_gate_db` below the
+        // recording's loudest is a pause or silence: neither votes.
+        let n_az = self.grid.num_azimuths();
+        let mut votes = vec![0u32; if dominance { n_az } else { 0 }];
+        let loudest = energy.iter().copied().fold(0.0, f64::max);
+        let quiet = loudest * 10f64.powf(-self.config.decay_gate_db.max(0.0) / 10.0);
+        let votes_in = |b: usize| {
+            dominance && energy[b] >= quiet && (b == 0 || energy[b] >= 0.5 * energy[b - 1])
+        };
         let mut pooled = vec![0.0f32; self.grid.len()];
         let mut block = std::mem::take(&mut scratch.block);
         block.resize(self.grid.len(), 0.0);
@@ -234,6 +251,15 @@ impl Localizer {
         for b in (0..n_blocks).filter(|&b| keep[b]) {
             self.estimator
                 .estimate_into(&spec, frames(b), &mut block, scratch);
+            if votes_in(b) {
+                let (mut best, mut at) = (f32::NEG_INFINITY, 0);
+                for (d, &v) in block.iter().enumerate() {
+                    if v > best {
+                        (best, at) = (v, d);
+                    }
+                }
+                votes[at % n_az] += 1;
+            }
             match self.config.pooling {
                 // The plain maximum as one vectorisable pass.
                 Pooling::Max if k == 1 => {
@@ -263,38 +289,33 @@ impl Localizer {
             }
         }
         scratch.block = block;
-        Ok(AngularSpectrum::new(self.grid.clone(), pooled))
+        Ok(AngularSpectrum::new(self.grid.clone(), pooled).with_votes(votes))
     }
 
     /// Which blocks the pooling keeps: all when the gate is off; else those whose energy
     /// (all channels, the band's bins) is within `decay_gate_db` of the loudest block of
     /// the preceding `decay_window_s` (see [`SslConfig::decay_gate_db`]). The loudest
     /// block of a recording is always kept.
+    #[cfg(test)]
     fn decay_gate(
         &self,
         spec: &Spectrogram,
         n_blocks: usize,
         frames: &dyn Fn(usize) -> Range<usize>,
     ) -> Vec<bool> {
+        let energy = block_energies(spec, n_blocks, frames);
+        self.gate(&energy, n_blocks, spec.num_frames())
+    }
+
+    /// [`Localizer::decay_gate`] on the blocks' energies (`n_blocks` blocks of `nf`
+    /// frames in all).
+    fn gate(&self, energy: &[f64], n_blocks: usize, nf: usize) -> Vec<bool> {
         let gate = self.config.decay_gate_db;
         if gate <= 0.0 || n_blocks < 2 {
             return vec![true; n_blocks];
         }
-        let energy: Vec<f64> = (0..n_blocks)
-            .map(|b| {
-                frames(b)
-                    .flat_map(|f| (0..spec.num_channels()).map(move |c| (f, c)))
-                    .map(|(f, c)| {
-                        spec.frame(f, c)
-                            .iter()
-                            .map(|x| f64::from(x.norm_sqr()))
-                            .sum::<f64>()
-                    })
-                    .sum()
-            })
-            .collect();
         // Blocks per window: the window's length over one block's hop in time.
-        let frames_per_block = spec.num_frames() as f64 / n_blocks as f64;
+        let frames_per_block = nf as f64 / n_blocks as f64;
         let block_s = self.stft.hop() as f64 * frames_per_block / f64::from(self.sample_rate);
         let window = ((self.config.decay_window_s / block_s).round() as usize).max(1);
         let floor = 10f64.powf(-gate / 10.0);
@@ -326,9 +347,34 @@ impl Localizer {
             .spectrum_with_scratch(audio, scratch)?
             .peaks(self.config.num_peaks, self.config.min_sep_deg)
             .into_iter()
-            .filter(|d| d.relative >= self.config.min_relative)
+            .filter(|d| {
+                let dominant = self.config.dominance_blocks;
+                d.relative >= self.config.min_relative
+                    || (dominant > 0 && d.dominant_blocks as usize >= dominant)
+            })
             .collect())
     }
+}
+
+/// Each block's energy: all channels, the band's bins.
+fn block_energies(
+    spec: &Spectrogram,
+    n_blocks: usize,
+    frames: &dyn Fn(usize) -> Range<usize>,
+) -> Vec<f64> {
+    (0..n_blocks)
+        .map(|b| {
+            frames(b)
+                .flat_map(|f| (0..spec.num_channels()).map(move |c| (f, c)))
+                .map(|(f, c)| {
+                    spec.frame(f, c)
+                        .iter()
+                        .map(|x| f64::from(x.norm_sqr()))
+                        .sum::<f64>()
+                })
+                .sum()
+        })
+        .collect()
 }
 
 #[cfg(test)]

@@ -18,6 +18,11 @@ pub struct Doa {
     /// spectrum's median over azimuths, as a fraction of the strongest peak's height above
     /// it (1 for the strongest peak; near 0 for a ripple of the background).
     pub relative: f64,
+    /// How many blocks of the recording had their strongest direction within 2 degrees
+    /// of this azimuth (blocks in a decay not counted; see
+    /// [`crate::SslConfig::dominance_blocks`]); 0 when not counted.
+    #[serde(default)]
+    pub dominant_blocks: u32,
 }
 
 /// An angular spectrum over a [`DirectionGrid`]: `values[e * num_azimuths + a]`.
@@ -25,6 +30,9 @@ pub struct Doa {
 pub struct AngularSpectrum {
     grid: DirectionGrid,
     values: Vec<f32>,
+    /// Per azimuth cell, the blocks whose strongest direction lay there (empty: not
+    /// counted).
+    votes: Vec<u32>,
 }
 
 /// Wraps an angle in degrees to `[-180, 180)`.
@@ -41,7 +49,26 @@ impl AngularSpectrum {
     /// If `values.len() != grid.len()`.
     pub fn new(grid: DirectionGrid, values: Vec<f32>) -> Self {
         assert_eq!(values.len(), grid.len(), "one value per direction");
-        Self { grid, values }
+        Self {
+            grid,
+            values,
+            votes: Vec::new(),
+        }
+    }
+
+    /// The same spectrum with, per azimuth cell of the grid, the number of pooled blocks
+    /// whose strongest direction lay at that azimuth: the peaks then report them as
+    /// [`Doa::dominant_blocks`].
+    ///
+    /// # Panics
+    /// If `votes` is neither empty nor one count per azimuth.
+    #[must_use]
+    pub fn with_votes(self, votes: Vec<u32>) -> Self {
+        assert!(
+            votes.is_empty() || votes.len() == self.grid.num_azimuths(),
+            "one count per azimuth"
+        );
+        Self { votes, ..self }
     }
 
     /// The grid.
@@ -103,6 +130,16 @@ impl AngularSpectrum {
         };
         let top = cands.first().map_or(median, |c| c.2);
         let span = top - median;
+        // Votes within 2 degrees (at least one cell) either side of the peak cell.
+        let reach = ((2.0 / step).round() as usize).clamp(1, n / 2);
+        let dominant = |i: usize| -> u32 {
+            if self.votes.is_empty() {
+                return 0;
+            }
+            (0..=2 * reach)
+                .map(|d| self.votes[(i + n + d - reach) % n])
+                .sum()
+        };
         let mut out: Vec<Doa> = Vec::with_capacity(max_peaks);
         for (i, az, val) in cands {
             if out.len() == max_peaks {
@@ -121,6 +158,7 @@ impl AngularSpectrum {
                     } else {
                         1.0
                     },
+                    dominant_blocks: dominant(i),
                 });
             }
         }
