@@ -20,6 +20,7 @@ num_peaks = 2
 min_sep_deg = 15.0
 min_relative = 0.2
 dominance_blocks = 3
+min_prominence = 0.1
 decay_gate_db = 12.0
 decay_window_s = 0.4
 speed_of_sound = 340.0

@@ -71,6 +71,9 @@ pub enum ConfigError {
     /// A relative peak threshold outside `[0, 1]`.
     #[error("min_relative must be in [0, 1], got {0}")]
     MinRelative(f64),
+    /// A prominence threshold outside `[0, 1]`.
+    #[error("min_prominence must be in [0, 1], got {0}")]
+    MinProminence(f64),
     /// Asked for no peaks at all.
     #[error("number of peaks must be at least 1, got {0}")]
     MaxPeaks(usize),

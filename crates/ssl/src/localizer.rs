@@ -345,7 +345,11 @@ impl Localizer {
     pub fn locate_with_scratch(&self, audio: &Audio, scratch: &mut Scratch) -> Result<Vec<Doa>> {
         Ok(self
             .spectrum_with_scratch(audio, scratch)?
-            .peaks(self.config.num_peaks, self.config.min_sep_deg)
+            .resolved_peaks(
+                self.config.num_peaks,
+                self.config.min_sep_deg,
+                self.config.min_prominence,
+            )
             .into_iter()
             .filter(|d| {
                 let dominant = self.config.dominance_blocks;

@@ -23,6 +23,12 @@ pub struct Doa {
     /// [`crate::SslConfig::dominance_blocks`]); 0 when not counted.
     #[serde(default)]
     pub dominant_blocks: u32,
+    /// How far the azimuth profile dips between this peak and the nearest higher one (on
+    /// the lower side of the two), as a fraction of the peak's height above the median:
+    /// 1 for the strongest peak or one with the background between; near 0 for a ripple
+    /// on another peak's flank (see [`crate::SslConfig::min_prominence`]).
+    #[serde(default)]
+    pub prominence: f64,
 }
 
 /// An angular spectrum over a [`DirectionGrid`]: `values[e * num_azimuths + a]`.
@@ -103,6 +109,18 @@ impl AngularSpectrum {
     /// Each peak's azimuth is refined between grid cells by fitting a parabola through the
     /// peak cell and its two neighbours, so the estimate is not quantised to the grid.
     pub fn peaks(&self, max_peaks: usize, min_sep_deg: f64) -> Vec<Doa> {
+        self.resolved_peaks(max_peaks, min_sep_deg, 0.0)
+    }
+
+    /// [`AngularSpectrum::peaks`] without the peaks (but the strongest) whose
+    /// [`Doa::prominence`] is below `min_prominence`: what the spectrum does not resolve
+    /// from a higher peak is not reported, and takes no place among the `max_peaks`.
+    pub fn resolved_peaks(
+        &self,
+        max_peaks: usize,
+        min_sep_deg: f64,
+        min_prominence: f64,
+    ) -> Vec<Doa> {
         let (v, el_at) = self.azimuth_profile();
         let n = v.len();
         let step = self.grid.az_step_deg();
@@ -140,10 +158,43 @@ impl AngularSpectrum {
                 .map(|d| self.votes[(i + n + d - reach) % n])
                 .sum()
         };
+        // The dip to the nearest higher cell on each side (circularly), the higher of the
+        // two lowest points on the way, as a fraction of the cell's height above the
+        // median; 1 at most (the background between counts as a full dip).
+        let prominence = |i: usize| -> f64 {
+            let c = v[i];
+            let lowest_towards = |step: usize| -> Option<f32> {
+                let (mut lo, mut j) = (c, i);
+                for _ in 1..n {
+                    j = (j + step) % n;
+                    if v[j] > c {
+                        return Some(lo);
+                    }
+                    lo = lo.min(v[j]);
+                }
+                None // no higher cell: the strongest
+            };
+            let height = f64::from(c) - median;
+            match (lowest_towards(n - 1), lowest_towards(1)) {
+                (None, None) => 1.0,
+                (l, r) => {
+                    let saddle = f64::from(l.unwrap_or(f32::MIN).max(r.unwrap_or(f32::MIN)));
+                    if height > 0.0 {
+                        ((f64::from(c) - saddle) / height).min(1.0)
+                    } else {
+                        0.0
+                    }
+                }
+            }
+        };
         let mut out: Vec<Doa> = Vec::with_capacity(max_peaks);
         for (i, az, val) in cands {
             if out.len() == max_peaks {
                 break;
+            }
+            let prominence = prominence(i);
+            if !out.is_empty() && prominence < min_prominence {
+                continue;
             }
             if out
                 .iter()
@@ -159,6 +210,7 @@ impl AngularSpectrum {
                         1.0
                     },
                     dominant_blocks: dominant(i),
+                    prominence,
                 });
             }
         }
@@ -220,6 +272,50 @@ mod tests {
         for (got, want) in rel.iter().zip([1.0, 0.5, 0.2]) {
             assert!((got - want).abs() < 1e-3, "{rel:?}");
         }
+    }
+
+    #[test]
+    fn a_ripple_on_a_peaks_flank_is_not_resolved_a_separate_peak_is() {
+        // A broad peak (1 at 0 degrees, Gaussian of width 12) with a ripple on its flank
+        // (0.2 at 20 degrees, width 4: a local maximum at 19) and a separate bump (0.5 at
+        // 90), on a zero floor: the median is 0.
+        let f = |a: f64| -> f64 {
+            (-(a / 12.0).powi(2)).exp()
+                + 0.2 * (-((a - 20.0) / 4.0).powi(2)).exp()
+                + 0.5 * (-((a - 90.0) / 4.0).powi(2)).exp()
+        };
+        let g = DirectionGrid::new(1.0, ElevationRange::default()).unwrap();
+        let values = g.azimuths().iter().map(|&a| f(a) as f32).collect();
+        let s = AngularSpectrum::new(g, values);
+        // The ripple's prominence from the definition: its height above the lowest point
+        // between it and the higher peak, as a fraction of its height (about 0.10).
+        let want = (f(19.0)
+            - (1..19)
+                .map(|a| f(f64::from(a)))
+                .fold(f64::INFINITY, f64::min))
+            / f(19.0);
+        assert!(want > 0.05 && want < 0.2, "the test's ripple dips {want}");
+        let all = s.peaks(4, 10.0);
+        assert_eq!(all.len(), 3, "{all:?}");
+        let ripple = all
+            .iter()
+            .find(|d| (d.azimuth_deg - 19.0).abs() < 1.0)
+            .unwrap();
+        assert!(
+            (ripple.prominence - want).abs() < 1e-5,
+            "{ripple:?} against {want}"
+        );
+        // The separate bump has the floor between it and the higher one: a full dip.
+        let apart = all
+            .iter()
+            .find(|d| (d.azimuth_deg - 90.0).abs() < 1.0)
+            .unwrap();
+        assert!((apart.prominence - 1.0).abs() < 1e-6, "{apart:?}");
+        assert_eq!(all[0].prominence, 1.0, "{all:?}");
+        // Resolved peaks drop the ripple and keep the separate one.
+        let resolved = s.resolved_peaks(4, 10.0, 0.2);
+        let az: Vec<f64> = resolved.iter().map(|d| d.azimuth_deg.round()).collect();
+        assert_eq!(az, [0.0, 90.0]);
     }
 
     #[test]
