@@ -51,6 +51,7 @@ densest_fallback = true
 vote_min_stops = 6
 absence_ratio = 2.0
 min_range_m = 0.25
+beyond_map_m = 0.7
 "#;
 
 // See: issue 8
