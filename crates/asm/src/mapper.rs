@@ -638,43 +638,46 @@ impl Mapper {
         assert_eq!(poses.len(), heard.len(), "one row of DoAs per pose");
         let c = &self.config;
         let at: Vec<[f64; 2]> = sources.iter().map(|s| [s.x, s.y]).collect();
-        // Until no more falls: a source removed masks no stop of the others (a ghost
-        // beside a stop does not excuse that stop's silence towards another ghost).
-        let mut keep = vec![true; at.len()];
+        // What does not depend on the other sources, once: where the robot stood, and
+        // where the source's own rays meet.
+        let mut keep: Vec<bool> = (0..at.len())
+            .map(|i| {
+                let q = at[i];
+                let nearest = poses
+                    .iter()
+                    .map(|p| (p.x - q[0]).hypot(p.y - q[1]))
+                    .fold(f64::INFINITY, f64::min);
+                if nearest < c.min_range_m {
+                    return false;
+                }
+                c.beyond_map_m <= 0.0
+                    || fit_within(q, &sources[i].rays, 0.5 * self.sigma, f64::INFINITY)
+                        .is_none_or(|(p, _)| self.within_bounds(p, c.beyond_map_m))
+            })
+            .collect();
+        let reach: Vec<f64> = (0..at.len())
+            .map(|i| {
+                let q = at[i];
+                sources[i]
+                    .rays
+                    .iter()
+                    .map(|r| (r.from[0] - q[0]).hypot(r.from[1] - q[1]))
+                    .fold(0.0, f64::max)
+            })
+            .collect();
+        // The absences, until no more falls: a source removed masks no stop of the others
+        // (a ghost beside a stop does not excuse that stop's silence towards another).
         loop {
             let next: Vec<bool> = (0..at.len())
                 .map(|i| {
                     if !keep[i] {
                         return false;
                     }
-                    let q = at[i];
-                    let nearest = poses
-                        .iter()
-                        .map(|p| (p.x - q[0]).hypot(p.y - q[1]))
-                        .fold(f64::INFINITY, f64::min);
-                    if nearest < c.min_range_m {
-                        return false;
-                    }
-                    if c.beyond_map_m > 0.0
-                        && let Some((p, _)) =
-                            fit_within(q, &sources[i].rays, 0.5 * self.sigma, f64::INFINITY)
-                    {
-                        let (x0, x1, y0, y1) = self.bounds;
-                        let m = c.beyond_map_m;
-                        if p[0] < x0 - m || p[0] > x1 + m || p[1] < y0 - m || p[1] > y1 + m {
-                            return false;
-                        }
-                    }
                     let others: Vec<[f64; 2]> = (0..at.len())
                         .filter(|&j| j != i && keep[j])
                         .map(|j| at[j])
                         .collect();
-                    let reach = sources[i]
-                        .rays
-                        .iter()
-                        .map(|r| (r.from[0] - q[0]).hypot(r.from[1] - q[1]))
-                        .fold(0.0, f64::max);
-                    let against = self.absences(q, reach, poses, heard, &others);
+                    let against = self.absences(at[i], reach[i], poses, heard, &others);
                     // The first is forgiven: see `IasmConfig::absence_ratio`.
                     sources[i].rays.len() >= c.min_observations + against.saturating_sub(1)
                 })
@@ -696,6 +699,12 @@ impl Mapper {
             kept
         });
         before - sources.len()
+    }
+
+    /// Whether `q` lies within `margin` (m) of the bounding box of the map's known cells.
+    fn within_bounds(&self, q: [f64; 2], margin: f64) -> bool {
+        let (x0, x1, y0, y1) = self.bounds;
+        (x0 - margin..=x1 + margin).contains(&q[0]) && (y0 - margin..=y1 + margin).contains(&q[1])
     }
 
     /// The stops that speak against a source at `q` (see [`IasmConfig::absence_ratio`]):
@@ -910,7 +919,6 @@ impl Mapper {
         if live < need {
             return None;
         }
-        let (x0, x1, y0, y1) = self.bounds;
         let rays: Vec<([f64; 2], f64, usize)> = bearings
             .iter()
             .enumerate()
@@ -948,7 +956,7 @@ impl Mapper {
                 if t < 0.3 || u < 0.3 {
                     continue;
                 }
-                if !(x0..=x1).contains(&q[0]) || !(y0..=y1).contains(&q[1]) {
+                if !self.within_bounds(q, 0.0) {
                     continue;
                 }
                 let (n, sq) = support(q);

@@ -292,10 +292,7 @@ impl Localizer {
         Ok(AngularSpectrum::new(self.grid.clone(), pooled).with_votes(votes))
     }
 
-    /// Which blocks the pooling keeps: all when the gate is off; else those whose energy
-    /// (all channels, the band's bins) is within `decay_gate_db` of the loudest block of
-    /// the preceding `decay_window_s` (see [`SslConfig::decay_gate_db`]). The loudest
-    /// block of a recording is always kept.
+    /// [`Localizer::gate`] on the blocks of `spec` (the tests' entry).
     #[cfg(test)]
     fn decay_gate(
         &self,
@@ -307,8 +304,10 @@ impl Localizer {
         self.gate(&energy, n_blocks, spec.num_frames())
     }
 
-    /// [`Localizer::decay_gate`] on the blocks' energies (`n_blocks` blocks of `nf`
-    /// frames in all).
+    /// Which of `n_blocks` blocks (of `nf` frames in all) the pooling keeps, given their
+    /// energies ([`block_energies`]): all when the gate is off; else those whose energy is
+    /// within `decay_gate_db` of the loudest block of the preceding `decay_window_s` (see
+    /// [`SslConfig::decay_gate_db`]). The loudest block of a recording is always kept.
     fn gate(&self, energy: &[f64], n_blocks: usize, nf: usize) -> Vec<bool> {
         let gate = self.config.decay_gate_db;
         if gate <= 0.0 || n_blocks < 2 {

@@ -174,17 +174,15 @@ impl AngularSpectrum {
                 }
                 None // no higher cell: the strongest
             };
+            // Each walk passes every other cell: both find a higher one, or neither.
+            let (Some(l), Some(r)) = (lowest_towards(n - 1), lowest_towards(1)) else {
+                return 1.0;
+            };
             let height = f64::from(c) - median;
-            match (lowest_towards(n - 1), lowest_towards(1)) {
-                (None, None) => 1.0,
-                (l, r) => {
-                    let saddle = f64::from(l.unwrap_or(f32::MIN).max(r.unwrap_or(f32::MIN)));
-                    if height > 0.0 {
-                        ((f64::from(c) - saddle) / height).min(1.0)
-                    } else {
-                        0.0
-                    }
-                }
+            if height > 0.0 {
+                ((f64::from(c) - f64::from(l.max(r))) / height).min(1.0)
+            } else {
+                0.0
             }
         };
         let mut out: Vec<Doa> = Vec::with_capacity(max_peaks);
