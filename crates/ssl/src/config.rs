@@ -192,9 +192,10 @@ pub struct SslConfig {
     /// heard. A reflection or a sidelobe is never the strongest direction of a block while
     /// its source sounds, and is after the source stops, in the room's decay: hence the
     /// rule on falling energy (the decay of a room with RT60 below 1.2 s falls by more than
-    /// 3 dB from one 64-ms block to the next), and on the pauses: a block more than
-    /// [`SslConfig::decay_gate_db`] below the recording's loudest does not count either
-    /// (in a long silence each block's top is a random direction of the sensor noise).
+    /// 3 dB from one 64-ms block to the next), and on the pauses: a block more than 10 dB
+    /// below the recording's loudest does not count either (in a long silence each block's
+    /// top is a random direction of the sensor noise), whatever
+    /// [`SslConfig::decay_gate_db`] is.
     /// Why two blocks, not one: one block's top can be a fluke of the decay that the
     /// energy rule misses. Measured (the regression suite, 3 seeds): two talkers with
     /// pauses at RT60 0.5 s, DoA score GCC-PHAT 0.79 -> 0.81, MVDR 0.68 -> 0.78, every

@@ -13,6 +13,13 @@ use crate::method::music::SubspaceScratch;
 use crate::spectrum::{AngularSpectrum, Doa};
 use crate::stft::{Spectrogram, Stft};
 
+/// A block more than this many dB below the recording's loudest casts no dominance vote
+/// (see [`SslConfig::dominance_blocks`]): in a pause or a silence the strongest direction
+/// of a block is a random one of the sensor noise or the room's decay. Its own floor, not
+/// [`SslConfig::decay_gate_db`], so that turning the decay gate off (0, as MBSS Locate
+/// pools) leaves the vote as it is; with the default gate the two are equal.
+const VOTE_QUIET_DB: f64 = 10.0;
+
 /// An angular-spectrum method: writes the spectrum of a block of STFT frames.
 pub trait SpectrumEstimator: Send + Sync {
     /// Stable short name used in reports (`"gcc-phat"`, `"mvdr"`).
@@ -229,12 +236,12 @@ impl Localizer {
         let kept = keep.iter().filter(|&&k| k).count();
         // Per azimuth cell, the blocks whose strongest direction lies there (see
         // `SslConfig::dominance_blocks`). A block holding half the energy of the one before
-        // or less is the room's decay, and one more than `decay_gate_db` below the
+        // or less is the room's decay, and one more than `VOTE_QUIET_DB` below the
         // recording's loudest is a pause or silence: neither votes.
         let n_az = self.grid.num_azimuths();
         let mut votes = vec![0u32; if dominance { n_az } else { 0 }];
         let loudest = energy.iter().copied().fold(0.0, f64::max);
-        let quiet = loudest * 10f64.powf(-self.config.decay_gate_db.max(0.0) / 10.0);
+        let quiet = loudest * 10f64.powf(-VOTE_QUIET_DB / 10.0);
         let votes_in = |b: usize| {
             dominance && energy[b] >= quiet && (b == 0 || energy[b] >= 0.5 * energy[b - 1])
         };

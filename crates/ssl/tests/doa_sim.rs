@@ -356,7 +356,7 @@ fn averaging_the_best_blocks_lets_a_one_block_burst_fade() {
 /// 0.6 s while the first drops by 6 dB: for those blocks the second is the strongest thing
 /// the array hears. Its DoA reports the blocks it dominated, and with `min_relative = 1`
 /// (only the strongest peak passes by height) it is reported because of them, and only
-/// because of them.
+/// because of them, with the decay gate on or off.
 #[test]
 fn a_source_that_dominates_blocks_is_reported_below_min_relative() {
     let n = FS as usize; // 1 s: 23 blocks of 4 hops of 512 samples (42.7 ms)
@@ -372,7 +372,7 @@ fn a_source_that_dominates_blocks_is_reported_below_min_relative() {
         })
     };
     let audio = mix(2 * n / 5..3 * n / 5, 0.5, 1.0);
-    // The same 14 dB below the rest of the recording (beyond `decay_gate_db`) from 0.3 s
+    // The same 14 dB below the rest of the recording (beyond the vote's 10-dB floor) from 0.3 s
     // to the end: a pause, where nothing votes, not even once the decay gate's 0.5-s
     // memory has let its last blocks back into the pooling.
     let pause = mix(3 * n / 10..n, 0.1, 0.2);
@@ -381,15 +381,19 @@ fn a_source_that_dominates_blocks_is_reported_below_min_relative() {
     let block_s = 4.0 * 512.0 / f64::from(FS);
     let inside = (0.2 / block_s).floor() as u32 - 1;
     for method in Method::PAPER {
-        let run_on = |audio: &Audio, dominance_blocks: usize| {
+        let run_gated = |audio: &Audio, dominance_blocks: usize, decay_gate_db: f64| {
             let config = SslConfig {
                 method,
                 num_peaks: 4,
                 min_relative: 1.0,
                 dominance_blocks,
+                decay_gate_db,
                 ..SslConfig::default()
             };
             locate(audio, &config)
+        };
+        let run_on = |audio: &Audio, dominance_blocks: usize| {
+            run_gated(audio, dominance_blocks, SslConfig::default().decay_gate_db)
         };
         let run = |dominance_blocks: usize| run_on(&audio, dominance_blocks);
         let near = |d: &ssl::Doa, az: f64| wrap_deg(d.azimuth_deg - az).abs() < 2.0;
@@ -418,6 +422,16 @@ fn a_source_that_dominates_blocks_is_reported_below_min_relative() {
         let quiet = run_on(&pause, 2);
         assert_eq!(quiet.len(), 1, "{method}: {quiet:?}");
         assert!(near(&quiet[0], steady), "{method}: {quiet:?}");
+        // With the decay gate off (every block pooled, as MBSS Locate does) the vote
+        // keeps its own floor: the second source is still reported, and the pause still
+        // gives nothing.
+        let ungated = run_gated(&audio, 2, 0.0);
+        assert!(
+            ungated.iter().any(|d| near(d, second)),
+            "{method}, decay gate off: the second source is not reported: {ungated:?}"
+        );
+        let quiet = run_gated(&pause, 2, 0.0);
+        assert_eq!(quiet.len(), 1, "{method}, decay gate off: {quiet:?}");
     }
 }
 
