@@ -152,6 +152,24 @@ impl Spectrogram {
         self.bins.clone()
     }
 
+    /// A spectrogram of the given values (frame-major, then channel, then bin), for tests
+    /// of the estimators.
+    #[cfg(test)]
+    pub(crate) fn from_parts(
+        num_frames: usize,
+        num_channels: usize,
+        bins: Range<usize>,
+        data: Vec<Complex32>,
+    ) -> Self {
+        assert_eq!(data.len(), num_frames * num_channels * bins.len());
+        Self {
+            num_frames,
+            num_channels,
+            bins,
+            data,
+        }
+    }
+
     /// The kept bins of one channel in one frame.
     ///
     /// # Panics
