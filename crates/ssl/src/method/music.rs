@@ -742,6 +742,48 @@ mod tests {
     use super::*;
     use crate::grid::ElevationRange;
 
+    /// NormMUSIC for `array` on `grid` (at most 4 sources, groups of 5 bins).
+    fn plan(
+        array: &MicArray,
+        grid: &DirectionGrid,
+        (fs, c): (f64, f64),
+        bins: Range<usize>,
+        frame_len: usize,
+        sources: Option<usize>,
+    ) -> Music {
+        Music::new(array, grid, fs, c, bins, frame_len, sources, 4, 2, true)
+    }
+
+    /// Uniform numbers in `[-0.5, 0.5)` from a linear congruential generator (24-bit
+    /// values, exact in `f32`).
+    fn lcg(mut state: u64) -> impl FnMut() -> f64 {
+        move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 40) as f64 / (1u64 << 24) as f64 - 0.5
+        }
+    }
+
+    /// The steering phasor `(re, im)` of microphone `mic` towards `u` at `w` rad per
+    /// sample, its lead over the array's centroid computed afresh in f64.
+    fn phasor(
+        array: &MicArray,
+        mic: usize,
+        u: [f64; 3],
+        w: f64,
+        (fs, c): (f64, f64),
+    ) -> (f64, f64) {
+        let pos = array.positions();
+        let n = pos.len() as f64;
+        let lead = (0..3)
+            .map(|a| (pos[mic][a] - pos.iter().map(|p| p[a]).sum::<f64>() / n) * u[a])
+            .sum::<f64>()
+            / c
+            * fs;
+        ((w * lead).cos(), (w * lead).sin())
+    }
+
     /// The chunked, recurrence-stepped kernel against a direct sum in f64 with every
     /// steering phasor computed from its delay: `sum_v |e_v^H a_k(d)|^2`.
     #[test]
@@ -749,26 +791,10 @@ mod tests {
         let array = MicArray::default();
         let grid = DirectionGrid::new(7.0, ElevationRange::ROBOT).unwrap();
         let (fs, c, frame_len, bins) = (48_000.0, 343.0, 1024, 5..171);
-        let music = Music::new(
-            &array,
-            &grid,
-            fs,
-            c,
-            bins.clone(),
-            frame_len,
-            Some(2),
-            4,
-            2,
-            true,
-        );
+        let music = plan(&array, &grid, (fs, c), bins.clone(), frame_len, Some(2));
         let (m, dim, ng) = (array.len(), 2, music.centres.len());
-        let mut state = 7u64;
-        let mut rnd = move || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 40) as f32 / (1u64 << 24) as f32 - 0.5
-        };
+        let mut uniform = lcg(7);
+        let mut rnd = move || uniform() as f32;
         let vec_re: Vec<f32> = (0..ng * dim * m).map(|_| rnd()).collect();
         let vec_im: Vec<f32> = (0..ng * dim * m).map(|_| rnd()).collect();
         let nd_pad = grid.len().div_ceil(W) * W;
@@ -793,9 +819,6 @@ mod tests {
         let mut portable = vec![0.0; ng * nd_pad];
         steer_all_portable(&t, &vecs, m, ng, &mut a_re, &mut a_im, &mut portable);
         assert!(proj == portable, "dispatched and portable kernels differ");
-        let pos = array.positions();
-        let centroid: [f64; 3] =
-            std::array::from_fn(|a| pos.iter().map(|p| p[a]).sum::<f64>() / m as f64);
         let mut worst = 0.0f64;
         for (k, &centre) in music.centres.iter().enumerate() {
             let w = std::f64::consts::TAU * (bins.start + centre) as f64 / frame_len as f64;
@@ -804,10 +827,8 @@ mod tests {
                 let mut want = 0.0;
                 for v in 0..dim {
                     let (mut re, mut im) = (0.0, 0.0);
-                    for (mic, p) in pos.iter().enumerate() {
-                        let lead =
-                            (0..3).map(|a| (p[a] - centroid[a]) * u[a]).sum::<f64>() / c * fs;
-                        let (ar, ai) = ((w * lead).cos(), (w * lead).sin());
+                    for mic in 0..m {
+                        let (ar, ai) = phasor(&array, mic, u, w, (fs, c));
                         let i = (k * dim + v) * m + mic;
                         let (er, ei) = (f64::from(vec_re[i]), f64::from(vec_im[i]));
                         re += er * ar + ei * ai;
@@ -836,39 +857,15 @@ mod tests {
         let array = MicArray::default();
         let grid = DirectionGrid::new(5.0, ElevationRange::ROBOT).unwrap();
         let (fs, c, frame_len, bins) = (16_000.0, 343.0, 512, 100..140);
-        let music = Music::new(
-            &array,
-            &grid,
-            fs,
-            c,
-            bins.clone(),
-            frame_len,
-            None,
-            4,
-            2,
-            true,
-        );
+        let music = plan(&array, &grid, (fs, c), bins.clone(), frame_len, None);
         let m = array.len();
-        let pos = array.positions();
-        let centroid: [f64; 3] =
-            std::array::from_fn(|a| pos.iter().map(|p| p[a]).sum::<f64>() / m as f64);
         // The steering phasor of direction `u` at FFT bin `bin`, microphone `mic`.
         let steer = |u: [f64; 3], bin: f64, mic: usize| {
-            let lead = (0..3)
-                .map(|a| (pos[mic][a] - centroid[a]) * u[a])
-                .sum::<f64>()
-                / c
-                * fs;
             let w = std::f64::consts::TAU * bin / frame_len as f64;
-            C::new((w * lead).cos(), (w * lead).sin())
+            let (re, im) = phasor(&array, mic, u, w, (fs, c));
+            C::new(re, im)
         };
-        let mut state = 11u64;
-        let mut rnd = move || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 40) as f64 / (1u64 << 24) as f64 - 0.5
-        };
+        let mut rnd = lcg(11);
         for (sources, used_noise) in [(4usize, true), (2, false), (1, false)] {
             let dirs: Vec<[f64; 3]> = (0..sources)
                 .map(|s| grid.unit((s * 997 + 131) % grid.len()))
