@@ -262,11 +262,14 @@ pub struct SslConfig {
     pub music_freq_smoothing: usize,
     /// MUSIC and NormMUSIC: search the grid coarse-to-fine (every other azimuth at every
     /// other elevation, then the full grid around the `6 N` strongest local maxima of each
-    /// block, the rest interpolated) instead of steering every direction: 1.65x faster
-    /// (NormMUSIC 40 -> 24 ms per 3-s recording). Default: false. Why: measured, the maps
-    /// move both ways (arrangement II 0.145 -> 0.143 m, rows_ten 0.195 -> 0.164, but
-    /// speech_two_rt05 0.017 -> 0.104): a weak source's peak that is not among a block's
-    /// refined maxima is pooled at its interpolated height, below its own.
+    /// block, the rest interpolated) instead of steering every direction. Default: false.
+    /// Why: measured, the maps move both ways (arrangement II 0.145 -> 0.143 m, rows_ten
+    /// 0.195 -> 0.164, but speech_two_rt05 0.017 -> 0.104): a weak source's peak that is
+    /// not among a block's refined maxima is pooled at its interpolated height, below its
+    /// own. It was 1.65x faster than the full search when that steered block by block
+    /// (NormMUSIC 40 -> 24 ms per 3-s recording); since the full search evaluates all of a
+    /// recording's blocks at once it is no faster (25-26 ms both), and it is kept only to
+    /// reproduce those measurements.
     pub music_coarse: bool,
 }
 

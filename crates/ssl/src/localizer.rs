@@ -41,6 +41,29 @@ pub trait SpectrumEstimator: Send + Sync {
         out: &mut [f32],
         scratch: &mut Scratch,
     );
+
+    /// The spectra of several blocks: `sink(i, spectrum)` for each of `blocks` (frame
+    /// ranges of `stft`), in order, each spectrum being what
+    /// [`SpectrumEstimator::estimate_into`] writes for it. `block` is a buffer of one
+    /// value per direction. The default runs `estimate_into` block by block; an estimator
+    /// whose work can be shared between blocks overrides it (the subspace methods form
+    /// each direction's steering terms once per recording instead of once per block).
+    ///
+    /// # Panics
+    /// As [`SpectrumEstimator::estimate_into`].
+    fn estimate_blocks(
+        &self,
+        stft: &Spectrogram,
+        blocks: &[Range<usize>],
+        block: &mut [f32],
+        scratch: &mut Scratch,
+        sink: &mut dyn FnMut(usize, &[f32]),
+    ) {
+        for (i, frames) in blocks.iter().enumerate() {
+            self.estimate_into(stft, frames.clone(), block, scratch);
+            sink(i, block);
+        }
+    }
 }
 
 /// Working memory of the spectrum estimators, grown on first use and reused after: one
@@ -255,9 +278,10 @@ impl Localizer {
             Pooling::Max => vec![f32::NEG_INFINITY; pooled.len() * k],
             Pooling::Mean => Vec::new(),
         };
-        for b in (0..n_blocks).filter(|&b| keep[b]) {
-            self.estimator
-                .estimate_into(&spec, frames(b), &mut block, scratch);
+        let kept_blocks: Vec<usize> = (0..n_blocks).filter(|&b| keep[b]).collect();
+        let ranges: Vec<Range<usize>> = kept_blocks.iter().map(|&b| frames(b)).collect();
+        let mut sink = |i: usize, block: &[f32]| {
+            let b = kept_blocks[i];
             if votes_in(b) {
                 let (mut best, mut at) = (f32::NEG_INFINITY, 0);
                 for (d, &v) in block.iter().enumerate() {
@@ -270,10 +294,10 @@ impl Localizer {
             match self.config.pooling {
                 // The plain maximum as one vectorisable pass.
                 Pooling::Max if k == 1 => {
-                    top.iter_mut().zip(&block).for_each(|(t, &v)| *t = t.max(v))
+                    top.iter_mut().zip(block).for_each(|(t, &v)| *t = t.max(v))
                 }
                 Pooling::Max => {
-                    for (t, &v) in top.chunks_exact_mut(k).zip(&block) {
+                    for (t, &v) in top.chunks_exact_mut(k).zip(block) {
                         if v > t[k - 1] {
                             let mut i = k - 1;
                             while i > 0 && t[i - 1] < v {
@@ -286,10 +310,12 @@ impl Localizer {
                 }
                 Pooling::Mean => pooled
                     .iter_mut()
-                    .zip(&block)
+                    .zip(block)
                     .for_each(|(p, &v)| *p += v / kept as f32),
             }
-        }
+        };
+        self.estimator
+            .estimate_blocks(&spec, &ranges, &mut block, scratch, &mut sink);
         if self.config.pooling == Pooling::Max {
             for (p, t) in pooled.iter_mut().zip(top.chunks_exact(k)) {
                 *p = t.iter().sum::<f32>() / k as f32;
