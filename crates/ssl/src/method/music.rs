@@ -481,8 +481,8 @@ impl Music {
                         for j in i + 1..m {
                             // Q_ij = conj(e_i) e_j; its pair term 2 Re(Q_ij g) with
                             // g = a_i conj(a_j) is 2 Re(Q) Re(g) - 2 Im(Q) Im(g).
-                            t[1 + p] += 2.0 * (er[i] * er[j] + ei[i] * ei[j]);
-                            t[1 + np + p] -= 2.0 * (er[i] * ei[j] - ei[i] * er[j]);
+                            t[1 + 2 * p] += 2.0 * (er[i] * er[j] + ei[i] * ei[j]);
+                            t[2 + 2 * p] -= 2.0 * (er[i] * ei[j] - ei[i] * er[j]);
                             p += 1;
                         }
                     }
@@ -521,34 +521,8 @@ impl Music {
                 step: (k + 1 < ng).then_some((&self.step_re[..], &self.step_im[..])),
             };
             kernel.run(cur_re, cur_im, g_re, g_im, xs);
-            for (b, (x, o)) in xs
-                .chunks_exact(nd_pad)
-                .zip(outs.chunks_exact_mut(nd))
-                .enumerate()
-            {
-                let (a0, a1) = affine[k * nb + b];
-                let x = &x[..nd];
-                // The pseudo-spectrum is 1 / max(a0 + a1 x, FLOOR): its largest value is
-                // at the smallest denominator (a reduction in lanes, so that it vectorises).
-                let mut low = [f32::INFINITY; 8];
-                let mut it = x.chunks_exact(8);
-                for ch in it.by_ref() {
-                    for l in 0..8 {
-                        let d = a0 + a1 * ch[l];
-                        low[l] = if d < low[l] { d } else { low[l] };
-                    }
-                }
-                let low = it
-                    .remainder()
-                    .iter()
-                    .map(|&v| a0 + a1 * v)
-                    .chain(low)
-                    .fold(f32::INFINITY, f32::min);
-                let scale = self.group_scale(1.0 / low.max(FLOOR));
-                for (o, &v) in o.iter_mut().zip(x) {
-                    *o += scale / (a0 + a1 * v).max(FLOOR);
-                }
-            }
+            let scale = |low: f32| self.group_scale(1.0 / low.max(FLOOR));
+            accumulate(xs, outs, &affine[k * nb..(k + 1) * nb], &scale);
         }
         for (b, o) in outs.chunks_exact(nd).enumerate() {
             sink(b, o);
@@ -869,32 +843,41 @@ impl PairKernel<'_> {
                     p += 1;
                 }
             }
-            // Two blocks at a time, so that each pair phasor loaded serves both.
-            let mut pairs = self.terms.chunks_exact(2 * stride);
+            // Two blocks at a time, so that each pair phasor loaded serves both. A block's
+            // terms: the trace, then each pair's two coefficients.
+            let g = || g_re.iter().zip(g_im.iter());
+            let mut tiles = self.terms.chunks_exact(2 * stride);
             let mut b = 0;
-            for t2 in pairs.by_ref() {
+            for t2 in tiles.by_ref() {
                 let (t, u) = t2.split_at(stride);
+                // Real and imaginary parts summed apart: four independent chains of
+                // multiply-adds per block pair instead of two, so that the adder's latency
+                // does not bound the loop.
                 let (mut x, mut y) = ([t[0]; W], [u[0]; W]);
-                for q in 0..np {
-                    let (cr, ci) = (t[1 + q], t[1 + np + q]);
-                    let (dr, di) = (u[1 + q], u[1 + np + q]);
-                    let (gr, gi) = (&g_re[q], &g_im[q]);
+                let (mut xi, mut yi) = ([0.0f32; W], [0.0f32; W]);
+                let coefs = t[1..].chunks_exact(2).zip(u[1..].chunks_exact(2));
+                for ((c, d), (gr, gi)) in coefs.zip(g()) {
                     for l in 0..W {
-                        x[l] = madd::<FMA>(ci, gi[l], madd::<FMA>(cr, gr[l], x[l]));
-                        y[l] = madd::<FMA>(di, gi[l], madd::<FMA>(dr, gr[l], y[l]));
+                        x[l] = madd::<FMA>(c[0], gr[l], x[l]);
+                        xi[l] = madd::<FMA>(c[1], gi[l], xi[l]);
+                        y[l] = madd::<FMA>(d[0], gr[l], y[l]);
+                        yi[l] = madd::<FMA>(d[1], gi[l], yi[l]);
                     }
+                }
+                for l in 0..W {
+                    x[l] += xi[l];
+                    y[l] += yi[l];
                 }
                 xs[b * nd_pad + c * W..b * nd_pad + (c + 1) * W].copy_from_slice(&x);
                 xs[(b + 1) * nd_pad + c * W..(b + 1) * nd_pad + (c + 1) * W].copy_from_slice(&y);
                 b += 2;
             }
-            let t = pairs.remainder();
+            let t = tiles.remainder();
             if !t.is_empty() {
                 let mut x = [t[0]; W];
-                for q in 0..np {
-                    let (cr, ci) = (t[1 + q], t[1 + np + q]);
+                for (c, (gr, gi)) in t[1..].chunks_exact(2).zip(g()) {
                     for l in 0..W {
-                        x[l] = madd::<FMA>(ci, g_im[q][l], madd::<FMA>(cr, g_re[q][l], x[l]));
+                        x[l] = madd::<FMA>(c[1], gi[l], madd::<FMA>(c[0], gr[l], x[l]));
                     }
                 }
                 xs[b * nd_pad + c * W..b * nd_pad + (c + 1) * W].copy_from_slice(&x);
@@ -913,6 +896,69 @@ impl PairKernel<'_> {
                     }
                 }
             }
+        }
+    }
+}
+
+/// `outs[b] += scale(low_b) / max(a0_b + a1_b x_b, FLOOR)` for each block `b` (its
+/// `x_b` the first `outs[b].len()` values of its row of `xs`), where `low_b` is the
+/// smallest denominator of the row: one group's pseudo-spectrum `1 / max(a0 + a1 x,
+/// FLOOR)`, scaled by its largest value and summed.
+fn accumulate(xs: &[f32], outs: &mut [f32], affine: &[(f32, f32)], scale: &dyn Fn(f32) -> f32) {
+    #[cfg(target_arch = "x86_64")]
+    if crate::localizer::avx2_fma() {
+        // SAFETY: the CPU supports the features the function is compiled for.
+        unsafe { accumulate_avx2(xs, outs, affine, scale) };
+        return;
+    }
+    accumulate_portable(xs, outs, affine, scale);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn accumulate_avx2(
+    xs: &[f32],
+    outs: &mut [f32],
+    affine: &[(f32, f32)],
+    scale: &dyn Fn(f32) -> f32,
+) {
+    accumulate_portable(xs, outs, affine, scale);
+}
+
+#[inline(always)]
+fn accumulate_portable(
+    xs: &[f32],
+    outs: &mut [f32],
+    affine: &[(f32, f32)],
+    scale: &dyn Fn(f32) -> f32,
+) {
+    let nb = affine.len();
+    let (nd_pad, nd) = (xs.len() / nb, outs.len() / nb);
+    for ((x, o), &(a0, a1)) in xs
+        .chunks_exact(nd_pad)
+        .zip(outs.chunks_exact_mut(nd))
+        .zip(affine)
+    {
+        let x = &x[..nd];
+        // The smallest denominator is the largest value; reduced in lanes, so that it
+        // vectorises.
+        let mut low = [f32::INFINITY; 8];
+        let mut it = x.chunks_exact(8);
+        for ch in it.by_ref() {
+            for l in 0..8 {
+                let d = a0 + a1 * ch[l];
+                low[l] = if d < low[l] { d } else { low[l] };
+            }
+        }
+        let low = it
+            .remainder()
+            .iter()
+            .map(|&v| a0 + a1 * v)
+            .chain(low)
+            .fold(f32::INFINITY, f32::min);
+        let s = scale(low);
+        for (o, &v) in o.iter_mut().zip(x) {
+            *o += s / (a0 + a1 * v).max(FLOOR);
         }
     }
 }
