@@ -44,7 +44,8 @@ pub trait SpectrumEstimator: Send + Sync {
 
     /// The spectra of several blocks: `sink(i, spectrum)` for each of `blocks` (frame
     /// ranges of `stft`), in order, each spectrum being what
-    /// [`SpectrumEstimator::estimate_into`] writes for it. `block` is a buffer of one
+    /// [`SpectrumEstimator::estimate_into`] writes for it (to within rounding: an override
+    /// may sum in another order). `block` is a buffer of one
     /// value per direction. The default runs `estimate_into` block by block; an estimator
     /// whose work can be shared between blocks overrides it (the subspace methods form
     /// each direction's steering terms once per recording instead of once per block).
