@@ -60,10 +60,23 @@ pub trait SpectrumEstimator: Send + Sync {
         scratch: &mut Scratch,
         sink: &mut dyn FnMut(usize, &[f32]),
     ) {
-        for (i, frames) in blocks.iter().enumerate() {
-            self.estimate_into(stft, frames.clone(), block, scratch);
-            sink(i, block);
-        }
+        each_block(self, stft, blocks, block, scratch, sink);
+    }
+}
+
+/// [`SpectrumEstimator::estimate_blocks`] block by block, through `estimate_into`: the
+/// default, and the fallback of an override for the cases it does not batch.
+pub(crate) fn each_block<E: SpectrumEstimator + ?Sized>(
+    estimator: &E,
+    stft: &Spectrogram,
+    blocks: &[Range<usize>],
+    block: &mut [f32],
+    scratch: &mut Scratch,
+    sink: &mut dyn FnMut(usize, &[f32]),
+) {
+    for (i, frames) in blocks.iter().enumerate() {
+        estimator.estimate_into(stft, frames.clone(), block, scratch);
+        sink(i, block);
     }
 }
 

@@ -49,7 +49,7 @@ use realfft::num_complex::Complex32;
 
 use crate::array::MicArray;
 use crate::grid::DirectionGrid;
-use crate::localizer::zeroed;
+use crate::localizer::{each_block, zeroed};
 use crate::stft::Spectrogram;
 use crate::{Scratch, SpectrumEstimator};
 
@@ -427,11 +427,7 @@ impl SpectrumEstimator for Music {
         sink: &mut dyn FnMut(usize, &[f32]),
     ) {
         if self.coarse.is_some() || blocks.len() < 2 {
-            for (i, frames) in blocks.iter().enumerate() {
-                self.estimate_into(stft, frames.clone(), block, scratch);
-                sink(i, block);
-            }
-            return;
+            return each_block(self, stft, blocks, block, scratch, sink);
         }
         assert_eq!(
             stft.bins().len(),
@@ -533,12 +529,11 @@ impl Music {
 impl Music {
     /// Every group's pseudo-spectrum `1 / |E_n^H a|^2` (floored) on the `n` directions of
     /// `tables`, into `proj` (group-major, each group padded to whole chunks), from the
-    /// groups' vectors of [`Music::subspaces`] (`dim` slots per group).
+    /// groups' vectors of [`Music::subspaces`].
     fn pseudo(
         &self,
         tables: &Tables,
         n: usize,
-        dim: usize,
         sub: &Subspaces,
         a: (&mut Vec<f32>, &mut Vec<f32>),
         proj: &mut Vec<f32>,
@@ -548,13 +543,7 @@ impl Music {
         let a_re = zeroed(a.0, m * W);
         let a_im = zeroed(a.1, m * W);
         let proj = zeroed(proj, ng * n_pad);
-        let vecs = Vectors {
-            re: sub.re,
-            im: sub.im,
-            stride: dim,
-            used: sub.used,
-        };
-        steer_all(tables, &vecs, m, ng, a_re, a_im, proj);
+        steer_all(tables, sub, m, ng, a_re, a_im, proj);
         // |E_n^H a|^2 / |a|^2 with |a|^2 = M: the noise subspace's projection, or M less
         // the signal subspace's. Branch-free within a group, so that the loop runs on whole
         // vectors.
@@ -614,10 +603,11 @@ impl Music {
         let sub = Subspaces {
             re: vec_re,
             im: vec_im,
+            stride: dim,
             used,
             signal,
         };
-        let nd_pad = self.pseudo(&tables, nd, dim, &sub, (a_re, a_im), proj);
+        let nd_pad = self.pseudo(&tables, nd, &sub, (a_re, a_im), proj);
         self.sum_groups(proj, nd_pad, nd, out);
     }
 
@@ -634,17 +624,11 @@ impl Music {
         let sub = Subspaces {
             re: &s.vec_re,
             im: &s.vec_im,
+            stride: dim,
             used: &s.used,
             signal: &s.signal,
         };
-        let nc_pad = self.pseudo(
-            &coarse,
-            nc,
-            dim,
-            &sub,
-            (&mut s.a_re, &mut s.a_im),
-            &mut s.proj,
-        );
+        let nc_pad = self.pseudo(&coarse, nc, &sub, (&mut s.a_re, &mut s.a_im), &mut s.proj);
         // The coarse spectrum with each group scaled by its coarse maximum: enough to rank
         // the local maxima.
         let sum = zeroed(&mut s.coarse_sum, nc);
@@ -701,13 +685,13 @@ impl Music {
         let sub = Subspaces {
             re: &s.vec_re,
             im: &s.vec_im,
+            stride: dim,
             used: &s.used,
             signal: &s.signal,
         };
         let nf_pad = self.pseudo(
             &fine,
             nf,
-            dim,
             &sub,
             (&mut s.a_re, &mut s.a_im),
             &mut s.proj_fine,
@@ -969,29 +953,22 @@ fn madd<const FMA: bool>(a: f32, b: f32, c: f32) -> f32 {
     if FMA { a.mul_add(b, c) } else { a * b + c }
 }
 
-/// The groups' eigenvectors as [`Music::subspaces`] leaves them, with which subspace each
-/// group's span.
+/// The groups' eigenvectors as [`Music::subspaces`] leaves them: group-major (`stride`
+/// slots per group), then vector, then mic; group `k` uses its first `used[k]` slots, which
+/// span its signal subspace when `signal[k]`, else its noise subspace.
 struct Subspaces<'a> {
-    re: &'a [f32],
-    im: &'a [f32],
-    used: &'a [usize],
-    signal: &'a [bool],
-}
-
-/// The groups' vectors for the steering kernel: group-major (`stride` slots per group),
-/// then vector, then mic; group `k` uses its first `used[k]` slots.
-struct Vectors<'a> {
     re: &'a [f32],
     im: &'a [f32],
     stride: usize,
     used: &'a [usize],
+    signal: &'a [bool],
 }
 
 /// `proj[k * nd_pad + d] = sum over the group's vectors e of |e^H a_k(d)|^2` for every
 /// group `k` and (padded) direction `d`.
 fn steer_all(
     t: &Tables,
-    vecs: &Vectors,
+    vecs: &Subspaces,
     mics: usize,
     groups: usize,
     a_re: &mut [f32],
@@ -1011,7 +988,7 @@ fn steer_all(
 #[target_feature(enable = "avx2,fma")]
 unsafe fn steer_all_avx2(
     t: &Tables,
-    vecs: &Vectors,
+    vecs: &Subspaces,
     mics: usize,
     groups: usize,
     a_re: &mut [f32],
@@ -1024,7 +1001,7 @@ unsafe fn steer_all_avx2(
 #[inline(always)]
 fn steer_all_portable(
     t: &Tables,
-    vecs: &Vectors,
+    vecs: &Subspaces,
     mics: usize,
     groups: usize,
     a_re: &mut [f32],
@@ -1143,12 +1120,13 @@ mod tests {
             step_re: &music.step_re,
             step_im: &music.step_im,
         };
-        let used = vec![dim; ng];
-        let vecs = Vectors {
+        let (used, signal) = (vec![dim; ng], vec![true; ng]);
+        let vecs = Subspaces {
             re: &vec_re,
             im: &vec_im,
             stride: dim,
             used: &used,
+            signal: &signal,
         };
         steer_all(&t, &vecs, m, ng, &mut a_re, &mut a_im, &mut proj);
         // The portable build is the same source compiled without AVX2 (no fused
