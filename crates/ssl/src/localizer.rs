@@ -103,6 +103,8 @@ pub struct Scratch {
     pub(crate) subspace: SubspaceScratch,
     /// One block's spectrum (the localizer).
     pub(crate) block: Vec<f32>,
+    /// The recording's STFT (the localizer), its memory kept from one recording to the next.
+    pub(crate) spec: Spectrogram,
 }
 
 /// Whether this CPU can run the AVX2+FMA builds of the hot kernels (the lag sums, the
@@ -258,7 +260,9 @@ impl Localizer {
                 got: audio.sample_rate(),
             });
         }
-        let spec = self.stft.analyze(audio, self.bins.clone())?;
+        let mut spec = std::mem::take(&mut scratch.spec);
+        self.stft
+            .analyze_into(audio, self.bins.clone(), &mut spec)?;
         let nf = spec.num_frames();
         let n_blocks = (nf / self.config.block_frames).max(1);
         // Blocks split the frames as evenly as possible and cover all of them.
@@ -336,6 +340,7 @@ impl Localizer {
             }
         }
         scratch.block = block;
+        scratch.spec = spec;
         Ok(AngularSpectrum::new(self.grid.clone(), pooled).with_votes(votes))
     }
 
