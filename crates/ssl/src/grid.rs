@@ -5,6 +5,8 @@ use std::ops::Range;
 use crate::array::MicArray;
 use crate::error::ConfigError;
 use crate::localizer::zeroed;
+use crate::stft::Spectrogram;
+use crate::{Scratch, SpectrumEstimator};
 use serde::{Deserialize, Serialize};
 
 /// The elevation range searched, in degrees.
@@ -162,6 +164,14 @@ pub(crate) fn check(
 /// a pair needs only as many lags as its delay range spans, however many directions
 /// (and elevations) the grid holds, and every direction reads its value by linear
 /// interpolation between the two nearest lags.
+///
+/// That reading-off is a gather (each direction's lag index is its own), one per pair,
+/// direction and block. It ran scalar and took 22 % of a GCC-PHAT run. A recording's
+/// blocks therefore go [`TILE`] at a time ([`Pairwise`], [`LagTile`]): each direction's
+/// lag index is read once per tile, and the tile's blocks are summed side by side in SIMD
+/// lanes (same sums, same order: identical values). Measured on the authors' recordings
+/// (one thread, median of 9 interleaved runs): GCC-PHAT 14.4 -> 12.6 ms, MVDR 19.8 -> 17.0
+/// ms per recording on a slow day; tiles of 8 blocks were slower, and tiles of 32 no faster.
 #[derive(Clone, Debug)]
 pub(crate) struct PairLags {
     pub pairs: Vec<(usize, usize)>,
@@ -176,6 +186,107 @@ pub(crate) struct PairLags {
     /// Per pair and direction: the lower lag index and the interpolation weight of the upper.
     lookup: Vec<(u32, f32)>,
     n_dirs: usize,
+    /// Where pair `p`'s `2 half[p]` lag segments start in a [`LagTile`].
+    seg_offset: Vec<usize>,
+}
+
+/// Blocks per [`LagTile`]: two AVX2 vectors per direction.
+pub(crate) const TILE: usize = 16;
+
+/// A pairwise method: what one block's spectrum is, written into a [`Target`]. Every
+/// such method is a [`SpectrumEstimator`] alike: block by block it reads each pair's lag
+/// function off at every direction, and for a recording's blocks it goes [`TILE`] blocks at
+/// a time through a [`LagTile`].
+pub(crate) trait Pairwise: Send + Sync {
+    /// The method's short name ([`SpectrumEstimator::name`]).
+    const NAME: &'static str;
+
+    /// The lag grids the method was planned with.
+    fn lags(&self) -> &PairLags;
+
+    /// One block's spectrum (frames `frames` of `stft`) into `target`.
+    fn spectrum(
+        &self,
+        stft: &Spectrogram,
+        frames: Range<usize>,
+        target: Target<'_>,
+        scratch: &mut Scratch,
+    );
+}
+
+impl<T: Pairwise> SpectrumEstimator for T {
+    fn name(&self) -> &'static str {
+        T::NAME
+    }
+
+    fn estimate_into(
+        &self,
+        stft: &Spectrogram,
+        frames: Range<usize>,
+        out: &mut [f32],
+        scratch: &mut Scratch,
+    ) {
+        self.spectrum(stft, frames, Target::Directions(out), scratch);
+    }
+
+    fn estimate_blocks(
+        &self,
+        stft: &Spectrogram,
+        blocks: &[Range<usize>],
+        block: &mut [f32],
+        scratch: &mut Scratch,
+        sink: &mut dyn FnMut(usize, &[f32]),
+    ) {
+        let lags = self.lags();
+        let mut tile = std::mem::take(&mut scratch.lag_tile);
+        for (i, chunk) in blocks.chunks(TILE).enumerate() {
+            let w = chunk.len();
+            tile.reset(lags, w);
+            for (slot, frames) in chunk.iter().enumerate() {
+                self.spectrum(stft, frames.clone(), Target::Lags(&mut tile, slot), scratch);
+            }
+            lags.read_off_tile(&mut tile);
+            for slot in 0..w {
+                for (d, b) in block.iter_mut().enumerate() {
+                    *b = tile.out[d * w + slot];
+                }
+                sink(i * TILE + slot, block);
+            }
+        }
+        scratch.lag_tile = tile;
+    }
+}
+
+/// Where [`PairLags::pairwise_spectrum`] puts a block's spectrum.
+pub(crate) enum Target<'a> {
+    /// Read off at every direction, into this slice (one value per direction).
+    Directions(&'a mut [f32]),
+    /// Each pair's lag segments, into this slot of a tile of blocks.
+    Lags(&'a mut LagTile, usize),
+}
+
+/// The lag functions of a tile of blocks ([`Target::Lags`]), and their spectra.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct LagTile {
+    /// Blocks in the tile.
+    pub width: usize,
+    /// Per pair segment (pairs one after the other) and block: the lag function's value at
+    /// the segment's lower lag, and its rise to the upper.
+    value: Vec<f32>,
+    slope: Vec<f32>,
+    /// Per direction and block, the spectrum ([`PairLags::read_off_tile`]).
+    pub out: Vec<f32>,
+}
+
+impl LagTile {
+    /// Makes room for `width` blocks of `lags`' segments.
+    pub fn reset(&mut self, lags: &PairLags, width: usize) {
+        self.width = width;
+        let n = lags.seg_offset.last().copied().unwrap_or(0)
+            + 2 * lags.half.last().copied().unwrap_or(0);
+        zeroed(&mut self.value, n * width);
+        zeroed(&mut self.slope, n * width);
+    }
 }
 
 impl PairLags {
@@ -236,6 +347,14 @@ impl PairLags {
                 lookup.push((k0 as u32, (x - k0 as f64) as f32));
             }
         }
+        let seg_offset = half
+            .iter()
+            .scan(0, |at, &h| {
+                let o = *at;
+                *at += 2 * h;
+                Some(o)
+            })
+            .collect();
         Self {
             pairs,
             half,
@@ -245,6 +364,7 @@ impl PairLags {
             sin,
             lookup,
             n_dirs,
+            seg_offset,
         }
     }
 
@@ -275,9 +395,12 @@ impl PairLags {
     /// coefficients (the padded tail of `x`, `y`, `z` must make the kernel 0). This is the
     /// shape every pairwise method shares; a method only says what its bins hold and how a
     /// bin votes at a lag.
+    ///
+    /// With [`Target::Lags`] the lag functions are stored in a tile of blocks instead, to be
+    /// read off at every direction for the whole tile at once ([`PairLags::read_off_tile`]).
     pub fn pairwise_spectrum<F, K>(
         &self,
-        out: &mut [f32],
+        mut target: Target<'_>,
         scale: f32,
         scratch: &mut PairScratch,
         mut coefficients: F,
@@ -286,7 +409,9 @@ impl PairLags {
         F: FnMut(usize, (usize, usize), &mut [f32], &mut [f32], &mut [f32]),
         K: Fn(f32, f32, f32, f32, f32) -> f32 + Copy,
     {
-        out.fill(0.0);
+        if let Target::Directions(out) = &mut target {
+            out.fill(0.0);
+        }
         let PairScratch {
             x,
             y,
@@ -306,7 +431,58 @@ impl PairLags {
             lagfn.resize(2 * self.half[p] + 1, 0.0);
             lag_sums(x, y, z, cos, sin, lagfn, kernel);
             lagfn.iter_mut().for_each(|v| *v *= scale);
-            self.accumulate(p, lagfn, segments, out);
+            match &mut target {
+                Target::Directions(out) => self.accumulate(p, lagfn, segments, out),
+                Target::Lags(tile, slot) => {
+                    // Each lag's value and slope, as `accumulate` forms them.
+                    let w = tile.width;
+                    let at = self.seg_offset[p];
+                    for (k, pair) in lagfn.windows(2).enumerate() {
+                        tile.value[(at + k) * w + *slot] = pair[0];
+                        tile.slope[(at + k) * w + *slot] = pair[1] - pair[0];
+                    }
+                }
+            }
+        }
+    }
+
+    /// The spectra of a tile of blocks whose lag functions [`PairLags::pairwise_spectrum`]
+    /// stored: `tile.out[d * width + t]` for direction `d` and block `t`. The same sums as
+    /// [`Target::Directions`], term for term and in the same order, so the values are
+    /// identical; but each direction's lookup is read once per tile, and the tile's blocks
+    /// are summed side by side in SIMD lanes instead of one scalar gather per block.
+    pub fn read_off_tile(&self, tile: &mut LagTile) {
+        #[cfg(target_arch = "x86_64")]
+        if crate::localizer::avx2_fma() {
+            // SAFETY: the CPU supports the features the function is compiled for.
+            unsafe { self.read_off_tile_avx2(tile) };
+            return;
+        }
+        self.read_off_tile_portable(tile);
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn read_off_tile_avx2(&self, tile: &mut LagTile) {
+        self.read_off_tile_portable(tile);
+    }
+
+    #[inline(always)]
+    fn read_off_tile_portable(&self, tile: &mut LagTile) {
+        let w = tile.width;
+        let LagTile {
+            value, slope, out, ..
+        } = tile;
+        let out = zeroed(out, self.n_dirs * w);
+        for p in 0..self.pairs.len() {
+            let look = &self.lookup[p * self.n_dirs..(p + 1) * self.n_dirs];
+            let at = self.seg_offset[p];
+            for (o, &(k, f)) in out.chunks_exact_mut(w).zip(look) {
+                let r = (at + k as usize) * w..(at + k as usize + 1) * w;
+                for ((o, &v), &sl) in o.iter_mut().zip(&value[r.clone()]).zip(&slope[r]) {
+                    *o += v + f * sl;
+                }
+            }
         }
     }
 

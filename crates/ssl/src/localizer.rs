@@ -48,7 +48,9 @@ pub trait SpectrumEstimator: Send + Sync {
     /// may sum in another order). `block` is a buffer of one
     /// value per direction. The default runs `estimate_into` block by block; an estimator
     /// whose work can be shared between blocks overrides it (the subspace methods form
-    /// each direction's steering terms once per recording instead of once per block).
+    /// each direction's steering terms once per recording instead of once per block; the
+    /// pairwise methods read their lag functions off at the directions a tile of blocks at
+    /// a time).
     ///
     /// # Panics
     /// As [`SpectrumEstimator::estimate_into`].
@@ -105,6 +107,8 @@ pub struct Scratch {
     pub(crate) block: Vec<f32>,
     /// The recording's STFT (the localizer), its memory kept from one recording to the next.
     pub(crate) spec: Spectrogram,
+    /// A tile of blocks' lag functions and spectra (the pairwise methods).
+    pub(crate) lag_tile: crate::grid::LagTile,
 }
 
 /// Whether this CPU can run the AVX2+FMA builds of the hot kernels (the lag sums, the

@@ -19,10 +19,10 @@
 use std::ops::Range;
 use std::sync::Arc;
 
-use crate::grid::PairLags;
+use crate::Scratch;
+use crate::grid::{PairLags, Pairwise, Target};
 use crate::localizer::zeroed;
 use crate::stft::Spectrogram;
-use crate::{Scratch, SpectrumEstimator};
 
 /// The GCC-PHAT estimator for one array, grid, band and sample rate.
 #[derive(Clone, Debug)]
@@ -36,16 +36,18 @@ impl GccPhat {
     }
 }
 
-impl SpectrumEstimator for GccPhat {
-    fn name(&self) -> &'static str {
-        "gcc-phat"
+impl Pairwise for GccPhat {
+    const NAME: &'static str = "gcc-phat";
+
+    fn lags(&self) -> &PairLags {
+        &self.lags
     }
 
-    fn estimate_into(
+    fn spectrum(
         &self,
         stft: &Spectrogram,
         frames: Range<usize>,
-        out: &mut [f32],
+        target: Target<'_>,
         scratch: &mut Scratch,
     ) {
         let l = &*self.lags;
@@ -82,7 +84,7 @@ impl SpectrumEstimator for GccPhat {
                 }
             }
         };
-        l.pairwise_spectrum(out, norm, pairs, coefficients, |gr, gi, _, c, s| {
+        l.pairwise_spectrum(target, norm, pairs, coefficients, |gr, gi, _, c, s| {
             gr * c - gi * s
         });
     }

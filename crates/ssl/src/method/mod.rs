@@ -84,3 +84,63 @@ pub(crate) fn estimator(
         Method::NormMusic => music(true),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Scratch;
+    use crate::grid::ElevationRange;
+
+    /// The pairwise methods spectra of a recording's blocks at once (a tile of blocks'
+    /// lag functions read off together) are bit for bit their block-by-block spectra, over
+    /// whole tiles and a partial one, on the 3-D grid and in the plane.
+    #[test]
+    fn all_blocks_at_once_are_the_blocks_one_by_one() {
+        let array = MicArray::default();
+        let (fs, frame_len, bins) = (16_000.0, 512, 8..200);
+        let m = array.len();
+        let (frames, nb) = (3 * crate::grid::TILE + 5, bins.len());
+        let mut state = 7u64;
+        let data: Vec<Complex32> = (0..frames * m * nb)
+            .map(|_| {
+                let mut r = || {
+                    state = state
+                        .wrapping_mul(6_364_136_223_846_793_005)
+                        .wrapping_add(1);
+                    (state >> 40) as f32 / (1u64 << 24) as f32 - 0.5
+                };
+                Complex32::new(r(), r())
+            })
+            .collect();
+        let spec = Spectrogram::from_parts(frames, m, bins.clone(), data);
+        let blocks: Vec<Range<usize>> = (0..frames).map(|f| f..f + 1).collect();
+        for elevation in [ElevationRange::ROBOT, ElevationRange::PLANE] {
+            let grid = DirectionGrid::new(2.0, elevation).unwrap();
+            for method in [Method::GccPhat, Method::Mvdr, Method::SrpPhat] {
+                let config = SslConfig {
+                    method,
+                    ..SslConfig::default()
+                };
+                let est = estimator(&config, &array, &grid, fs, bins.clone(), frame_len);
+                let mut scratch = Scratch::default();
+                let mut one = vec![0.0f32; grid.len()];
+                let mut got: Vec<Vec<f32>> = Vec::new();
+                let mut buf = vec![0.0f32; grid.len()];
+                est.estimate_blocks(&spec, &blocks, &mut buf, &mut scratch, &mut |i, v| {
+                    assert_eq!(i, got.len(), "blocks in order");
+                    got.push(v.to_vec());
+                });
+                assert_eq!(got.len(), blocks.len());
+                for (b, frames) in blocks.iter().enumerate() {
+                    est.estimate_into(&spec, frames.clone(), &mut one, &mut scratch);
+                    assert!(
+                        one.iter()
+                            .zip(&got[b])
+                            .all(|(x, y)| x.to_bits() == y.to_bits()),
+                        "{method:?}, {elevation:?}, block {b}"
+                    );
+                }
+            }
+        }
+    }
+}

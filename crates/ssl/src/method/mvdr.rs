@@ -27,10 +27,10 @@ use std::sync::Arc;
 
 use realfft::num_complex::Complex32;
 
-use crate::grid::PairLags;
+use crate::Scratch;
+use crate::grid::{PairLags, Pairwise, Target};
 use crate::localizer::zeroed;
 use crate::stft::Spectrogram;
-use crate::{Scratch, SpectrumEstimator};
 
 /// The pairwise MVDR estimator for one array, grid, band and sample rate.
 #[derive(Clone, Debug)]
@@ -72,16 +72,18 @@ fn box_smooth<T: Copy + Default + std::ops::AddAssign + std::ops::Sub<Output = T
     }
 }
 
-impl SpectrumEstimator for Mvdr {
-    fn name(&self) -> &'static str {
-        "mvdr"
+impl Pairwise for Mvdr {
+    const NAME: &'static str = "mvdr";
+
+    fn lags(&self) -> &PairLags {
+        &self.lags
     }
 
-    fn estimate_into(
+    fn spectrum(
         &self,
         stft: &Spectrogram,
         frames: Range<usize>,
-        out: &mut [f32],
+        target: Target<'_>,
         scratch: &mut Scratch,
     ) {
         let l = &*self.lags;
@@ -131,7 +133,7 @@ impl SpectrumEstimator for Mvdr {
             }
         };
         let norm = 1.0 / (nb * l.pairs.len()) as f32;
-        l.pairwise_spectrum(out, norm, pairs, coefficients, |gr, gi, num, c, s| {
+        l.pairwise_spectrum(target, norm, pairs, coefficients, |gr, gi, num, c, s| {
             num / (a - (gr * c - gi * s))
         });
     }

@@ -20,10 +20,10 @@ use std::sync::Arc;
 
 use realfft::num_complex::Complex32;
 
-use crate::grid::PairLags;
+use crate::Scratch;
+use crate::grid::{PairLags, Pairwise, Target};
 use crate::localizer::zeroed;
 use crate::stft::Spectrogram;
-use crate::{Scratch, SpectrumEstimator};
 
 /// The SRP-PHAT estimator for one array, grid, band and sample rate.
 #[derive(Clone, Debug)]
@@ -37,16 +37,18 @@ impl SrpPhat {
     }
 }
 
-impl SpectrumEstimator for SrpPhat {
-    fn name(&self) -> &'static str {
-        "srp-phat"
+impl Pairwise for SrpPhat {
+    const NAME: &'static str = "srp-phat";
+
+    fn lags(&self) -> &PairLags {
+        &self.lags
     }
 
-    fn estimate_into(
+    fn spectrum(
         &self,
         stft: &Spectrogram,
         frames: Range<usize>,
-        out: &mut [f32],
+        target: Target<'_>,
         scratch: &mut Scratch,
     ) {
         let l = &*self.lags;
@@ -69,7 +71,7 @@ impl SpectrumEstimator for SrpPhat {
                 gi[b] = u.im;
             }
         };
-        l.pairwise_spectrum(out, norm, pairs, coefficients, |gr, gi, _, c, s| {
+        l.pairwise_spectrum(target, norm, pairs, coefficients, |gr, gi, _, c, s| {
             gr * c - gi * s
         });
     }
