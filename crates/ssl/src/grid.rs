@@ -585,10 +585,34 @@ fn lag_sums_portable<K>(
         cos.len() >= out.len() * nb && sin.len() >= out.len() * nb,
         "one table row per lag"
     );
-    for ((o, c), s) in out
+    // ROWS lags at a time: each bin's coefficients are loaded once for all of them, and
+    // their sums are independent chains, so that the adder's latency does not bound the
+    // loop. Each lag's own sum runs in the same order as one lag at a time would.
+    let mut outs = out.chunks_exact_mut(ROWS);
+    let mut at = 0;
+    for o in outs.by_ref() {
+        let mut acc = [[0.0f32; LANES]; ROWS];
+        let c: [&[f32]; ROWS] = std::array::from_fn(|j| &cos[(at + j) * nb..(at + j + 1) * nb]);
+        let s: [&[f32]; ROWS] = std::array::from_fn(|j| &sin[(at + j) * nb..(at + j + 1) * nb]);
+        for k in (0..nb).step_by(LANES) {
+            let (x8, y8, z8) = (&x[k..k + LANES], &y[k..k + LANES], &z[k..k + LANES]);
+            for j in 0..ROWS {
+                let (c8, s8) = (&c[j][k..k + LANES], &s[j][k..k + LANES]);
+                for l in 0..LANES {
+                    acc[j][l] += kernel(x8[l], y8[l], z8[l], c8[l], s8[l]);
+                }
+            }
+        }
+        for (o, a) in o.iter_mut().zip(&acc) {
+            *o = a.iter().sum();
+        }
+        at += ROWS;
+    }
+    for ((o, c), s) in outs
+        .into_remainder()
         .iter_mut()
-        .zip(cos.chunks_exact(nb))
-        .zip(sin.chunks_exact(nb))
+        .zip(cos[at * nb..].chunks_exact(nb))
+        .zip(sin[at * nb..].chunks_exact(nb))
     {
         let mut acc = [0.0f32; LANES];
         let rows = x
@@ -604,6 +628,12 @@ fn lag_sums_portable<K>(
         *o = acc.iter().sum();
     }
 }
+
+/// Lags summed together by [`lag_sums`]. Measured (GCC-PHAT / MVDR on the authors'
+/// recordings, median ms per recording of 15 interleaved runs): one lag at a time 12.4 /
+/// 15.0, four 12.1 / 13.3; eight no faster than four, and two (21 / 31) far slower, the
+/// compiler vectorising that loop another way.
+const ROWS: usize = 4;
 
 #[cfg(test)]
 mod tests {
