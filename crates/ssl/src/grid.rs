@@ -186,7 +186,8 @@ pub(crate) struct PairLags {
     /// Per pair and direction: the lower lag index and the interpolation weight of the upper.
     lookup: Vec<(u32, f32)>,
     n_dirs: usize,
-    /// Where pair `p`'s `2 half[p]` lag segments start in a [`LagTile`].
+    /// Where pair `p`'s `2 half[p]` lag segments start in a [`LagTile`]; the last entry is
+    /// the total.
     seg_offset: Vec<usize>,
 }
 
@@ -282,8 +283,7 @@ impl LagTile {
     /// Makes room for `width` blocks of `lags`' segments.
     pub fn reset(&mut self, lags: &PairLags, width: usize) {
         self.width = width;
-        let n = lags.seg_offset.last().copied().unwrap_or(0)
-            + 2 * lags.half.last().copied().unwrap_or(0);
+        let n = lags.seg_offset[lags.pairs.len()];
         zeroed(&mut self.value, n * width);
         zeroed(&mut self.slope, n * width);
     }
@@ -347,13 +347,11 @@ impl PairLags {
                 lookup.push((k0 as u32, (x - k0 as f64) as f32));
             }
         }
-        let seg_offset = half
-            .iter()
-            .scan(0, |at, &h| {
-                let o = *at;
+        let seg_offset = std::iter::once(0)
+            .chain(half.iter().scan(0, |at, &h| {
                 *at += 2 * h;
-                Some(o)
-            })
+                Some(*at)
+            }))
             .collect();
         Self {
             pairs,
@@ -431,15 +429,18 @@ impl PairLags {
             lagfn.resize(2 * self.half[p] + 1, 0.0);
             lag_sums(x, y, z, cos, sin, lagfn, kernel);
             lagfn.iter_mut().for_each(|v| *v *= scale);
+            // Each lag's value and slope, so that a direction costs one load and one
+            // multiply-add.
+            segments.clear();
+            segments.extend(lagfn.windows(2).map(|w| [w[0], w[1] - w[0]]));
             match &mut target {
-                Target::Directions(out) => self.accumulate(p, lagfn, segments, out),
+                Target::Directions(out) => self.accumulate(p, segments, out),
                 Target::Lags(tile, slot) => {
-                    // Each lag's value and slope, as `accumulate` forms them.
                     let w = tile.width;
                     let at = self.seg_offset[p];
-                    for (k, pair) in lagfn.windows(2).enumerate() {
-                        tile.value[(at + k) * w + *slot] = pair[0];
-                        tile.slope[(at + k) * w + *slot] = pair[1] - pair[0];
+                    for (k, &[v, slope]) in segments.iter().enumerate() {
+                        tile.value[(at + k) * w + *slot] = v;
+                        tile.slope[(at + k) * w + *slot] = slope;
                     }
                 }
             }
@@ -486,14 +487,10 @@ impl PairLags {
         }
     }
 
-    /// Adds pair `p`'s lag function, read off at every direction, to `out`.
-    ///
-    /// `segments` is scratch: it is refilled with each lag's value and slope, so that each
-    /// direction costs one load and one multiply-add (this loop runs pairs x directions x
-    /// blocks times, the most of any in the crate).
-    fn accumulate(&self, p: usize, lagfn: &[f32], segments: &mut Vec<[f32; 2]>, out: &mut [f32]) {
-        segments.clear();
-        segments.extend(lagfn.windows(2).map(|w| [w[0], w[1] - w[0]]));
+    /// Adds pair `p`'s lag function, given as each lag's value and slope, read off at
+    /// every direction, to `out` (block by block this loop runs pairs x directions x blocks
+    /// times, the most of any in the crate; see [`PairLags::read_off_tile`]).
+    fn accumulate(&self, p: usize, segments: &[[f32; 2]], out: &mut [f32]) {
         let look = &self.lookup[p * self.n_dirs..(p + 1) * self.n_dirs];
         for (o, &(k, f)) in out.iter_mut().zip(look) {
             let [v, slope] = segments[k as usize];

@@ -463,12 +463,7 @@ impl SpectrumEstimator for Music {
         out: &mut [f32],
         scratch: &mut Scratch,
     ) {
-        assert_eq!(
-            stft.bins().len(),
-            self.n_bins,
-            "spectrogram band differs from the plan"
-        );
-        assert_eq!(stft.num_channels(), self.mics, "one channel per microphone");
+        self.check_plan(stft);
         assert_eq!(out.len(), self.n_dirs, "one value per direction");
         let s = &mut scratch.subspace;
         let dim = self.subspaces(stft, frames, s);
@@ -489,12 +484,7 @@ impl SpectrumEstimator for Music {
         if self.coarse.is_some() || blocks.len() < 2 {
             return each_block(self, stft, blocks, block, scratch, sink);
         }
-        assert_eq!(
-            stft.bins().len(),
-            self.n_bins,
-            "spectrogram band differs from the plan"
-        );
-        assert_eq!(stft.num_channels(), self.mics, "one channel per microphone");
+        self.check_plan(stft);
         self.all_blocks(stft, blocks, block, &mut scratch.subspace, sink);
     }
 }
@@ -523,7 +513,6 @@ impl Music {
         zeroed(&mut s.terms, ng * nb * stride);
         s.affine.clear();
         s.affine.resize(ng * nb, (1.0, 0.0));
-        let inv_m = 1.0 / m as f32;
         for (b, frames) in blocks.iter().enumerate() {
             let dim = self.subspaces(stft, frames.clone(), s);
             for k in 0..ng {
@@ -543,11 +532,7 @@ impl Music {
                         }
                     }
                 }
-                s.affine[k * nb + b] = if s.signal[k] {
-                    (1.0, -inv_m)
-                } else {
-                    (0.0, inv_m)
-                };
+                s.affine[k * nb + b] = noise_share(s.signal[k], m);
             }
         }
         let SubspaceScratch {
@@ -632,12 +617,9 @@ impl Music {
         let a_im = zeroed(a.1, m * W);
         let proj = zeroed(proj, ng * n_pad);
         steer_all(tables, sub, m, ng, a_re, a_im, proj);
-        // |E_n^H a|^2 / |a|^2 with |a|^2 = M: the noise subspace's projection, or M less
-        // the signal subspace's. Branch-free within a group, so that the loop runs on whole
-        // vectors.
-        let inv_m = 1.0 / m as f32;
+        // Branch-free within a group, so that the loop runs on whole vectors.
         for (p, &signal) in proj.chunks_exact_mut(n_pad).zip(sub.signal) {
-            let (a0, a1) = if signal { (1.0, -inv_m) } else { (0.0, inv_m) };
+            let (a0, a1) = noise_share(signal, m);
             for v in p.iter_mut() {
                 *v = 1.0 / (a0 + a1 * *v).max(FLOOR);
             }
@@ -657,6 +639,16 @@ impl Music {
                 *o += v * scale;
             }
         }
+    }
+
+    /// Panics unless `stft` has the band and the channel count the plan was made for.
+    fn check_plan(&self, stft: &Spectrogram) {
+        assert_eq!(
+            stft.bins().len(),
+            self.n_bins,
+            "spectrogram band differs from the plan"
+        );
+        assert_eq!(stft.num_channels(), self.mics, "one channel per microphone");
     }
 
     /// A group's weight in the sum: NormMUSIC divides by its largest value (`max`).
@@ -1152,6 +1144,14 @@ fn covariance_lanes(
             cov[(i, j)] = Complex::new(sr[i][j], si[i][j]);
         }
     }
+}
+
+/// `(a0, a1)` such that `a0 + a1 x = |E_n^H a|^2 / |a|^2` (`|a|^2 = M`, `m` microphones)
+/// for a group whose projected-on vectors sum to `x = sum_v |e_v^H a|^2`: the noise
+/// subspace's projection itself, or `M` less the signal subspace's.
+fn noise_share(signal: bool, m: usize) -> (f32, f32) {
+    let inv_m = 1.0 / m as f32;
+    if signal { (1.0, -inv_m) } else { (0.0, inv_m) }
 }
 
 /// `a b + c`, fused when `FMA`.
