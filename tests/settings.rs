@@ -49,6 +49,7 @@ refine = false
 min_observations = 4
 densest_fallback = true
 vote_min_stops = 6
+vote_min_thresholded_stops = 4
 absence_ratio = 2.0
 min_range_m = 0.25
 beyond_map_m = 0.7
