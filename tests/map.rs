@@ -646,3 +646,62 @@ fn a_continuous_recording_cut_at_the_pose_times_maps_like_one_file_per_stop() {
     ]);
     assert_clear_error(&o, &["long.wav", "pose 21", "999 s"]);
 }
+
+/// Where nothing sounds, the map is empty. Every recording of a drive holds independent
+/// noise on each channel (sensor noise, a silent room): the SSL reports no DoA (each
+/// spectrum's peaks lie below `ssl::SslConfig::min_significance`), and the map has no
+/// source, with both of the paper's methods. (Before the significance floor, such a data
+/// set gave N random DoAs per stop and maps of 5-8 sources.)
+#[test]
+fn a_drive_through_silence_maps_nothing() {
+    let dir = tempdir();
+    let root = path(&dir, "ds");
+    let poses = drive();
+    mapping_dataset(&root, &AUDIO_TRUTH, &poses);
+    std::fs::create_dir_all(root.join("audio")).unwrap();
+    let mut state = 0x9E37_79B9_7F4A_7C15u64;
+    let mut gauss = move || {
+        let mut uniform = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            ((state >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+        };
+        let (u, v) = (uniform(), uniform());
+        (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
+    };
+    for k in 0..poses.len() {
+        let channels: Vec<Vec<f64>> = (0..6)
+            .map(|_| (0..FS as usize / 2).map(|_| 0.01 * gauss()).collect())
+            .collect();
+        write_wav(&root.join(format!("audio/sub{}.wav", k + 1)), &channels, FS);
+    }
+    for method in ["gcc-phat", "mvdr"] {
+        let ssl = json(&iasm(&[
+            "ssl",
+            "--dataset",
+            arg(&root),
+            "--method",
+            method,
+            "--json",
+        ]));
+        let files = ssl["files"].as_array().unwrap();
+        assert_eq!(files.len(), poses.len());
+        for f in files {
+            assert_eq!(f["doas"].as_array().unwrap().len(), 0, "{method}: {f}");
+        }
+        let map = json(&iasm(&[
+            "map",
+            "--dataset",
+            arg(&root),
+            "--method",
+            method,
+            "--json",
+        ]));
+        assert_eq!(
+            map["sources"].as_array().unwrap().len(),
+            0,
+            "{method}: {map}"
+        );
+    }
+}

@@ -398,7 +398,7 @@ impl Localizer {
     /// # Errors
     /// As [`Localizer::spectrum`].
     pub fn locate_with_scratch(&self, audio: &Audio, scratch: &mut Scratch) -> Result<Vec<Doa>> {
-        Ok(self
+        let doas: Vec<Doa> = self
             .spectrum_with_scratch(audio, scratch)?
             .resolved_peaks(
                 self.config.num_peaks,
@@ -411,7 +411,95 @@ impl Localizer {
                 d.relative >= self.config.min_relative
                     || (dominant > 0 && d.dominant_blocks as usize >= dominant)
             })
+            .collect();
+        // Every DoA's significance (cheap beside the spectrum: one pass over the frames,
+        // then a few thousand terms per DoA); those below the floor are noise.
+        let z = self.significance(&scratch.spec, &doas);
+        let floor = self.config.min_significance;
+        Ok(doas
+            .into_iter()
+            .zip(z)
+            .map(|(d, significance)| Doa { significance, ..d })
+            .filter(|d| floor <= 0.0 || d.significance >= floor)
             .collect())
+    }
+
+    /// Each DoA's [`Doa::significance`] in `spec`: with `u` each channel's unit phasors,
+    /// `G_ij(b) = sum_f u_i u_j^*` over all frames, and the statistic
+    /// `sum_(i<j) sum_b Re(G_ij(b) e^(-i w_b tau_ij)) / (F B P)` at the pairs' delays
+    /// `tau_ij` of the direction, divided by its standard deviation under independent
+    /// noise, `1 / sqrt(2 F B P)` (each term then has mean 0 and variance 1/2).
+    fn significance(&self, spec: &Spectrogram, doas: &[Doa]) -> Vec<f64> {
+        if doas.is_empty() {
+            return Vec::new();
+        }
+        let m = self.array.len();
+        let pos = self.array.positions();
+        let fs = f64::from(self.sample_rate);
+        let c = self.config.speed_of_sound;
+        let frame_len = self.stft.frame_len() as f64;
+        let nf = spec.num_frames();
+        let bins = spec.bins();
+        let nb = bins.len();
+        let pairs: Vec<(usize, usize)> = (0..m)
+            .flat_map(|i| (i + 1..m).map(move |j| (i, j)))
+            .collect();
+        let np = pairs.len();
+        // G_p(b) = sum over frames of u_i u_j^*, u the unit phasors; real and imaginary
+        // parts apart, bins contiguous, so that the sums vectorise.
+        let (mut gr, mut gi) = (vec![0.0f32; np * nb], vec![0.0f32; np * nb]);
+        let (mut ur, mut ui) = (vec![0.0f32; m * nb], vec![0.0f32; m * nb]);
+        for f in 0..nf {
+            for i in 0..m {
+                let x = spec.frame(f, i);
+                let r = ur[i * nb..(i + 1) * nb].iter_mut();
+                let im = ui[i * nb..(i + 1) * nb].iter_mut();
+                for ((v, r), im) in x.iter().zip(r).zip(im) {
+                    let n2 = v.re * v.re + v.im * v.im;
+                    let inv = if n2 > 0.0 { n2.sqrt().recip() } else { 0.0 };
+                    *r = v.re * inv;
+                    *im = v.im * inv;
+                }
+            }
+            for (p, &(i, j)) in pairs.iter().enumerate() {
+                let (ar, ai) = (&ur[i * nb..(i + 1) * nb], &ui[i * nb..(i + 1) * nb]);
+                let (br, bi) = (&ur[j * nb..(j + 1) * nb], &ui[j * nb..(j + 1) * nb]);
+                let sums = gr[p * nb..(p + 1) * nb]
+                    .iter_mut()
+                    .zip(&mut gi[p * nb..(p + 1) * nb]);
+                for ((((sr, si), ar), ai), (br, bi)) in sums.zip(ar).zip(ai).zip(br.iter().zip(bi))
+                {
+                    *sr += ar * br + ai * bi;
+                    *si += ai * br - ar * bi;
+                }
+            }
+        }
+        let sigma0 = (1.0 / (2.0 * nf as f64 * nb as f64 * np as f64)).sqrt();
+        doas.iter()
+            .map(|d| {
+                let (az, el) = (d.azimuth_deg.to_radians(), d.elevation_deg.to_radians());
+                let u = [el.cos() * az.cos(), el.cos() * az.sin(), el.sin()];
+                let lead: Vec<f64> = pos
+                    .iter()
+                    .map(|q| (q[0] * u[0] + q[1] * u[1] + q[2] * u[2]) / c * fs)
+                    .collect();
+                let mut total = 0.0f64;
+                for (p, &(i, j)) in pairs.iter().enumerate() {
+                    // e^(-i w_b tau) over the band's bins, a geometric progression in b.
+                    let step = -std::f64::consts::TAU / frame_len * (lead[i] - lead[j]);
+                    let (mut re, mut im) = (step * bins.start as f64).sin_cos();
+                    (re, im) = (im, re);
+                    let (sr, si) = (step.cos(), step.sin());
+                    let (g_re, g_im) = (&gr[p * nb..(p + 1) * nb], &gi[p * nb..(p + 1) * nb]);
+                    for (a, b) in g_re.iter().zip(g_im) {
+                        // Re(G e^(-i w tau)), with e^(-i w tau) = re + i im.
+                        total += f64::from(*a) * re - f64::from(*b) * im;
+                        (re, im) = (re * sr - im * si, re * si + im * sr);
+                    }
+                }
+                total / (nf as f64 * nb as f64 * np as f64) / sigma0
+            })
+            .collect()
     }
 }
 

@@ -29,6 +29,13 @@ pub struct Doa {
     /// on another peak's flank (see [`crate::SslConfig::min_prominence`]).
     #[serde(default)]
     pub prominence: f64,
+    /// How surely the array heard something coherent from this direction: the PHAT
+    /// coherence of the whole recording towards it (every microphone pair's unit-magnitude
+    /// cross-spectrum, summed over frames and band bins, steered to the direction), in
+    /// standard deviations of its value when every channel holds independent noise (see
+    /// [`crate::SslConfig::min_significance`]). 0 when not computed.
+    #[serde(default)]
+    pub significance: f64,
 }
 
 /// An angular spectrum over a [`DirectionGrid`]: `values[e * num_azimuths + a]`.
@@ -209,6 +216,7 @@ impl AngularSpectrum {
                     },
                     dominant_blocks: dominant(i),
                     prominence,
+                    significance: 0.0,
                 });
             }
         }

@@ -241,7 +241,8 @@ proptest! {
 }
 
 /// N is an upper bound: one source in free field gives one DoA by default, and the
-/// spectrum's ripples only when `min_relative` is 0 (MBSS Locate's behaviour).
+/// spectrum's ripples only when `min_relative` and `min_significance` are 0 (MBSS Locate's
+/// behaviour).
 #[test]
 fn one_source_gives_one_doa_when_n_is_set_high() {
     let array = MicArray::default();
@@ -259,6 +260,11 @@ fn one_source_gives_one_doa_when_n_is_set_high() {
                     method,
                     num_peaks: 4,
                     min_relative,
+                    min_significance: if min_relative > 0.0 {
+                        SslConfig::default().min_significance
+                    } else {
+                        0.0
+                    },
                     ..SslConfig::default()
                 };
                 Localizer::new(&array, FS, &config)
@@ -469,4 +475,106 @@ fn blocks_of_a_decay_give_no_dominance() {
         );
         assert_eq!(doas.len(), 1, "{method}: the decay is reported: {doas:?}");
     }
+}
+
+/// Independent Gaussian noise on every channel (a stop where nothing sounds): a seeded
+/// xorshift generator and the Box-Muller transform.
+fn independent_noise(channels: usize, seconds: f64, seed: u64) -> Audio {
+    let mut state = seed | 1;
+    let mut uniform = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        ((state >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+    };
+    let n = (seconds * f64::from(FS)) as usize;
+    let channels = (0..channels)
+        .map(|_| {
+            (0..n)
+                .map(|_| {
+                    let (u, v) = (uniform(), uniform());
+                    (0.01 * (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()) as f32
+                })
+                .collect()
+        })
+        .collect();
+    Audio::new(FS, channels).unwrap()
+}
+
+/// Where nothing sounds, nothing is reported: every peak of a spectrum of independent
+/// sensor noise lies below the significance floor, with every method; with the floor off
+/// the same recording gives its N random peaks (so the floor is what removes them).
+#[test]
+fn independent_noise_on_every_channel_gives_no_doa() {
+    for (name, array) in [
+        ("iasm6", MicArray::default()),
+        ("respeaker4", MicArray::preset("respeaker4").unwrap()),
+    ] {
+        for k in 0..3 {
+            let audio = independent_noise(array.len(), 0.5, SEED + k);
+            for method in Method::ALL {
+                let config = SslConfig {
+                    method,
+                    ..SslConfig::default()
+                };
+                let doas = Localizer::new(&array, FS, &config)
+                    .unwrap()
+                    .locate(&audio)
+                    .unwrap();
+                assert!(doas.is_empty(), "{method}/{name}/{k}: {doas:?}");
+                let off = SslConfig {
+                    min_significance: 0.0,
+                    ..config
+                };
+                let doas = Localizer::new(&array, FS, &off)
+                    .unwrap()
+                    .locate(&audio)
+                    .unwrap();
+                assert!(
+                    !doas.is_empty(),
+                    "{method}/{name}/{k}: nothing even without the floor"
+                );
+                assert!(
+                    doas.iter().all(|d| d.significance.abs() < 6.0),
+                    "{method}/{name}/{k}: noise stands out: {doas:?}"
+                );
+            }
+        }
+    }
+}
+
+/// The significance of a plane wave follows its expected value. With per-microphone SNR
+/// `s` (linear), two microphones' bins at the true delay are complex Gaussians of
+/// correlation `rho = s / (1 + s)`, and the mean of the product of their unit phasors is
+/// `(pi / 4) rho 2F1(1/2, 1/2; 2; rho^2)`, about `(pi / 4) rho` for a weak source; the
+/// statistic is that mean times `sqrt(2 F B P)`. A source 10 dB below the sensor noise,
+/// 0.4 s long, stands far above the floor, and is reported.
+#[test]
+fn a_plane_wave_below_the_sensor_noise_is_significant() {
+    let array = MicArray::default();
+    let az = 37.0;
+    let audio = render(&array, &[(az, 0.0, Signal::Noise)], 0.4, -10.0, SEED);
+    let config = SslConfig {
+        method: Method::GccPhat,
+        num_peaks: 1,
+        ..SslConfig::default()
+    };
+    let loc = Localizer::new(&array, FS, &config).unwrap();
+    let doas = loc.locate(&audio).unwrap();
+    assert_eq!(doas.len(), 1, "{doas:?}");
+    assert!(wrap_deg(doas[0].azimuth_deg - az).abs() < 3.0, "{doas:?}");
+    // F frames (hop 512 of 0.4 s at 48 kHz), B bins of the 200-8000 Hz band at
+    // 48000 / 1024 Hz, P = 15 pairs.
+    let frames = (0.4 * f64::from(FS) - 1024.0) / 512.0 + 1.0;
+    let bins = (8000.0f64 / 46.875).floor() - (200.0f64 / 46.875).ceil() + 1.0;
+    let rho = 0.1f64 / 1.1;
+    let hyp = 1.0 + rho * rho / 8.0; // 2F1(1/2, 1/2; 2; rho^2) to second order
+    let mean = std::f64::consts::FRAC_PI_4 * rho * hyp;
+    let want = mean * (2.0 * frames.floor() * bins * 15.0).sqrt();
+    let got = doas[0].significance;
+    assert!(
+        (got / want - 1.0).abs() < 0.1,
+        "significance {got:.1}, expected about {want:.1}"
+    );
+    assert!(got > 3.0 * config.min_significance, "{got}");
 }
