@@ -160,10 +160,22 @@ pub fn run(args: &SslArgs) -> Result<Outcome> {
             "{:<28} {:>6} {:>6} {:>7} {:>10}",
             "table", "hits", "total", "score", "mean err"
         );
+        // An angle, or "-" where there was nothing to average (no hit, an empty band).
+        let deg = |v: f64| {
+            if v.is_finite() {
+                format!("{v:.2}°")
+            } else {
+                "-".to_owned()
+            }
+        };
         let line = |name: &str, s: &DoaScore| {
             println!(
-                "{:<28} {:>6} {:>6} {:>7.3} {:>9.2}°",
-                name, s.hits, s.total, s.score, s.mean_hit_error_deg
+                "{:<28} {:>6} {:>6} {:>7.3} {:>10}",
+                name,
+                s.hits,
+                s.total,
+                s.score,
+                deg(s.mean_hit_error_deg)
             )
         };
         line(&format!("iasm {}", config.method), &ours);
@@ -182,8 +194,12 @@ pub fn run(args: &SslArgs) -> Result<Outcome> {
             );
             for b in &d.bands {
                 println!(
-                    "  {:<10} {:>5} {:>9.2}° {:>11.2}° {:>10.2}°",
-                    b.band, b.doas, b.mean_abs_err_deg, b.median_abs_err_deg, b.axis_bias_deg
+                    "  {:<10} {:>5} {:>10} {:>12} {:>11}",
+                    b.band,
+                    b.doas,
+                    deg(b.mean_abs_err_deg),
+                    deg(b.median_abs_err_deg),
+                    deg(b.axis_bias_deg)
                 );
             }
         }
