@@ -148,6 +148,15 @@ impl Renderer {
 
     /// What each microphone (world positions, m) hears: `n` samples per microphone.
     pub fn render(&self, mics: &[[f64; 3]]) -> Vec<Vec<f64>> {
+        self.render_playing(mics, &vec![true; self.images.len()])
+    }
+
+    /// [`Renderer::render`] with only the sources whose flag in `playing` is set.
+    ///
+    /// # Panics
+    /// If `playing` has not one flag per source.
+    pub fn render_playing(&self, mics: &[[f64; 3]], playing: &[bool]) -> Vec<Vec<f64>> {
+        assert_eq!(playing.len(), self.images.len(), "one flag per source");
         let RenderConfig {
             fs,
             speed_of_sound: c,
@@ -165,7 +174,13 @@ impl Renderer {
         mics.iter()
             .map(|&m| {
                 acc.iter_mut().for_each(|a| a.fill(Complex64::default()));
-                for (images, spectra) in self.images.iter().zip(&self.spectra) {
+                for ((images, spectra), _) in self
+                    .images
+                    .iter()
+                    .zip(&self.spectra)
+                    .zip(playing)
+                    .filter(|x| *x.1)
+                {
                     h.fill(0.0);
                     add_images(&mut h[..l], images, m, fs, c);
                     high_pass(&mut h[..l], HIGH_PASS_HZ, fs);

@@ -21,6 +21,7 @@
 //! # or: wav = "talker.wav" (relative to the scene file; first channel, at the scene's fs)
 //! level_db = 65.0       # dB SPL at 1 m
 //! active_s = [0.0, 0.8] # plays only then (s into each clip); the decay follows
+//! at_stops = [0, 5]     # plays at stops 0 to 5 only (a talker who leaves)
 //! [trajectory]
 //! waypoints = [[1.0, 1.0], [5.0, 1.0]]
 //! spacing = 0.5         # or poses = [[x, y, theta_deg], ...]
@@ -159,6 +160,11 @@ pub struct SourceSpec {
     /// decay after it stops. Default: the whole clip.
     #[serde(default)]
     pub active_s: Option<[f64; 2]>,
+    /// `[first, last]` (stop indices from 0, inclusive): the source plays at those stops
+    /// only and is silent at the others (a talker who arrives or leaves while the robot
+    /// drives). Default: every stop.
+    #[serde(default)]
+    pub at_stops: Option<[usize; 2]>,
 }
 
 fn default_f0() -> f64 {
@@ -338,6 +344,20 @@ impl Scene {
             return Err(invalid("sources", "a scene needs at least one source"));
         }
         let stops = self.stops()?;
+        for (i, src) in self.sources.iter().enumerate() {
+            if let Some([first, last]) = src.at_stops
+                && !(first <= last && last < stops.len())
+            {
+                return Err(invalid(
+                    format!("sources[{i}].at_stops"),
+                    format!(
+                        "[{first}, {last}] is not a range of the {} stops (0..={})",
+                        stops.len(),
+                        stops.len().saturating_sub(1)
+                    ),
+                ));
+            }
+        }
         for (k, st) in stops.iter().enumerate() {
             for (m, p) in mics.iter().enumerate() {
                 let w = mic_world(*st, self.array.height, *p);
@@ -581,10 +601,23 @@ impl PreparedScene {
             .iter()
             .map(|&p| mic_world(self.stops[k], sc.array.height, p))
             .collect();
-        let mut out = self.renderer().render(&mics);
+        let playing: Vec<bool> = sc
+            .sources
+            .iter()
+            .map(|s| s.at_stops.is_none_or(|[a, b]| (a..=b).contains(&k)))
+            .collect();
+        let mut out = self.renderer().render_playing(&mics, &playing);
         if let Some(snr) = sc.snr_db {
-            let p = out.iter().flatten().map(|v| v * v).sum::<f64>()
-                / (out.len() * out[0].len()) as f64;
+            // The sensor noise is relative to what the array hears there with every source
+            // playing, so that a stop where one is silent hears the same noise.
+            let everyone = if playing.iter().all(|&p| p) {
+                None
+            } else {
+                Some(self.renderer().render(&mics))
+            };
+            let full = everyone.as_ref().unwrap_or(&out);
+            let p = full.iter().flatten().map(|v| v * v).sum::<f64>()
+                / (full.len() * full[0].len()) as f64;
             let sd = p.sqrt() * 10f64.powf(-snr / 20.0);
             let mut rng = StdRng::seed_from_u64(
                 sc.seed ^ (0x9E37_79B9_7F4A_7C15u64.wrapping_mul(k as u64 + 1)),
@@ -707,6 +740,40 @@ spacing = 0.5
         );
         let e = refusal(&bad, std::path::Path::new("."));
         assert!(e.contains("sources[0].active_s"), "{e}");
+    }
+
+    #[test]
+    fn a_source_heard_at_some_stops_only_leaves_the_others_to_the_sensor_noise() {
+        // Playing at stops 0 and 1 only, SNR 20 dB: at stop 3 the array hears the sensor
+        // noise alone, at the level the source would have set there (1 % of its power).
+        let text = SCENE.replace(
+            "pos = [1.5, 3.0, 1.2]",
+            "pos = [1.5, 3.0, 1.2]\nat_stops = [0, 1]",
+        );
+        let text = format!("snr_db = 20.0\n{text}");
+        let p = Scene::from_toml(&text).unwrap().prepare(two_mics).unwrap();
+        assert!(p.stops.len() > 3);
+        let power = |x: &[Vec<f64>]| {
+            x.iter().flatten().map(|v| v * v).sum::<f64>() / (x.len() * x[0].len()) as f64
+        };
+        let mics: Vec<[f64; 3]> = p
+            .mics
+            .iter()
+            .map(|&m| mic_world(p.stops[3], p.scene.array.height, m))
+            .collect();
+        let would_hear = power(&p.renderer().render(&mics));
+        let silent = power(&p.render_stop(3));
+        let ratio = silent / would_hear;
+        assert!((ratio - 0.01).abs() < 0.002, "noise / source power {ratio}");
+        let heard = power(&p.render_stop(1));
+        assert!(heard > 50.0 * silent, "{heard} {silent}");
+        // A range beyond the stops is refused, naming the field.
+        let bad = SCENE.replace(
+            "pos = [1.5, 3.0, 1.2]",
+            "pos = [1.5, 3.0, 1.2]\nat_stops = [2, 40]",
+        );
+        let e = refusal(&bad, std::path::Path::new("."));
+        assert!(e.contains("sources[0].at_stops"), "{e}");
     }
 
     #[test]
