@@ -228,8 +228,8 @@ pub struct IasmConfig {
     /// in `reverberant_low_snr` (0.27 / 0.20 -> 0.45 / 0.40 m) and of the authors' tables.
     pub vote_min_thresholded_stops: usize,
     /// Stops that heard nothing count against a source. A stop *speaks against* a source
-    /// when its row holds fewer than `N` DoAs (the SSL found no further peak worth
-    /// reporting, as the `ssl` crate's `min_relative` threshold does), none of them lies
+    /// when its row holds fewer than `N` DoAs but at least one (the SSL found no further
+    /// peak worth reporting, as the `ssl` crate's `min_relative` threshold does), none of them lies
     /// within `gamma` of the bearing to the source, it is no further from the source than
     /// the furthest stop that heard it, and no other mapped source is nearer to the stop
     /// than the source's distance divided by this ratio (a nearer source may mask it).
@@ -255,7 +255,11 @@ pub struct IasmConfig {
     /// stay mask: the check repeats until none falls, so that one ghost beside a few stops
     /// does not excuse their silence towards another (measured on the held-out one-talker
     /// scenes of `fixtures/heldout`: two ghosts of three seeds gone, 0.23 -> 0.07 m and
-    /// 0.20 -> 0.04 m; the suite and arrangement II unchanged).
+    /// 0.20 -> 0.04 m; the suite and arrangement II unchanged). Why an empty row says
+    /// nothing: a stop where the SSL found nothing significant at all (the `ssl` crate's
+    /// `min_significance`) heard silence, and silence says nothing about any one source:
+    /// everything may have paused, or left (a talker heard from six stops is mapped,
+    /// whatever the stops after it heard).
     pub absence_ratio: f64,
     /// No source lies nearer than this (m) to a stop: the robot stood there, and the
     /// array is on it. A cluster that close to the path is where DoAs along the direction
@@ -759,7 +763,8 @@ impl Mapper {
             .filter(|(p, row)| {
                 let (at, to) = (p.position(), p.bearing_to(q));
                 let d = dist(q, at);
-                row.len() < self.config.num_doas
+                !row.is_empty()
+                    && row.len() < self.config.num_doas
                     && d <= reach
                     && row.iter().all(|&b| wrap_rad(to - b).abs() >= self.gamma)
                     && others.iter().all(|&o| dist(o, at) * ratio > d)
@@ -1475,6 +1480,26 @@ mod tests {
             0
         );
         assert_eq!(sources.len(), 2);
+    }
+
+    #[test]
+    fn stops_that_heard_nothing_at_all_speak_against_nothing() {
+        // The ghost survey, with the three stops that missed the ghost silent instead
+        // (empty rows: nothing significant at all): silence says nothing of any source.
+        let (mapper, poses, mut heard, mut sources) = ghost_survey(&[]);
+        for row in &mut heard[1..4] {
+            row.clear();
+        }
+        let others = [[sources[0].x, sources[0].y]];
+        assert_eq!(
+            mapper.absences([2.0, 1.5], 3.36, &poses, &heard, &others),
+            0
+        );
+        let mut left = vec![Vec::new(); poses.len()];
+        assert_eq!(
+            mapper.drop_implausible(&mut sources, &poses, &heard, &mut left),
+            0
+        );
     }
 
     #[test]
