@@ -166,7 +166,10 @@ pub fn compare(
         let files = localise_files(&ds.audio, &array, &s.ssl)?;
         let ms = 1e3 * files.iter().map(|f| f.seconds).sum::<f64>() / files.len() as f64;
         let table = doa_table(files.iter().map(|f| &f.doas[..]), n);
-        let survey = survey(table, format!("ssl:{method}"), &s)?;
+        let survey = Survey {
+            cut: Some(files.iter().map(|f| f.cut).collect()),
+            ..survey(table, format!("ssl:{method}"), &s)?
+        };
         tell(format!("{method}: {} maps", opts.runs));
         rows.push(row(
             &survey,

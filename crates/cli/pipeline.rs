@@ -27,7 +27,7 @@ use rand::rngs::StdRng;
 use rayon::prelude::*;
 use serde::Serialize;
 use sim::scene::PreparedScene;
-use ssl::{Audio, Doa, Localizer, MicArray, Scratch, SslConfig};
+use ssl::{Audio, Doa, Localizer, Located, MicArray, Scratch, SslConfig};
 
 use crate::dataset::read_timed_poses;
 use crate::dataset::{Dataset, Table, first_with_ext, list_files, load_map, read_poses};
@@ -42,6 +42,10 @@ pub struct FileDoas {
     pub file: PathBuf,
     /// Strongest first.
     pub doas: Vec<Doa>,
+    /// Whether N cut the row: a further peak passed the thresholds ([`ssl::Located::cut`]).
+    /// Not serialised: the DoA output is the DoAs.
+    #[serde(skip)]
+    pub cut: bool,
     /// The time it took to read and localise it on one thread (s). Not serialised: the
     /// DoA output stays the same from run to run.
     #[serde(skip)]
@@ -75,13 +79,14 @@ pub fn localise_files(
                     }
                 }
             };
-            let doas = loc
-                .locate_with_scratch(&audio, scratch)
+            let Located { doas, cut } = loc
+                .locate_row_with_scratch(&audio, scratch)
                 .with_context(|| format!("localising {}", f.display()))?;
             bar.inc(1);
             Ok(FileDoas {
                 file: f.clone(),
                 doas,
+                cut,
                 seconds: t0.elapsed().as_secs_f64(),
             })
         })
@@ -138,7 +143,7 @@ pub fn localise_audio(
     windows: &[Audio],
     array: &MicArray,
     config: &SslConfig,
-) -> Result<Vec<Vec<Doa>>> {
+) -> Result<Vec<Located>> {
     let Some(first) = windows.first() else {
         return Ok(Vec::new());
     };
@@ -147,7 +152,7 @@ pub fn localise_audio(
         .par_iter()
         .enumerate()
         .map_init(Scratch::default, |scratch, (k, w)| {
-            loc.locate_with_scratch(w, scratch)
+            loc.locate_row_with_scratch(w, scratch)
                 .with_context(|| format!("window {}", k + 1))
         })
         .collect()
@@ -195,6 +200,10 @@ pub struct Survey {
     /// The DoAs heard at each stop: azimuths in degrees, array frame, strongest first;
     /// `None` for an empty cell.
     pub doas_deg: Table,
+    /// Per stop, whether the SSL cut its row at N (a further peak passed its thresholds;
+    /// [`ssl::Located::cut`]); `None` for a DoA table, whose rows do not say (the mapper
+    /// then takes a full row as cut; see [`asm::Mapper::run_rows`]).
+    pub cut: Option<Vec<bool>>,
     /// The true source positions (m), when known.
     pub truth: Option<Vec<[f64; 2]>>,
     /// Where the DoAs came from: a table's path, or `ssl:<method>`.
@@ -249,6 +258,7 @@ impl Survey {
             .clone()
             .or_else(|| ds.as_ref().and_then(|d| d.sources.clone()));
         let truth = truth_path.as_deref().map(read_sources).transpose()?;
+        let mut cut = None;
         let (doas_deg, doa_source) = if let Some(given) = doas {
             given
         } else if let (Some(rec), Some(timed)) = (&inputs.recording, &timed) {
@@ -263,8 +273,9 @@ impl Survey {
             })?;
             let rows = localise_audio(&windows, &settings.mic_array()?, &settings.ssl)
                 .with_context(|| format!("localising {}", rec.display()))?;
+            cut = Some(rows.iter().map(|r| r.cut).collect());
             (
-                doa_table(rows.iter().map(|r| &r[..]), settings.ssl.num_peaks),
+                doa_table(rows.iter().map(|r| &r.doas[..]), settings.ssl.num_peaks),
                 format!("ssl:{}", settings.ssl.method),
             )
         } else if let Some(t) = &inputs.doas {
@@ -287,20 +298,23 @@ impl Survey {
                 pose_path.display()
             );
             let rows = localise_files(&files, &settings.mic_array()?, &settings.ssl)?;
+            cut = Some(rows.iter().map(|r| r.cut).collect());
             (
                 doa_table(rows.iter().map(|r| &r.doas[..]), settings.ssl.num_peaks),
                 format!("ssl:{}", settings.ssl.method),
             )
         };
-        Self {
+        let survey = Self {
             map,
             poses,
             doas_deg: Table::new(),
+            cut: None,
             truth,
             doa_source: String::new(),
         }
         .with_doas(doas_deg, doa_source)
-        .with_context(|| format!("poses from {}", pose_path.display()))
+        .with_context(|| format!("poses from {}", pose_path.display()))?;
+        Ok(Self { cut, ..survey })
     }
 
     /// The same survey heard through other DoAs (a table, and where it came from): several
@@ -317,6 +331,7 @@ impl Survey {
         );
         Ok(Self {
             doas_deg,
+            cut: None,
             doa_source,
             ..self
         })
@@ -336,9 +351,10 @@ impl Survey {
     /// As [`Mapper::new`] and [`Mapper::run`].
     pub fn map(&self, config: &IasmConfig, seed: u64) -> Result<MapResult> {
         let mapper = Mapper::new(&self.map, config)?;
-        Ok(mapper.run(
+        Ok(mapper.run_rows(
             &self.poses,
             &self.doas_rad(),
+            self.cut.as_deref(),
             &mut StdRng::seed_from_u64(seed),
         )?)
     }
@@ -444,7 +460,12 @@ pub fn evaluate(
                 .into_par_iter()
                 .map(|s| {
                     let mut rng = StdRng::seed_from_u64(seed0 + s);
-                    let r = mapper.run(&survey.poses, &doas_rad, &mut rng)?;
+                    let r = mapper.run_rows(
+                        &survey.poses,
+                        &doas_rad,
+                        survey.cut.as_deref(),
+                        &mut rng,
+                    )?;
                     bar.inc(1);
                     let found = r.positions();
                     Ok((
@@ -589,18 +610,19 @@ impl Simulated {
     /// Settings refused for this array and rate.
     pub fn survey(&self, ssl: &SslConfig) -> Result<Survey> {
         let loc = Localizer::new(&self.array, self.scene.scene.fs, ssl)?;
-        let rows: Vec<Vec<Doa>> = self
+        let rows: Vec<Located> = self
             .audio
             .par_iter()
             .map_init(Scratch::default, |scratch, a| {
-                loc.locate_with_scratch(a, scratch)
+                loc.locate_row_with_scratch(a, scratch)
             })
             .collect::<Result<_, _>>()
             .with_context(|| format!("localising scene {}", self.name))?;
         Ok(Survey {
             map: self.map.clone(),
             poses: self.scene.stops.clone(),
-            doas_deg: doa_table(rows.iter().map(|r| &r[..]), ssl.num_peaks),
+            doas_deg: doa_table(rows.iter().map(|r| &r.doas[..]), ssl.num_peaks),
+            cut: Some(rows.iter().map(|r| r.cut).collect()),
             truth: Some(self.truth.clone()),
             doa_source: format!("ssl:{}", ssl.method),
         })

@@ -97,6 +97,14 @@ pub enum Error {
         /// DoA rows.
         doas: usize,
     },
+    /// A row-cut flag per stop that does not match the poses.
+    #[error("{poses} poses but {cut} row-cut flags: they must match one to one")]
+    CutMismatch {
+        /// Pose rows.
+        poses: usize,
+        /// Flags.
+        cut: usize,
+    },
     /// No pose at all.
     #[error("no observation point: the pose table is empty")]
     NoPoses,

@@ -154,10 +154,12 @@ impl OnlineMapper {
                 self.search(&mut update);
             }
             // As the batch mapper does before its merge.
+            let complete = self.mapper.complete_by_length(&self.bearings);
             self.removed += self.mapper.drop_implausible(
                 &mut self.sources,
                 &self.poses,
                 &self.bearings,
+                &complete,
                 &mut self.pool,
             );
             self.mapper.merge(&mut self.sources);
@@ -252,10 +254,12 @@ impl OnlineMapper {
         let mut k = dissolved.iter();
         self.sources
             .retain(|_| !*k.next().expect("one flag per source"));
+        let complete = self.mapper.complete_by_length(&self.bearings);
         let contradicted = self.mapper.drop_implausible(
             &mut self.sources,
             &self.poses,
             &self.bearings,
+            &complete,
             &mut self.pool,
         );
         self.removed += contradicted;

@@ -52,7 +52,7 @@ pub use audio::{Audio, read_wav};
 pub use config::{Method, Pooling, SslConfig};
 pub use error::{ArrayError, ConfigError, Error, Result};
 pub use grid::{DirectionGrid, ElevationRange};
-pub use localizer::{Localizer, Scratch, SpectrumEstimator};
+pub use localizer::{Localizer, Located, Scratch, SpectrumEstimator};
 pub use method::{gcc_phat, music, mvdr, srp_phat};
 pub use spectrum::{AngularSpectrum, Doa, wrap_deg};
 pub use stft::{Spectrogram, Stft};

@@ -125,6 +125,18 @@ pub(crate) fn zeroed<T: Copy + Default>(v: &mut Vec<T>, n: usize) -> &mut [T] {
     v
 }
 
+/// The DoAs of one recording ([`Localizer::locate_row_with_scratch`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Located {
+    /// At most [`SslConfig::num_peaks`], strongest first.
+    pub doas: Vec<Doa>,
+    /// Whether `num_peaks` cut the row: a further peak passed every threshold. A row that
+    /// is not cut holds every peak the thresholds let through, so a full row is then as
+    /// telling as a shorter one (what it does not hold was not heard); a cut one holds the
+    /// strongest `N` of more.
+    pub cut: bool,
+}
+
 /// A validated, precomputed SSL front end for one array and sample rate.
 ///
 /// Building it plans the FFT, the window, the direction grid and every pair's delay
@@ -398,30 +410,46 @@ impl Localizer {
     /// # Errors
     /// As [`Localizer::spectrum`].
     pub fn locate_with_scratch(&self, audio: &Audio, scratch: &mut Scratch) -> Result<Vec<Doa>> {
-        let doas: Vec<Doa> = self
-            .spectrum_with_scratch(audio, scratch)?
-            .resolved_peaks(
-                self.config.num_peaks,
-                self.config.min_sep_deg,
-                self.config.min_prominence,
-            )
-            .into_iter()
-            .filter(|d| {
-                let dominant = self.config.dominance_blocks;
-                d.relative >= self.config.min_relative
-                    || (dominant > 0 && d.dominant_blocks as usize >= dominant)
-            })
-            .collect();
+        Ok(self.locate_row_with_scratch(audio, scratch)?.doas)
+    }
+
+    /// [`Localizer::locate_with_scratch`], and whether `num_peaks` cut the row: a further
+    /// peak passed every threshold (see [`Located::cut`]).
+    ///
+    /// # Errors
+    /// As [`Localizer::spectrum`].
+    pub fn locate_row_with_scratch(&self, audio: &Audio, scratch: &mut Scratch) -> Result<Located> {
+        let n = self.config.num_peaks;
+        // The N strongest resolved peaks, and the next one: the row is cut when that one
+        // passes the thresholds too (the peaks are taken strongest first, so the first N
+        // are those of a search for N).
+        let mut peaks = self.spectrum_with_scratch(audio, scratch)?.resolved_peaks(
+            n + 1,
+            self.config.min_sep_deg,
+            self.config.min_prominence,
+        );
+        let next = (peaks.len() > n).then(|| peaks.remove(n));
+        let stands_out = |d: &Doa| {
+            let dominant = self.config.dominance_blocks;
+            d.relative >= self.config.min_relative
+                || (dominant > 0 && d.dominant_blocks as usize >= dominant)
+        };
+        let mut doas: Vec<Doa> = peaks.into_iter().filter(stands_out).collect();
+        let next = next.filter(stands_out);
+        let checked = doas.len();
+        doas.extend(next);
         // Every DoA's significance (cheap beside the spectrum: one pass over the frames,
         // then a few thousand terms per DoA); those below the floor are noise.
         let z = self.significance(&scratch.spec, &doas);
         let floor = self.config.min_significance;
-        Ok(doas
+        let mut significant = doas
             .into_iter()
             .zip(z)
             .map(|(d, significance)| Doa { significance, ..d })
-            .filter(|d| floor <= 0.0 || d.significance >= floor)
-            .collect())
+            .map(|d| (floor <= 0.0 || d.significance >= floor).then_some(d));
+        let doas: Vec<Doa> = significant.by_ref().take(checked).flatten().collect();
+        let cut = significant.next().flatten().is_some();
+        Ok(Located { doas, cut })
     }
 
     /// Each DoA's [`Doa::significance`] in `spec`: with `u` each channel's unit phasors,

@@ -283,6 +283,57 @@ fn one_source_gives_one_doa_when_n_is_set_high() {
     }
 }
 
+#[test]
+fn a_row_is_cut_only_when_a_further_peak_passes_the_thresholds() {
+    // Three noise sources of equal power: N = 2 reports two of three (cut), N = 3 all
+    // three (not cut: nothing else stands out), N = 5 the same three. A row's DoAs are
+    // those of `locate`.
+    let array = MicArray::default();
+    let azs = [-150.0, -30.0, 90.0];
+    let sources: Vec<(f64, f64, Signal)> = azs.iter().map(|&a| (a, 0.0, Signal::Noise)).collect();
+    let audio = render(&array, &sources, 0.6, 30.0, SEED + 7);
+    for method in Method::ALL {
+        let row = |num_peaks| {
+            let config = SslConfig {
+                method,
+                num_peaks,
+                ..SslConfig::default()
+            };
+            let loc = Localizer::new(&array, FS, &config).unwrap();
+            let located = loc
+                .locate_row_with_scratch(&audio, &mut ssl::Scratch::default())
+                .unwrap();
+            assert_eq!(located.doas, loc.locate(&audio).unwrap(), "{method}");
+            located
+        };
+        let (two, three, five) = (row(2), row(3), row(5));
+        assert_eq!((two.doas.len(), two.cut), (2, true), "{method}: {two:?}");
+        assert_eq!(
+            (three.doas.len(), three.cut),
+            (3, false),
+            "{method}: {three:?}"
+        );
+        assert_eq!(
+            (five.doas.len(), five.cut),
+            (3, false),
+            "{method}: {five:?}"
+        );
+        // (MUSIC's subspace dimension is capped at N, so its spectrum depends on N.)
+        if !matches!(method, Method::Music | Method::NormMusic) {
+            assert_eq!(two.doas[..], three.doas[..2], "{method}");
+        }
+        for az in azs {
+            assert!(
+                three
+                    .doas
+                    .iter()
+                    .any(|d| wrap_deg(d.azimuth_deg - az).abs() < 3.0),
+                "{method}: {az} not in {three:?}"
+            );
+        }
+    }
+}
+
 /// One second of two white-noise plane waves on the default array, from azimuths `az_a`
 /// and `az_b` (elevation 0, no sensor noise), scaled at each sample `i` by `gains(i)`.
 fn two_noises(az_a: f64, az_b: f64, gains: impl Fn(usize) -> (f64, f64)) -> Audio {
