@@ -707,7 +707,9 @@ impl Mapper {
         }
         if c.vote_min_stops > 0 {
             while rounds < c.max_rounds {
-                let Some(s) = self.vote(poses, bearings, &complete, rounds + 1) else {
+                let mapped: Vec<[f64; 2]> = sources.iter().map(|s| [s.x, s.y]).collect();
+                let Some(s) = self.vote(poses, bearings, &heard, &complete, &mapped, rounds + 1)
+                else {
                     break;
                 };
                 rounds += 1;
@@ -744,34 +746,11 @@ impl Mapper {
     ) -> usize {
         assert_eq!(poses.len(), heard.len(), "one row of DoAs per pose");
         assert_eq!(poses.len(), complete.len(), "one flag per pose");
-        let c = &self.config;
         let at: Vec<[f64; 2]> = sources.iter().map(|s| [s.x, s.y]).collect();
         // What does not depend on the other sources, once: where the robot stood, and
         // where the source's own rays meet.
         let mut keep: Vec<bool> = (0..at.len())
-            .map(|i| {
-                let q = at[i];
-                let nearest = poses
-                    .iter()
-                    .map(|p| (p.x - q[0]).hypot(p.y - q[1]))
-                    .fold(f64::INFINITY, f64::min);
-                if nearest < c.min_range_m {
-                    return false;
-                }
-                c.beyond_map_m <= 0.0
-                    || fit_within(q, &sources[i].rays, 0.5 * self.sigma, f64::INFINITY)
-                        .is_none_or(|(p, _)| self.within_bounds(p, c.beyond_map_m))
-            })
-            .collect();
-        let reach: Vec<f64> = (0..at.len())
-            .map(|i| {
-                let q = at[i];
-                sources[i]
-                    .rays
-                    .iter()
-                    .map(|r| (r.from[0] - q[0]).hypot(r.from[1] - q[1]))
-                    .fold(0.0, f64::max)
-            })
+            .map(|i| !self.misplaced(at[i], &sources[i].rays, poses))
             .collect();
         // The absences, until no more falls: a source removed masks no stop of the others
         // (a ghost beside a stop does not excuse that stop's silence towards another).
@@ -785,9 +764,7 @@ impl Mapper {
                         .filter(|&j| j != i && keep[j])
                         .map(|j| at[j])
                         .collect();
-                    let against = self.absences(at[i], reach[i], poses, heard, complete, &others);
-                    // The first is forgiven: see `IasmConfig::absence_ratio`.
-                    sources[i].rays.len() >= c.min_observations + against.saturating_sub(1)
+                    !self.spoken_against(at[i], &sources[i].rays, poses, heard, complete, &others)
                 })
                 .collect();
             if next == keep {
@@ -815,8 +792,44 @@ impl Mapper {
         (x0 - margin..=x1 + margin).contains(&q[0]) && (y0 - margin..=y1 + margin).contains(&q[1])
     }
 
+    /// Whether a source at `q` explaining `rays` cannot be, whatever else is mapped: nearer
+    /// a stop than [`IasmConfig::min_range_m`], or its rays meeting further than
+    /// [`IasmConfig::beyond_map_m`] beyond the map.
+    fn misplaced(&self, q: [f64; 2], rays: &[Ray], poses: &[Pose]) -> bool {
+        let c = &self.config;
+        let nearest = poses
+            .iter()
+            .map(|p| (p.x - q[0]).hypot(p.y - q[1]))
+            .fold(f64::INFINITY, f64::min);
+        nearest < c.min_range_m
+            || (c.beyond_map_m > 0.0
+                && fit_within(q, rays, 0.5 * self.sigma, f64::INFINITY)
+                    .is_some_and(|(p, _)| !self.within_bounds(p, c.beyond_map_m)))
+    }
+
+    /// Whether the stops that heard nothing near a source at `q` explaining `rays` leave
+    /// it fewer than [`IasmConfig::min_observations`] (the first of them forgiven), with
+    /// the sources at `others` masking (see [`IasmConfig::absence_ratio`]).
+    fn spoken_against(
+        &self,
+        q: [f64; 2],
+        rays: &[Ray],
+        poses: &[Pose],
+        heard: &[Vec<f64>],
+        complete: &[bool],
+        others: &[[f64; 2]],
+    ) -> bool {
+        let reach = rays
+            .iter()
+            .map(|r| (r.from[0] - q[0]).hypot(r.from[1] - q[1]))
+            .fold(0.0, f64::max);
+        let against = self.absences(q, reach, poses, heard, complete, others);
+        rays.len() < self.config.min_observations + against.saturating_sub(1)
+    }
+
     /// The stops that speak against a source at `q` (see [`IasmConfig::absence_ratio`]):
-    /// their row of `heard` has fewer than `N` DoAs, none within `gamma` of the bearing to
+    /// their row of `heard` is complete (`complete`: every peak the SSL let through; see
+    /// [`Mapper::run_rows`]) and not empty, none within `gamma` of the bearing to
     /// `q`, it lies no further than `reach` from `q` (the furthest stop that heard it),
     /// and none of `others` (the other sources) is nearer than `|q - stop| / ratio`. 0 when
     /// the ratio is 0.
@@ -1025,11 +1038,19 @@ impl Mapper {
         &self,
         poses: &[Pose],
         bearings: &mut [Vec<f64>],
+        heard: &[Vec<f64>],
         complete: &[bool],
+        mapped: &[[f64; 2]],
         round: usize,
     ) -> Option<Source> {
         assert_eq!(poses.len(), bearings.len(), "one row of bearings per pose");
         assert_eq!(poses.len(), complete.len(), "one flag per pose");
+        assert_eq!(poses.len(), heard.len(), "one row of heard DoAs per pose");
+        let check = Plausible {
+            heard,
+            complete,
+            mapped,
+        };
         let c = &self.config;
         if c.vote_min_stops == 0 {
             return None;
@@ -1051,7 +1072,7 @@ impl Mapper {
                 .filter(|&(_, need)| need > 0)
                 .find_map(|(counts, need)| {
                     let need = need.max(c.min_observations);
-                    self.vote_among(poses, bearings, &rays, counts, need)
+                    self.vote_among(poses, bearings, &rays, counts, need, &check)
                 })?;
         // The crossings of its rays near it stand for its cloud (the picture's particles
         // and the covariance ellipse).
@@ -1088,7 +1109,18 @@ impl Mapper {
     /// of their remaining DoAs that at least `need` of them have a remaining DoA within
     /// `2 sigma` of, the one whose support is the most likely (see [`vote_weight`]); it is
     /// associated (with every stop's DoAs) and refined, and kept if at least `need` of the
-    /// marked stops are still among its rays.
+    /// marked stops are still among its rays and it could be a source (see
+    /// [`Mapper::drop_implausible`]); else the next most likely is tried.
+    ///
+    /// Why try the next: a proposal that the stops between its rays contradict used to be
+    /// taken, its DoAs with it, and removed only after the vote, when those DoAs could no
+    /// longer make the source they belonged to. In `sparse_ten` (seed 4, GCC-PHAT) a far
+    /// stop's ray to a source 1.5 m beside the path also crossed two rays of another near
+    /// (4.8, 2.2); that crossing won by a hair, took the far ray, and the source was left
+    /// with two stops. Measured (3 seeds): `sparse_ten` GCC-PHAT 0.210 -> 0.180 m (8, 9, 9
+    /// of 10 found); every other scene of the suite and of `fixtures/heldout`, and
+    /// arrangement II (50 runs, ours and the authors' tables), unchanged; the suite's run
+    /// time unchanged (37.9 against 38.0 s).
     fn vote_among(
         &self,
         poses: &[Pose],
@@ -1096,6 +1128,7 @@ impl Mapper {
         rays: &[([f64; 2], f64, usize)],
         counts: &[bool],
         need: usize,
+        check: &Plausible,
     ) -> Option<([f64; 2], Vec<Ray>)> {
         let live = bearings
             .iter()
@@ -1129,7 +1162,7 @@ impl Mapper {
             }
             (n, weight)
         };
-        let mut best: Option<([f64; 2], f64)> = None;
+        let mut proposals: Vec<([f64; 2], f64)> = Vec::new();
         for (i, &(pa, a, ka)) in rays.iter().enumerate() {
             for &(pb, b, kb) in &rays[i + 1..] {
                 if ka == kb || !counts[ka] || !counts[kb] {
@@ -1145,21 +1178,34 @@ impl Mapper {
                     continue;
                 }
                 let (n, weight) = support(q);
-                if n >= need && best.is_none_or(|(_, w)| weight > w) {
-                    best = Some((q, weight));
+                if n >= need {
+                    proposals.push((q, weight));
                 }
             }
         }
-        let (q, _) = best?;
-        let mut rays = crate::assoc::associate(q, poses, bearings, self.gamma);
-        let est = refit(q, &mut rays, self.sigma, bearings).unwrap_or(q);
-        if rays.iter().filter(|r| counts[r.stop]).count() < need {
+        // The most likely first (the first found among equals); a proposal whose refit
+        // keeps too few marked stops, or that cannot be a source (see `Plausible`), gives
+        // its DoAs back and the next is tried.
+        proposals.sort_by(|a, b| b.1.total_cmp(&a.1));
+        for &(q, _) in &proposals {
+            let mut rays = crate::assoc::associate(q, poses, bearings, self.gamma);
+            let est = refit(q, &mut rays, self.sigma, bearings).unwrap_or(q);
+            let enough = rays.iter().filter(|r| counts[r.stop]).count() >= need;
+            if enough && !self.implausible(est, &rays, poses, check) {
+                return Some((est, rays));
+            }
             for r in rays {
                 bearings[r.stop].push(r.bearing);
             }
-            return None;
         }
-        Some((est, rays))
+        None
+    }
+
+    /// Whether a vote's source at `q` explaining `rays` would be removed before the merge
+    /// ([`Mapper::drop_implausible`]), with the sources mapped so far masking.
+    fn implausible(&self, q: [f64; 2], rays: &[Ray], poses: &[Pose], check: &Plausible) -> bool {
+        self.misplaced(q, rays, poses)
+            || self.spoken_against(q, rays, poses, check.heard, check.complete, check.mapped)
     }
 }
 
@@ -1181,6 +1227,14 @@ impl Mapper {
 /// tables), unchanged.
 fn vote_weight(miss: f64, sigma: f64) -> f64 {
     (-0.5 * (miss / sigma).powi(2)).exp()
+}
+
+/// What the vote needs to tell whether a proposal can be a source: every stop's DoAs as
+/// the SSL gave them, which rows are complete, and the sources mapped so far.
+struct Plausible<'a> {
+    heard: &'a [Vec<f64>],
+    complete: &'a [bool],
+    mapped: &'a [[f64; 2]],
 }
 
 /// Where the line from `pa` at bearing `a` meets the line from `pb` at bearing `b` (rad),
@@ -1528,7 +1582,7 @@ mod tests {
     }
 
     #[test]
-    fn a_map_reports_the_ghost_it_removed_that_no_absence_check_keeps() {
+    fn a_map_leaves_out_the_ghost_that_no_absence_check_keeps() {
         // The stops of `ghost_survey`, the talker heard from all; a ghost at (4, 1) heard
         // from stops 0-2, 7 and 8 (3-4 m away) and missed by stops 3-6 (1-2.2 m away),
         // whose rows hold one DoA of N = 3.
@@ -1550,7 +1604,9 @@ mod tests {
                 (found[0][0] - 4.0).hypot(found[0][1] + 3.0) < 0.05,
                 "{found:?}"
             );
-            assert_eq!((robust.removed, robust.unexplained), (1, 5), "seed {seed}");
+            // The vote proposes the ghost and, the stops between contradicting it, leaves
+            // its DoAs unexplained: nothing is found to be removed.
+            assert_eq!((robust.removed, robust.unexplained), (0, 5), "seed {seed}");
             let p = unchecked
                 .run(&poses, &doas, &mut StdRng::seed_from_u64(seed))
                 .unwrap();
@@ -1773,7 +1829,7 @@ mod tests {
 
     #[test]
     fn the_vote_finds_a_source_that_enough_stops_agree_on_and_nothing_else() {
-        // Source A heard from 7 stops, source B from 4, and one clutter DoA at every
+        // Source A heard from 7 stops, source B from the 4 nearest it, and one clutter DoA at every
         // other stop.
         let truth = [[1.5, 1.5], [4.0, -1.2]];
         let (map, poses, _) = scene(&truth, 14);
@@ -1786,13 +1842,13 @@ mod tests {
                 if k % 2 == 0 {
                     row.push(p.bearing_to(truth[0]) + 0.01);
                 }
-                if (3..7).contains(&k) {
+                if (7..11).contains(&k) {
                     row.push(p.bearing_to(truth[1]) - 0.01);
                 }
                 if k % 2 == 1 {
                     // Away from both sources, and from one another's crossings.
                     row.push(crate::wrap_rad(
-                        p.bearing_to(truth[0]) + 2.0 + 0.3 * k as f64,
+                        p.bearing_to(truth[0]) + 2.0 + 0.25 * k as f64,
                     ));
                 }
                 row
@@ -1801,11 +1857,12 @@ mod tests {
         // Rows as the SSL gave them: every one shorter than N = 4, so none was cut at N
         // (complete); and the same stops had they reported N DoAs each, cut at N (a table
         // of N columns).
+        let heard = bearings.clone();
         let thresholded = vec![true; poses.len()];
         let full = vec![false; poses.len()];
         let before: usize = bearings.iter().map(Vec::len).sum();
         let s = mapper
-            .vote(&poses, &mut bearings, &full, 1)
+            .vote(&poses, &mut bearings, &heard, &full, &[], 1)
             .expect("A has 7 agreeing stops");
         assert!(
             (s.x - 1.5).abs() < 0.05 && (s.y - 1.5).abs() < 0.05,
@@ -1817,17 +1874,25 @@ mod tests {
         // B's 4 stops are fewer than the 5 the vote asks for when rows are full: nothing,
         // and nothing taken.
         let left = bearings.clone();
-        assert!(mapper.vote(&poses, &mut bearings, &full, 2).is_none());
+        assert!(
+            mapper
+                .vote(&poses, &mut bearings, &heard, &full, &[], 2)
+                .is_none()
+        );
         assert_eq!(bearings, left);
         // Nor when only two of B's stops were thresholded: two stops prove nothing.
         let mut two = full.clone();
-        two[3] = true;
-        two[4] = true;
-        assert!(mapper.vote(&poses, &mut bearings, &two, 2).is_none());
+        two[7] = true;
+        two[8] = true;
+        assert!(
+            mapper
+                .vote(&poses, &mut bearings, &heard, &two, &[], 2)
+                .is_none()
+        );
         assert_eq!(bearings, left);
         // But four thresholded stops agreeing on B are a source.
         let b = mapper
-            .vote(&poses, &mut bearings, &thresholded, 2)
+            .vote(&poses, &mut bearings, &heard, &thresholded, &[], 2)
             .expect("B has 4 agreeing thresholded stops");
         assert!(
             (b.x - 4.0).abs() < 0.05 && (b.y + 1.2).abs() < 0.05,
@@ -1845,14 +1910,14 @@ mod tests {
         .unwrap();
         assert!(
             strict
-                .vote(&poses, &mut left.clone(), &thresholded, 2)
+                .vote(&poses, &mut left.clone(), &heard, &thresholded, &[], 2)
                 .is_none()
         );
         // The paper profile does not vote.
         let paper = Mapper::new(&map, &IasmConfig::profile(Profile::Paper)).unwrap();
         assert!(
             paper
-                .vote(&poses, &mut left.clone(), &thresholded, 2)
+                .vote(&poses, &mut left.clone(), &heard, &thresholded, &[], 2)
                 .is_none()
         );
     }
@@ -1884,8 +1949,9 @@ mod tests {
             })
             .collect();
         let full = vec![false; poses.len()];
+        let heard = bearings.clone();
         let s = mapper
-            .vote(&poses, &mut bearings, &full, 1)
+            .vote(&poses, &mut bearings, &heard, &full, &[], 1)
             .expect("A has 5 agreeing stops");
         assert!(
             (s.x - a[0]).abs() < 0.02 && (s.y - a[1]).abs() < 0.02,
