@@ -96,6 +96,14 @@ impl Session {
     /// # Errors
     /// A recording the array or the SSL settings cannot take.
     pub fn localise(&mut self, audio: &Audio) -> Result<Vec<f64>> {
+        Ok(self.localise_row(audio)?.0)
+    }
+
+    /// [`Session::localise`], and whether N cut the row ([`ssl::Located::cut`]).
+    ///
+    /// # Errors
+    /// As [`Session::localise`].
+    pub fn localise_row(&mut self, audio: &Audio) -> Result<(Vec<f64>, bool)> {
         let fs = audio.sample_rate();
         let i = match self.localizers.iter().position(|l| l.sample_rate() == fs) {
             Some(i) => i,
@@ -105,11 +113,8 @@ impl Session {
                 self.localizers.len() - 1
             }
         };
-        Ok(self.localizers[i]
-            .locate_with_scratch(audio, &mut self.scratch)?
-            .iter()
-            .map(|d| d.azimuth_deg)
-            .collect())
+        let row = self.localizers[i].locate_row_with_scratch(audio, &mut self.scratch)?;
+        Ok((row.doas.iter().map(|d| d.azimuth_deg).collect(), row.cut))
     }
 
     /// Localises `audio` (the recording `name`, heard at `pose`) and adds it as the next
@@ -119,11 +124,11 @@ impl Session {
     /// As [`Session::localise`], or a pose the mapper refuses; named.
     pub fn add_recording(&mut self, name: &str, pose: Pose, audio: &Audio) -> Result<StopRecord> {
         let t0 = Instant::now();
-        let doas = self
-            .localise(audio)
+        let (doas, cut) = self
+            .localise_row(audio)
             .with_context(|| format!("localising {name}"))?;
         let ssl_ms = 1e3 * t0.elapsed().as_secs_f64();
-        let mut r = self.add_doas(name, pose, &doas)?;
+        let mut r = self.add_row(name, pose, &doas, Some(cut))?;
         r.ssl_ms = ssl_ms;
         Ok(r)
     }
@@ -133,12 +138,27 @@ impl Session {
     /// # Errors
     /// A non-finite pose or more DoAs than N, naming the stop.
     pub fn add_doas(&mut self, name: &str, pose: Pose, doas_deg: &[f64]) -> Result<StopRecord> {
+        self.add_row(name, pose, doas_deg, None)
+    }
+
+    /// [`Session::add_doas`], told whether the SSL cut the row at N (`None`: not known;
+    /// see [`asm::Mapper::run_rows`]).
+    ///
+    /// # Errors
+    /// As [`Session::add_doas`].
+    pub fn add_row(
+        &mut self,
+        name: &str,
+        pose: Pose,
+        doas_deg: &[f64],
+        cut: Option<bool>,
+    ) -> Result<StopRecord> {
         let t0 = Instant::now();
         let rad: Vec<f64> = doas_deg.iter().map(|a| a.to_radians()).collect();
         let n = self.mapper.mapper().config().num_doas;
         let u = self
             .mapper
-            .add_stop(pose, &rad[..rad.len().min(n)])
+            .add_row(pose, &rad[..rad.len().min(n)], cut)
             .with_context(|| format!("stop {} ({name})", self.poses.len() + 1))?;
         self.poses.push(pose);
         if self.recompute {

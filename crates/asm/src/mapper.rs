@@ -643,7 +643,11 @@ impl Mapper {
                 cut: cut.len(),
             });
         }
-        Ok(self.run_bearings_cut(poses, &mut bearings, cut, rng))
+        let complete: Vec<bool> = match cut {
+            Some(cut) => cut.iter().map(|&cut| !cut).collect(),
+            None => self.complete_by_length(&bearings),
+        };
+        Ok(self.run_bearings_complete(poses, &mut bearings, &complete, rng))
     }
 
     /// [`Mapper::run`] on checked world bearings ([`Mapper::world_bearings`]), which are
@@ -657,7 +661,8 @@ impl Mapper {
         bearings: &mut [Vec<f64>],
         rng: &mut impl Rng,
     ) -> MapResult {
-        self.run_bearings_cut(poses, bearings, None, rng)
+        let complete = self.complete_by_length(bearings);
+        self.run_bearings_complete(poses, bearings, &complete, rng)
     }
 
     /// Which of `rows` (each stop's DoAs) hold every peak the SSL let through, when
@@ -669,21 +674,17 @@ impl Mapper {
             .collect()
     }
 
-    /// [`Mapper::run_rows`] on checked world bearings.
-    fn run_bearings_cut(
+    /// [`Mapper::run_rows`] on checked world bearings, with the rows that hold every peak
+    /// the SSL let through marked in `complete`.
+    pub(crate) fn run_bearings_complete(
         &self,
         poses: &[Pose],
         bearings: &mut [Vec<f64>],
-        cut: Option<&[bool]>,
+        complete: &[bool],
         rng: &mut impl Rng,
     ) -> MapResult {
         let c = &self.config;
         let heard = bearings.to_vec();
-        // The rows that hold everything the SSL let through (see `run_rows`).
-        let complete: Vec<bool> = match cut {
-            Some(cut) => cut.iter().map(|&cut| !cut).collect(),
-            None => self.complete_by_length(&heard),
-        };
         let mut sources: Vec<Source> = Vec::new();
         let mut rounds = 0;
         let mut failed = 0;
@@ -708,7 +709,7 @@ impl Mapper {
         if c.vote_min_stops > 0 {
             while rounds < c.max_rounds {
                 let mapped: Vec<[f64; 2]> = sources.iter().map(|s| [s.x, s.y]).collect();
-                let Some(s) = self.vote(poses, bearings, &heard, &complete, &mapped, rounds + 1)
+                let Some(s) = self.vote(poses, bearings, &heard, complete, &mapped, rounds + 1)
                 else {
                     break;
                 };
@@ -716,7 +717,7 @@ impl Mapper {
                 sources.push(s);
             }
         }
-        let removed = self.drop_implausible(&mut sources, poses, &heard, &complete, bearings);
+        let removed = self.drop_implausible(&mut sources, poses, &heard, complete, bearings);
         self.merge(&mut sources);
         MapResult {
             sources,

@@ -64,6 +64,9 @@ pub struct OnlineMapper {
     poses: Vec<Pose>,
     /// Every stop's DoAs (world bearings, rad).
     bearings: Vec<Vec<f64>>,
+    /// Whether each stop's row holds every peak the SSL let through (see
+    /// [`Mapper::run_rows`]).
+    complete: Vec<bool>,
     /// Every stop's unexplained DoAs.
     pool: Vec<Vec<f64>>,
     sources: Vec<Source>,
@@ -89,6 +92,7 @@ impl OnlineMapper {
             seed,
             poses: Vec::new(),
             bearings: Vec::new(),
+            complete: Vec::new(),
             pool: Vec::new(),
             sources: Vec::new(),
             rounds: 0,
@@ -116,6 +120,21 @@ impl OnlineMapper {
     /// [`Error::NonFinitePose`] or [`Error::TooManyDoas`], naming the stop; the map is
     /// unchanged.
     pub fn add_stop(&mut self, pose: Pose, doas_rad: &[f64]) -> Result<StopUpdate> {
+        self.add_row(pose, doas_rad, None)
+    }
+
+    /// [`OnlineMapper::add_stop`], told whether the SSL cut the row at `N` (`cut`: a
+    /// further peak passed its thresholds; `None` when it is not known, as for a table,
+    /// and a full row is then taken as cut: see [`Mapper::run_rows`]).
+    ///
+    /// # Errors
+    /// As [`OnlineMapper::add_stop`].
+    pub fn add_row(
+        &mut self,
+        pose: Pose,
+        doas_rad: &[f64],
+        cut: Option<bool>,
+    ) -> Result<StopUpdate> {
         let stop = self.poses.len();
         if !pose.is_finite() {
             return Err(Error::NonFinitePose { index: stop });
@@ -134,6 +153,7 @@ impl OnlineMapper {
             .map(|&a| pose.world_bearing(a))
             .collect();
         self.poses.push(pose);
+        self.complete.push(cut.map_or(row.len() < n, |cut| !cut));
         self.bearings.push(row.clone());
         self.pool.push(row);
 
@@ -154,12 +174,11 @@ impl OnlineMapper {
                 self.search(&mut update);
             }
             // As the batch mapper does before its merge.
-            let complete = self.mapper.complete_by_length(&self.bearings);
             self.removed += self.mapper.drop_implausible(
                 &mut self.sources,
                 &self.poses,
                 &self.bearings,
-                &complete,
+                &self.complete,
                 &mut self.pool,
             );
             self.mapper.merge(&mut self.sources);
@@ -177,7 +196,9 @@ impl OnlineMapper {
         }
         let mut rng = StdRng::seed_from_u64(self.seed);
         let mut pool = self.bearings.clone();
-        let r = self.mapper.run_bearings(&self.poses, &mut pool, &mut rng);
+        let r = self
+            .mapper
+            .run_bearings_complete(&self.poses, &mut pool, &self.complete, &mut rng);
         self.pool = pool;
         self.rounds += r.rounds;
         self.sources = r.sources;
@@ -254,12 +275,11 @@ impl OnlineMapper {
         let mut k = dissolved.iter();
         self.sources
             .retain(|_| !*k.next().expect("one flag per source"));
-        let complete = self.mapper.complete_by_length(&self.bearings);
         let contradicted = self.mapper.drop_implausible(
             &mut self.sources,
             &self.poses,
             &self.bearings,
-            &complete,
+            &self.complete,
             &mut self.pool,
         );
         self.removed += contradicted;
@@ -411,6 +431,29 @@ mod tests {
                 "seed {seed}: apart {apart:.3}, OSPA {l:.3}"
             );
             // Consolidated, it is the batch map of the same seed.
+            online.consolidate();
+            assert_eq!(online.map().positions(), batch.positions(), "seed {seed}");
+        }
+    }
+
+    #[test]
+    fn told_which_rows_were_cut_the_consolidated_map_is_the_batch_map_told_the_same() {
+        let (map, poses, doas) = survey();
+        let mapper = Mapper::new(&map, &config()).unwrap();
+        // Every other full row cut, the rest not.
+        let cut: Vec<bool> = doas
+            .iter()
+            .enumerate()
+            .map(|(k, r)| r.len() == 5 && k % 2 == 0)
+            .collect();
+        for seed in 0..3 {
+            let batch = mapper
+                .run_rows(&poses, &doas, Some(&cut), &mut StdRng::seed_from_u64(seed))
+                .unwrap();
+            let mut online = OnlineMapper::new(mapper.clone(), seed);
+            for ((p, row), &c) in poses.iter().zip(&doas).zip(&cut) {
+                online.add_row(*p, row, Some(c)).unwrap();
+            }
             online.consolidate();
             assert_eq!(online.map().positions(), batch.positions(), "seed {seed}");
         }
