@@ -643,10 +643,11 @@ impl Mapper {
                 cut: cut.len(),
             });
         }
-        let complete: Vec<bool> = match cut {
-            Some(cut) => cut.iter().map(|&cut| !cut).collect(),
-            None => self.complete_by_length(&bearings),
-        };
+        let complete: Vec<bool> = bearings
+            .iter()
+            .enumerate()
+            .map(|(k, row)| self.complete(row.len(), cut.map(|c| c[k])))
+            .collect();
         Ok(self.run_bearings_complete(poses, &mut bearings, &complete, rng))
     }
 
@@ -669,9 +670,14 @@ impl Mapper {
     /// nothing else says: those with fewer than `N` DoAs (a full row may have been cut at
     /// `N`; see [`Mapper::run_rows`]).
     pub fn complete_by_length(&self, rows: &[Vec<f64>]) -> Vec<bool> {
-        rows.iter()
-            .map(|r| r.len() < self.config.num_doas)
-            .collect()
+        rows.iter().map(|r| self.complete(r.len(), None)).collect()
+    }
+
+    /// Whether a row of `len` DoAs holds every peak the SSL let through: not cut at `N`
+    /// when the SSL says (`cut`), else shorter than `N`. The one rule behind
+    /// [`Mapper::run_rows`], [`Mapper::complete_by_length`] and the online mapper.
+    pub fn complete(&self, len: usize, cut: Option<bool>) -> bool {
+        cut.map_or(len < self.config.num_doas, |cut| !cut)
     }
 
     /// [`Mapper::run_rows`] on checked world bearings, with the rows that hold every peak

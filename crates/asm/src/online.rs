@@ -158,7 +158,7 @@ impl OnlineMapper {
             .map(|&a| pose.world_bearing(a))
             .collect();
         self.poses.push(pose);
-        self.complete.push(cut.map_or(row.len() < n, |cut| !cut));
+        self.complete.push(self.mapper.complete(row.len(), cut));
         self.bearings.push(row.clone());
         self.pool.push(row);
 
