@@ -55,6 +55,50 @@ fn map_from_a_doa_table_finds_every_source() {
 }
 
 #[test]
+fn without_an_occupancy_map_the_sources_are_searched_around_the_stops() {
+    // The same survey with its map/ folder removed: the same three sources, a note on
+    // stderr saying where they were searched, and the margin in the JSON.
+    let dir = tempdir();
+    let root = dataset(&dir);
+    let doas = root.join("doas.csv");
+    let run = |extra: &[&str]| {
+        let mut args = vec!["map", "--dataset", arg(&root), "--doas", arg(&doas)];
+        args.extend_from_slice(&["--num", "3", "--seed", "4", "--json"]);
+        args.extend_from_slice(extra);
+        iasm(&args)
+    };
+    let with_map = json(&run(&[]));
+    assert!(with_map.get("open_margin_m").is_none(), "{with_map}");
+    std::fs::remove_dir_all(root.join("map")).unwrap();
+    let o = run(&[]);
+    let v = json(&o);
+    let note = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        note.contains("no occupancy map") && note.contains("3 m"),
+        "{note}"
+    );
+    assert_eq!(v["open_margin_m"], 3.0);
+    let found = v["sources"].as_array().unwrap();
+    assert_eq!(found.len(), 3, "{v}");
+    assert!(v["ospa"]["total"].as_f64().unwrap() < 0.15, "{v}");
+    // Every source is found within 0.1 m of where the surveyed map put it.
+    for s in with_map["sources"].as_array().unwrap() {
+        let (x, y) = (s["x"].as_f64().unwrap(), s["y"].as_f64().unwrap());
+        assert!(
+            found
+                .iter()
+                .any(|f| (f["x"].as_f64().unwrap() - x).hypot(f["y"].as_f64().unwrap() - y) < 0.1),
+            "{s} not in {v}"
+        );
+    }
+    // A margin that leaves a source out loses it (TRUTH[0] is 1.5 m from the path);
+    // a bad margin is a clear error.
+    let near = json(&run(&["--open-margin", "1.0"]));
+    assert!(near["sources"].as_array().unwrap().len() < 3, "{near}");
+    assert_clear_error(&run(&["--open-margin=0"]), &["margin", "poses.csv"]);
+}
+
+#[test]
 fn a_truth_surveyed_in_another_frame_is_told_from_a_bad_map() {
     // The truth the map is scored against, surveyed in a frame 5 % larger, turned 3
     // degrees and shifted: the map is as good as before, and the report says so.

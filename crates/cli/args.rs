@@ -273,9 +273,15 @@ pub struct InputArgs {
     /// A data set folder in the published layout (map/, pose/, audio/, azimuth/, src_gt*).
     #[arg(long, value_name = "DIR")]
     pub dataset: Option<PathBuf>,
-    /// ROS occupancy map YAML (overrides the data set's).
+    /// ROS occupancy map YAML (overrides the data set's). Without one (and without a
+    /// map/ folder in the data set) the sources are searched within --open-margin of the
+    /// stops.
     #[arg(long, value_name = "YAML")]
     pub map: Option<PathBuf>,
+    /// Without an occupancy map: how far from the stops to search for sources (m; default
+    /// 3, a room's half-width). The particles per round grow with the region's area.
+    #[arg(long, value_name = "M")]
+    pub open_margin: Option<f64>,
     /// Pose table, one row per stop, CSV or .xlsx (overrides the data set's): plain x, y,
     /// theta columns, or a CSV whose header names them as ROS exports do: x and y (or
     /// `*position.x`, `*position.y`), and yaw or theta_rad (radians), theta_deg (degrees),
@@ -338,6 +344,7 @@ impl InputArgs {
             truth: self.truth.clone(),
             recording: self.recording.clone(),
             window_s: self.window,
+            open_margin_m: self.open_margin,
         }
     }
 }

@@ -188,13 +188,27 @@ pub struct SurveyInputs {
     pub recording: Option<PathBuf>,
     /// The window per pose of a continuous recording (s).
     pub window_s: f64,
+    /// Without an occupancy map (no `map` and no data set with a `map/` folder): the
+    /// sources are searched within this many metres of a stop (default
+    /// [`OPEN_MARGIN_M`]; see [`asm::map::OccupancyMap::open_around`]).
+    pub open_margin_m: Option<f64>,
 }
+
+/// How far from the stops a survey without an occupancy map searches for sources (m): a
+/// room's half-width, where a robot driving through a room hears the sources in it.
+pub const OPEN_MARGIN_M: f64 = 3.0;
+
+/// The grid of an open region (m): as fine as the ROS maps robots build.
+const OPEN_RESOLUTION_M: f64 = 0.05;
 
 /// What one robot run gives the mapper.
 #[derive(Clone, Debug)]
 pub struct Survey {
     /// The occupancy map.
     pub map: OccupancyMap,
+    /// `Some(margin)` when no occupancy map was given and [`Survey::map`] is the region
+    /// within `margin` metres of the stops ([`asm::map::OccupancyMap::open_around`]).
+    pub open_margin_m: Option<f64>,
     /// One pose per stop.
     pub poses: Vec<Pose>,
     /// The DoAs heard at each stop: azimuths in degrees, array frame, strongest first;
@@ -232,11 +246,13 @@ impl Survey {
     ) -> Result<Self> {
         let ds = inputs.dataset.as_deref().map(Dataset::open).transpose()?;
         let map_path = match (&inputs.map, &ds) {
-            (Some(p), _) => p.clone(),
-            (None, Some(d)) => first_with_ext(&d.root.join("map"), "yaml")?,
-            (None, None) => bail!("give --dataset DIR or --map map.yaml"),
+            (Some(p), _) => Some(p.clone()),
+            (None, Some(d)) if d.root.join("map").is_dir() => {
+                Some(first_with_ext(&d.root.join("map"), "yaml")?)
+            }
+            (None, _) => None,
         };
-        let map = load_map(&map_path)?;
+        let map = map_path.as_deref().map(load_map).transpose()?;
         let pose_path = match (&inputs.poses, &ds) {
             (Some(p), _) => p.clone(),
             (None, Some(d)) => d
@@ -304,8 +320,19 @@ impl Survey {
                 format!("ssl:{}", settings.ssl.method),
             )
         };
+        let (map, open_margin_m) = match map {
+            Some(map) => (map, None),
+            None => {
+                let margin = inputs.open_margin_m.unwrap_or(OPEN_MARGIN_M);
+                let stops: Vec<[f64; 2]> = poses.iter().map(|p| [p.x, p.y]).collect();
+                let map = OccupancyMap::open_around(&stops, margin, OPEN_RESOLUTION_M)
+                    .with_context(|| format!("poses from {}", pose_path.display()))?;
+                (map, Some(margin))
+            }
+        };
         let survey = Self {
             map,
+            open_margin_m,
             poses,
             doas_deg: Table::new(),
             cut: None,
@@ -315,6 +342,16 @@ impl Survey {
         .with_doas(doas_deg, doa_source)
         .with_context(|| format!("poses from {}", pose_path.display()))?;
         Ok(Self { cut, ..survey })
+    }
+
+    /// What a user should know about the map when no occupancy map was given: where the
+    /// sources were searched for, and how to change it.
+    pub fn map_note(&self) -> Option<String> {
+        self.open_margin_m.map(|m| {
+            format!(
+                "note: no occupancy map given: the sources are searched within {m} m of the stops (--open-margin; --map map.yaml for a surveyed map)"
+            )
+        })
     }
 
     /// The same survey heard through other DoAs (a table, and where it came from): several
@@ -620,6 +657,7 @@ impl Simulated {
             .with_context(|| format!("localising scene {}", self.name))?;
         Ok(Survey {
             map: self.map.clone(),
+            open_margin_m: None,
             poses: self.scene.stops.clone(),
             doas_deg: doa_table(rows.iter().map(|r| &r.doas[..]), ssl.num_peaks),
             cut: Some(rows.iter().map(|r| r.cut).collect()),

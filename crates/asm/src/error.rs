@@ -74,6 +74,12 @@ pub enum MapError {
         /// What is wrong.
         message: String,
     },
+    /// An open region ([`crate::map::OccupancyMap::open_around`]) that cannot be built.
+    #[error("an open region around the stops: {message}")]
+    Open {
+        /// What is wrong.
+        message: String,
+    },
     /// A map with no known (free or occupied) cell: nowhere to put particles.
     #[error("{path}: the map has no known (free or occupied) cell")]
     NoKnownCell {

@@ -32,6 +32,9 @@ pub fn run(a: &EvalArgs) -> Result<Outcome> {
     ensure!(a.runs > 0, "--runs must be at least 1");
     let settings = a.input.settings()?;
     let survey = Survey::load(&a.input.survey_inputs(), &settings)?;
+    if let Some(note) = survey.map_note() {
+        eprintln!("{note}");
+    }
     let base = settings.iasm;
     let t0 = std::time::Instant::now();
     let stats = evaluate(

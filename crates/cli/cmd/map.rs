@@ -41,6 +41,9 @@ struct MapReport<'a> {
     /// data's frames; see `asm::align`).
     #[serde(skip_serializing_if = "Option::is_none")]
     alignment: Option<asm::align::Alignment>,
+    /// Without an occupancy map: how far from the stops the sources were searched for (m).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    open_margin_m: Option<f64>,
 }
 
 #[derive(Clone, Copy, Serialize)]
@@ -64,6 +67,9 @@ pub fn run(a: &MapArgs) -> Result<Outcome> {
         settings.iasm.variant = v;
     }
     let survey = Survey::load(&a.input.survey_inputs(), &settings)?;
+    if let Some(note) = survey.map_note() {
+        eprintln!("{note}");
+    }
     let config = &settings.iasm;
     let localised = a.input.doas.is_none();
     let t0 = std::time::Instant::now();
@@ -94,6 +100,7 @@ pub fn run(a: &MapArgs) -> Result<Outcome> {
         sources: &result.sources,
         ospa: o,
         alignment,
+        open_margin_m: survey.open_margin_m,
     };
     if let Some(out) = &a.out {
         crate::output::write_atomic(out, serde_json::to_string_pretty(&report)?.as_bytes())?;

@@ -122,7 +122,13 @@ pub fn run(a: &WatchArgs) -> Result<Outcome> {
     let mut settings = a.settings.settings()?;
     settings.iasm.refine |= a.refine;
     let ds = Dataset::open(&a.dir)?;
-    let map = load_map(&first_with_ext(&a.dir.join("map"), "yaml")?)?;
+    let map_yaml = first_with_ext(&a.dir.join("map"), "yaml").with_context(|| {
+        format!(
+            "{}: the live map needs an occupancy map in map/ from the start (the region the robot will drive is not known in advance; `iasm map` searches around the stops without one)",
+            a.dir.display()
+        )
+    })?;
+    let map = load_map(&map_yaml)?;
     let truth = ds.sources.as_deref().map(read_sources).transpose()?;
     let mut session = Session::new(&map, &settings, a.seed, truth, a.ospa_c, a.ospa_p)?;
     if a.recompute {

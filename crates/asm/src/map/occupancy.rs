@@ -64,6 +64,82 @@ impl OccupancyMap {
         }
     }
 
+    /// A map for a survey that has none: every cell within `margin_m` of one of `points`
+    /// (the robot's stops) free, the rest unknown, on a grid of `resolution` metres.
+    ///
+    /// I-ASM spreads its particles over the known cells, so the map bounds where a source
+    /// can be found. Without a surveyed map, the stops themselves say where the robot was,
+    /// and a source it mapped lies within hearing of them; how far is the caller's choice
+    /// (the CLI's `--open-margin`, 3 m by default: a room's half-width). No walls are
+    /// known, so nothing is removed as a mirror image beyond them except beyond the
+    /// region's edge ([`crate::IasmConfig::beyond_map_m`]). The particles per round grow
+    /// with the region's area (one per [`crate::IasmConfig::density_d`] cells).
+    ///
+    /// # Errors
+    /// [`MapError::Open`] if `points` is empty or holds a non-finite coordinate,
+    /// `margin_m` or `resolution` is not positive and finite, `resolution` exceeds
+    /// [`MAX_RESOLUTION_M`], or the region spans more than [`MAX_EXTENT_M`].
+    pub fn open_around(
+        points: &[[f64; 2]],
+        margin_m: f64,
+        resolution: f64,
+    ) -> Result<Self, MapError> {
+        let fail = |message: String| Err(MapError::Open { message });
+        if points.is_empty() {
+            return fail("no stop to build it around".into());
+        }
+        if let Some(p) = points
+            .iter()
+            .find(|p| !(p[0].is_finite() && p[1].is_finite()))
+        {
+            return fail(format!("a stop at ({}, {}) is not finite", p[0], p[1]));
+        }
+        if !(margin_m.is_finite() && margin_m > 0.0) {
+            return fail(format!("the margin must be positive (got {margin_m} m)"));
+        }
+        if !(resolution.is_finite() && resolution > 0.0 && resolution <= MAX_RESOLUTION_M) {
+            return fail(format!(
+                "the resolution must lie in (0, {MAX_RESOLUTION_M}] m (got {resolution})"
+            ));
+        }
+        let (mut lo, mut hi) = ([f64::MAX; 2], [f64::MIN; 2]);
+        for p in points {
+            for k in 0..2 {
+                lo[k] = lo[k].min(p[k] - margin_m);
+                hi[k] = hi[k].max(p[k] + margin_m);
+            }
+        }
+        let span = (hi[0] - lo[0]).max(hi[1] - lo[1]);
+        let far = lo.iter().chain(&hi).fold(0.0f64, |m, v| m.max(v.abs()));
+        if span > MAX_EXTENT_M || far > MAX_EXTENT_M {
+            return fail(format!(
+                "the stops and margin span {span:.0} m, beyond {MAX_EXTENT_M} m"
+            ));
+        }
+        let width = ((hi[0] - lo[0]) / resolution).ceil() as usize;
+        let height = ((hi[1] - lo[1]) / resolution).ceil() as usize;
+        let mut map = Self::new(
+            width,
+            height,
+            resolution,
+            lo,
+            vec![Cell::Unknown; width * height],
+        );
+        let r2 = margin_m * margin_m;
+        for j in 0..height {
+            for i in 0..width {
+                let c = map.cell_center(i, j);
+                if points
+                    .iter()
+                    .any(|p| (c[0] - p[0]).powi(2) + (c[1] - p[1]).powi(2) <= r2)
+                {
+                    map.cells[j * width + i] = Cell::Free;
+                }
+            }
+        }
+        Ok(map)
+    }
+
     /// Reads a ROS map: the YAML at `yaml` and the image it names (relative to the YAML's
     /// folder).
     ///
@@ -449,6 +525,44 @@ mod tests {
         // Top-right pixel (2, 0): x = -1 + 2.5 * 0.5, y = 2 + 1.5 * 0.5.
         assert_eq!(m.cell_center(2, 0), [0.25, 2.75]);
         assert_eq!(m.known_cells().count(), 5);
+    }
+
+    #[test]
+    fn an_open_region_is_the_disc_around_each_stop() {
+        // One stop: the free cells cover pi r^2 to within the cells cut by the circle.
+        let (r, res) = (3.0, 0.05);
+        let m = OccupancyMap::open_around(&[[1.0, -2.0]], r, res).unwrap();
+        let area = m.known_cells().count() as f64 * res * res;
+        let disc = std::f64::consts::PI * r * r;
+        assert!(
+            (area - disc).abs() < 2.0 * std::f64::consts::PI * r * res,
+            "{area} vs {disc}"
+        );
+        assert!(m.known_cells().all(|c| (c[0] - 1.0).hypot(c[1] + 2.0) <= r));
+        // Two stops 4 m apart: 2.9 m beside the midpoint lies sqrt(2^2 + 2.9^2) = 3.52 m
+        // from each, so it is unknown; 2.9 m beside a stop is free; 3.1 m beyond the far
+        // one is not.
+        let m = OccupancyMap::open_around(&[[0.0, 0.0], [4.0, 0.0]], r, res).unwrap();
+        let at = |p: [f64; 2]| m.world_to_cell(p).map(|(i, j)| m.cell(i, j));
+        assert_eq!(at([2.0, 2.9]), Some(Cell::Unknown));
+        assert_eq!(at([4.0, 2.9]), Some(Cell::Free));
+        assert_eq!(at([2.0, 0.0]), Some(Cell::Free));
+        assert_ne!(at([7.1, 0.0]), Some(Cell::Free));
+        assert_eq!(m.origin(), [-3.0, -3.0]);
+    }
+
+    #[test]
+    fn an_open_region_refuses_what_it_cannot_build() {
+        let e = |pts: &[[f64; 2]], m: f64, r: f64| {
+            OccupancyMap::open_around(pts, m, r)
+                .unwrap_err()
+                .to_string()
+        };
+        assert!(e(&[], 3.0, 0.05).contains("no stop"));
+        assert!(e(&[[f64::NAN, 0.0]], 3.0, 0.05).contains("not finite"));
+        assert!(e(&[[0.0, 0.0]], 0.0, 0.05).contains("margin"));
+        assert!(e(&[[0.0, 0.0]], 3.0, -1.0).contains("resolution"));
+        assert!(e(&[[0.0, 0.0], [2e4, 0.0]], 3.0, 0.05).contains("span"));
     }
 
     #[test]
