@@ -21,6 +21,7 @@ min_sep_deg = 15.0
 min_relative = 0.2
 dominance_blocks = 3
 min_prominence = 0.1
+sidelobe_ratio = 2.0
 min_significance = 6.0
 decay_gate_db = 12.0
 decay_window_s = 0.4

@@ -74,6 +74,9 @@ pub enum ConfigError {
     /// A prominence threshold outside `[0, 1]`.
     #[error("min_prominence must be in [0, 1], got {0}")]
     MinProminence(f64),
+    /// A sidelobe ratio negative or not finite.
+    #[error("sidelobe_ratio must be finite and >= 0, got {0}")]
+    SidelobeRatio(f64),
     /// A significance threshold negative or not finite.
     #[error("min_significance must be finite and >= 0, got {0}")]
     MinSignificance(f64),

@@ -10,7 +10,7 @@ use crate::config::{Pooling, SslConfig};
 use crate::error::{ConfigError, Error, Result};
 use crate::grid::{DirectionGrid, PairScratch};
 use crate::method::music::SubspaceScratch;
-use crate::spectrum::{AngularSpectrum, Doa};
+use crate::spectrum::{AngularSpectrum, Doa, wrap_deg};
 use crate::stft::{Spectrogram, Stft};
 
 /// A block more than this many dB below the recording's loudest casts no dominance vote
@@ -149,6 +149,10 @@ pub struct Localizer {
     bins: Range<usize>,
     grid: DirectionGrid,
     estimator: Box<dyn SpectrumEstimator>,
+    /// The synthetic plane wave of [`Localizer::plane_wave_profile`]: its inverse FFT and
+    /// its fixed phases, one per bin.
+    wave_fft: std::sync::Arc<dyn realfft::ComplexToReal<f32>>,
+    wave_phases: Vec<f64>,
 }
 
 impl std::fmt::Debug for Localizer {
@@ -206,6 +210,18 @@ impl Localizer {
             .unwrap_or_else(|| crate::ElevationRange::auto(array));
         let grid = DirectionGrid::new(config.az_step_deg, elevation)?;
         let estimator = crate::method::estimator(config, array, &grid, fs, bins.clone(), frame_len);
+        let wave_len = frame_len + (config.block_frames - 1) * stft.hop();
+        let wave_fft = realfft::RealFftPlanner::<f32>::new().plan_fft_inverse(wave_len);
+        // A fixed sequence of phases (xorshift64): every call hears the same wave.
+        let mut state: u64 = 0x9E37_79B9_7F4A_7C15;
+        let wave_phases = (0..wave_len / 2 + 1)
+            .map(|_| {
+                state ^= state << 13;
+                state ^= state >> 7;
+                state ^= state << 17;
+                (state >> 11) as f64 / (1u64 << 53) as f64 * std::f64::consts::TAU
+            })
+            .collect();
         Ok(Self {
             array: array.clone(),
             sample_rate,
@@ -214,6 +230,8 @@ impl Localizer {
             bins,
             grid,
             estimator,
+            wave_fft,
+            wave_phases,
         })
     }
 
@@ -435,7 +453,10 @@ impl Localizer {
                 || (dominant > 0 && d.dominant_blocks as usize >= dominant)
         };
         let mut doas: Vec<Doa> = peaks.into_iter().filter(stands_out).collect();
-        let next = next.filter(stands_out);
+        let mut next = next.filter(stands_out);
+        if self.config.sidelobe_ratio > 0.0 && doas.len() + usize::from(next.is_some()) > 1 {
+            (doas, next) = self.drop_sidelobes(doas, next.take())?;
+        }
         let checked = doas.len();
         doas.extend(next);
         // Every DoA's significance (cheap beside the spectrum: one pass over the frames,
@@ -450,6 +471,120 @@ impl Localizer {
         let doas: Vec<Doa> = significant.by_ref().take(checked).flatten().collect();
         let cut = significant.next().flatten().is_some();
         Ok(Located { doas, cut })
+    }
+
+    /// `doas` and `next` (strongest first) without the peaks that do not stand more than
+    /// [`SslConfig::sidelobe_ratio`] times above the sidelobes of the stronger peaks kept,
+    /// unless they were the strongest direction of a block ([`Doa::dominant_blocks`]). As
+    /// with the other thresholds, a peak dropped leaves its place empty.
+    fn drop_sidelobes(&self, doas: Vec<Doa>, next: Option<Doa>) -> Result<(Vec<Doa>, Option<Doa>)> {
+        let n = doas.len();
+        let ratio = self.config.sidelobe_ratio;
+        let mut scratch = Scratch::default();
+        let azimuths = self.grid.azimuths();
+        let na = azimuths.len();
+        let reach = ((2.0 / self.grid.az_step_deg()).round() as usize).max(1);
+        let cell = |az: f64| -> usize {
+            (0..na)
+                .min_by(|&a, &b| {
+                    wrap_deg(azimuths[a] - az)
+                        .abs()
+                        .total_cmp(&wrap_deg(azimuths[b] - az).abs())
+                })
+                .unwrap_or(0)
+        };
+        // The kept peaks, each with its plane wave's profile once a weaker peak needs it.
+        let mut kept: Vec<(Doa, Option<Vec<f32>>)> = Vec::new();
+        let mut last = None;
+        for (i, p) in doas.into_iter().chain(next).enumerate() {
+            // A peak that was the strongest direction of a block is not a sidelobe: in a
+            // block where a source sounds, its main lobe stands above its sidelobes.
+            if !kept.is_empty() && p.dominant_blocks == 0 {
+                let at = cell(p.azimuth_deg);
+                let mut sidelobe = 0.0f64;
+                for (k, profile) in &mut kept {
+                    if profile.is_none() {
+                        *profile = Some(self.plane_wave_profile(
+                            k.azimuth_deg,
+                            k.elevation_deg,
+                            &mut scratch,
+                        )?);
+                    }
+                    let profile = profile.as_deref().unwrap_or_default();
+                    let here = (0..=2 * reach)
+                        .map(|d| profile[(at + na + d - reach) % na])
+                        .fold(0.0f32, f32::max);
+                    sidelobe = sidelobe.max(k.relative * f64::from(here));
+                }
+                if p.relative <= ratio * sidelobe {
+                    continue;
+                }
+            }
+            if i == n {
+                last = Some(p);
+            } else {
+                kept.push((p, None));
+            }
+        }
+        Ok((kept.into_iter().map(|(d, _)| d).collect(), last))
+    }
+
+    /// The method's pooled azimuth profile of an ideal plane wave from `azimuth_deg`,
+    /// `elevation_deg` (array frame) through this localizer's array, band, grid and
+    /// settings, as heights above its median relative to its top (1 at the wave's
+    /// direction; its sidelobes where they stand): one block of a periodic noise with a
+    /// flat spectrum, delayed exactly at every microphone.
+    ///
+    /// # Errors
+    /// None in practice (the synthetic recording fits the localizer by construction).
+    pub fn plane_wave_profile(
+        &self,
+        azimuth_deg: f64,
+        elevation_deg: f64,
+        scratch: &mut Scratch,
+    ) -> Result<Vec<f32>> {
+        let len = self.wave_fft.len();
+        let nbins = len / 2 + 1;
+        let phases = &self.wave_phases;
+        let (az, el) = (azimuth_deg.to_radians(), elevation_deg.to_radians());
+        let u = [el.cos() * az.cos(), el.cos() * az.sin(), el.sin()];
+        let fs = f64::from(self.sample_rate);
+        let c = self.config.speed_of_sound;
+        let channels = self
+            .array
+            .positions()
+            .iter()
+            .map(|p| {
+                // A microphone further along `u` hears the wave earlier by `lead` seconds:
+                // x(t) = s(t + lead), X = S e^(i w lead).
+                let lead = (p[0] * u[0] + p[1] * u[1] + p[2] * u[2]) / c;
+                let mut spec: Vec<Complex32> = (0..nbins)
+                    .map(|k| {
+                        if k == 0 || (len % 2 == 0 && k == nbins - 1) {
+                            return Complex32::default();
+                        }
+                        let w = std::f64::consts::TAU * k as f64 / len as f64 * fs;
+                        let (im, re) = (phases[k] + w * lead).sin_cos();
+                        Complex32::new(re as f32, im as f32)
+                    })
+                    .collect();
+                let mut x = vec![0.0f32; len];
+                self.wave_fft
+                    .process(&mut spec, &mut x)
+                    .expect("a spectrum of the planned length, real at DC and Nyquist");
+                x
+            })
+            .collect();
+        let audio = Audio::new(self.sample_rate, channels)?;
+        let (profile, _) = self
+            .spectrum_with_scratch(&audio, scratch)?
+            .azimuth_profile();
+        let mut sorted = profile.clone();
+        let mid = sorted.len() / 2;
+        let median = *sorted.select_nth_unstable_by(mid, f32::total_cmp).1;
+        let top = profile.iter().copied().fold(f32::MIN, f32::max);
+        let span = (top - median).max(f32::MIN_POSITIVE);
+        Ok(profile.iter().map(|v| (v - median) / span).collect())
     }
 
     /// Each DoA's [`Doa::significance`] in `spec`: with `u` each channel's unit phasors,

@@ -265,6 +265,11 @@ fn one_source_gives_one_doa_when_n_is_set_high() {
                     } else {
                         0.0
                     },
+                    sidelobe_ratio: if min_relative > 0.0 {
+                        SslConfig::default().sidelobe_ratio
+                    } else {
+                        0.0
+                    },
                     ..SslConfig::default()
                 };
                 Localizer::new(&array, FS, &config)
@@ -628,4 +633,165 @@ fn a_plane_wave_below_the_sensor_noise_is_significant() {
         "significance {got:.1}, expected about {want:.1}"
     );
     assert!(got > 3.0 * config.min_significance, "{got}");
+}
+
+/// The directions (degrees) of a profile's local maxima of at least `floor`, beyond 15
+/// degrees of its top: the sidelobes.
+fn sidelobes(profile: &[f32], azimuths: &[f64], floor: f32) -> Vec<f64> {
+    let n = profile.len();
+    let top = (0..n)
+        .max_by(|&a, &b| profile[a].total_cmp(&profile[b]))
+        .unwrap();
+    (0..n)
+        .filter(|&i| {
+            let (l, c, r) = (profile[(i + n - 1) % n], profile[i], profile[(i + 1) % n]);
+            c >= l && c > r && c >= floor && wrap_deg(azimuths[i] - azimuths[top]).abs() > 15.0
+        })
+        .map(|i| azimuths[i])
+        .collect()
+}
+
+#[test]
+fn a_plane_waves_profile_has_the_sidelobes_of_the_arrays_pattern() {
+    // GCC-PHAT's response to one plane wave is, pair by pair, the band's bins summed at
+    // the difference of the pair's delays: sum_p sum_b cos(w_b (tau_p(u) - tau_p(u0))).
+    // Computed here independently on the horizontal plane, its sidelobes stand where the
+    // localizer's synthetic profile has them, within 2 degrees.
+    let array = MicArray::default();
+    let config = SslConfig {
+        method: Method::GccPhat,
+        elevation: Some(ElevationRange::PLANE),
+        ..SslConfig::default()
+    };
+    let loc = Localizer::new(&array, FS, &config).unwrap();
+    let azimuths = loc.grid().azimuths().to_vec();
+    let frame = config.frame_len_at(FS) as f64;
+    let bins: Vec<f64> = (1..=(frame as usize / 2))
+        .map(|b| b as f64 * f64::from(FS) / frame)
+        .filter(|f| (config.fmin_hz..=config.fmax_hz).contains(f))
+        .collect();
+    let p = array.positions();
+    for az0 in [0.0, 40.0, -100.0] {
+        let delays = |az: f64| -> Vec<f64> {
+            let u = [az.to_radians().cos(), az.to_radians().sin()];
+            (0..p.len())
+                .flat_map(|i| (i + 1..p.len()).map(move |j| (i, j)))
+                .map(|(i, j)| ((p[i][0] - p[j][0]) * u[0] + (p[i][1] - p[j][1]) * u[1]) / C)
+                .collect()
+        };
+        let d0 = delays(az0);
+        let analytic: Vec<f32> = azimuths
+            .iter()
+            .map(|&az| {
+                delays(az)
+                    .iter()
+                    .zip(&d0)
+                    .map(|(t, t0)| {
+                        bins.iter()
+                            .map(|f| (std::f64::consts::TAU * f * (t - t0)).cos())
+                            .sum::<f64>()
+                    })
+                    .sum::<f64>() as f32
+            })
+            .collect();
+        let mut sorted = analytic.clone();
+        sorted.sort_by(f32::total_cmp);
+        let (median, top) = (sorted[sorted.len() / 2], sorted[sorted.len() - 1]);
+        let analytic: Vec<f32> = analytic
+            .iter()
+            .map(|v| (v - median) / (top - median))
+            .collect();
+        let ours = loc
+            .plane_wave_profile(az0, 0.0, &mut ssl::Scratch::default())
+            .unwrap();
+        let want = sidelobes(&analytic, &azimuths, 0.1);
+        let got = sidelobes(&ours, &azimuths, 0.1);
+        assert!(!want.is_empty(), "{az0}: the pattern has sidelobes");
+        for w in &want {
+            assert!(
+                got.iter().any(|g| wrap_deg(g - w).abs() <= 2.0),
+                "{az0}: sidelobe at {w} not in {got:?}"
+            );
+        }
+        let at = |az: f64| {
+            azimuths
+                .iter()
+                .position(|&a| wrap_deg(a - az).abs() < 0.5)
+                .unwrap()
+        };
+        assert!(
+            (ours[at(az0)] - 1.0).abs() < 1e-3,
+            "{az0}: the top is the wave's direction"
+        );
+    }
+}
+
+#[test]
+fn a_sources_sidelobes_are_not_reported_as_sources() {
+    // One noise source in free field with every threshold but the sidelobe test off, so
+    // that every local maximum of the spectrum is a candidate: the peaks at the sidelobes
+    // of the source's own pattern are reported without the test and not with it, and the
+    // source is still found.
+    let array = MicArray::default();
+    let mut seen = 0;
+    for method in [Method::GccPhat, Method::SrpPhat, Method::Mvdr] {
+        for (k, az) in [25.0, -120.0, 100.0].into_iter().enumerate() {
+            let audio = render(
+                &array,
+                &[(az, 0.0, Signal::Noise)],
+                0.5,
+                40.0,
+                SEED + 30 + k as u64,
+            );
+            let open = SslConfig {
+                method,
+                num_peaks: 8,
+                min_relative: 0.0,
+                min_prominence: 0.0,
+                min_significance: 0.0,
+                dominance_blocks: 0,
+                sidelobe_ratio: 0.0,
+                ..SslConfig::default()
+            };
+            let loc = Localizer::new(&array, FS, &open).unwrap();
+            let without = loc.locate(&audio).unwrap();
+            let top = without[0];
+            assert!(
+                wrap_deg(top.azimuth_deg - az).abs() < 2.0,
+                "{method} {az}: {top:?}"
+            );
+            let profile = loc
+                .plane_wave_profile(
+                    top.azimuth_deg,
+                    top.elevation_deg,
+                    &mut ssl::Scratch::default(),
+                )
+                .unwrap();
+            let lobes = sidelobes(&profile, loc.grid().azimuths(), 0.1);
+            let near_lobe = |d: &ssl::Doa| {
+                lobes
+                    .iter()
+                    .any(|l| wrap_deg(d.azimuth_deg - l).abs() <= 3.0)
+            };
+            seen += usize::from(without.iter().any(near_lobe));
+            let tested = SslConfig {
+                sidelobe_ratio: SslConfig::default().sidelobe_ratio,
+                ..open
+            };
+            let with = Localizer::new(&array, FS, &tested)
+                .unwrap()
+                .locate(&audio)
+                .unwrap();
+            assert_eq!(with[0], top, "{method} {az}");
+            assert!(
+                !with.iter().any(near_lobe),
+                "{method} {az}: lobes {lobes:?}, {with:?}"
+            );
+        }
+    }
+    // Without the test, sidelobes are among the candidates in most cases.
+    assert!(
+        seen >= 5,
+        "sidelobes reported in only {seen} of 9 cases without the test"
+    );
 }
