@@ -2,7 +2,7 @@
 """A robot survey rendered by pyroomacoustics: another simulator than ours, for cross-checks.
 
 Five talkers speak real sentences (espeak-ng, resampled to 16 kHz by sox) in a 7.5 x 6 x
-2.8 m shoebox room; the iasm6 array, 0.6 m above the floor, stops every 0.5 m along an
+2.8 m shoebox room; the iasm6 array (or the ReSpeaker 4-mic), 0.6 m above the floor, stops every 0.5 m along an
 L-shaped path, heading along it, and records 2 s at each stop (each talker from a random
 point of its sentence), with white sensor noise at SNR_DB. Written in the published layout
 without an occupancy map: `audio/subNN.wav` (16-bit), `pose/poses.csv` (x, y, theta_deg),
@@ -12,7 +12,7 @@ then searched within `--open-margin` of the stops).
 Hand-run only (no test or CI uses Python); the figures it gave are in BENCHMARKS.md.
 
     pip install pyroomacoustics scipy; apt-get install espeak-ng sox
-    python3 scripts/pra_mobile_survey.py OUT [RT60_S] [SNR_DB] [SEED]
+    python3 scripts/pra_mobile_survey.py OUT [RT60_S] [SNR_DB] [SEED] [iasm6|respeaker4]
 """
 import os
 import subprocess
@@ -24,10 +24,14 @@ import pyroomacoustics as pra
 from scipy.io import wavfile
 
 FS = 16000
-MICS = np.array([
-    [0.1200, 0.0, 0.1040], [-0.0600, 0.1039, 0.1040], [-0.0600, -0.1039, 0.1040],
-    [-0.0606, -0.0350, 0.2080], [0.0606, -0.0350, 0.2080], [0.0000, 0.0700, 0.2080],
-])
+ARRAYS = {
+    "iasm6": np.array([
+        [0.1200, 0.0, 0.1040], [-0.0600, 0.1039, 0.1040], [-0.0600, -0.1039, 0.1040],
+        [-0.0606, -0.0350, 0.2080], [0.0606, -0.0350, 0.2080], [0.0000, 0.0700, 0.2080],
+    ]),
+    # iasm's `respeaker4` preset: radius 32 mm, its channel order.
+    "respeaker4": np.array([[-0.032, 0.0, 0.0], [0.0, -0.032, 0.0], [0.032, 0.0, 0.0], [0.0, 0.032, 0.0]]),
+}
 DIMS = [7.5, 6.0, 2.8]
 ARRAY_Z = 0.6
 CLIP_S = 2.0
@@ -65,6 +69,7 @@ def main():
     rt60 = float(sys.argv[2]) if len(sys.argv) > 2 else 0.5
     snr = float(sys.argv[3]) if len(sys.argv) > 3 else 20.0
     rng = np.random.default_rng(int(sys.argv[4]) if len(sys.argv) > 4 else 1)
+    array = ARRAYS[sys.argv[5] if len(sys.argv) > 5 else "iasm6"]
     with tempfile.TemporaryDirectory() as tmp:
         sigs = [speech(v, t, tmp) for v, _, t in TALKERS]
     e_abs, max_order = pra.inverse_sabine(rt60, DIMS)
@@ -78,7 +83,7 @@ def main():
             room.add_source(pos, signal=np.roll(s, -rng.integers(0, len(s)))[:n])
         c, sn = np.cos(np.radians(th)), np.sin(np.radians(th))
         rot = np.array([[c, -sn, 0], [sn, c, 0], [0, 0, 1]])
-        mics = rot @ MICS.T + np.array([[x], [y], [ARRAY_Z]])
+        mics = rot @ array.T + np.array([[x], [y], [ARRAY_Z]])
         room.add_microphone_array(pra.MicrophoneArray(mics, FS))
         room.simulate()
         sig = room.mic_array.signals[:, :n]

@@ -78,7 +78,8 @@ impl OccupancyMap {
     /// # Errors
     /// [`MapError::Open`] if `points` is empty or holds a non-finite coordinate,
     /// `margin_m` or `resolution` is not positive and finite, `resolution` exceeds
-    /// [`MAX_RESOLUTION_M`], or the region spans more than [`MAX_EXTENT_M`].
+    /// the coarsest resolution a map may have (10 m), or the region spans more than a map
+    /// may (10 km).
     pub fn open_around(
         points: &[[f64; 2]],
         margin_m: f64,
