@@ -145,16 +145,19 @@ pub fn compare(
     // The map, poses and truth are read once, with the first DoA table; every other row
     // swaps its DoAs in.
     let mut base: Option<Survey> = None;
-    let mut survey = |table: Table, source: String, s: &Settings| -> Result<Survey> {
-        match &base {
-            Some(b) => b.clone().with_doas(table, source),
-            None => {
-                let first = Survey::load_with_doas(&inputs, s, Some((table, source)))?;
-                base = Some(first.clone());
-                Ok(first)
-            }
-        }
-    };
+    let mut survey =
+        |table: Table, source: String, cut: Option<Vec<bool>>, s: &Settings| -> Result<Survey> {
+            let b = match &base {
+                Some(b) => b.clone(),
+                None => {
+                    let first =
+                        Survey::load_with_doas(&inputs, s, Some((table.clone(), source.clone())))?;
+                    base = Some(first.clone());
+                    first
+                }
+            };
+            b.with_doas(table, source, cut)
+        };
     let mut rows = Vec::new();
     for &method in &opts.methods {
         tell(format!(
@@ -166,10 +169,8 @@ pub fn compare(
         let files = localise_files(&ds.audio, &array, &s.ssl)?;
         let ms = 1e3 * files.iter().map(|f| f.seconds).sum::<f64>() / files.len() as f64;
         let table = doa_table(files.iter().map(|f| &f.doas[..]), n);
-        let survey = Survey {
-            cut: Some(files.iter().map(|f| f.cut).collect()),
-            ..survey(table, format!("ssl:{method}"), &s)?
-        };
+        let cut = Some(files.iter().map(|f| f.cut).collect());
+        let survey = survey(table, format!("ssl:{method}"), cut, &s)?;
         tell(format!("{method}: {} maps", opts.runs));
         rows.push(row(
             &survey,
@@ -187,7 +188,7 @@ pub fn compare(
         );
         tell(format!("{name}: {} maps", opts.runs));
         let table = first_columns(read_table(t)?, n, t);
-        let survey = survey(table, t.display().to_string(), settings)?;
+        let survey = survey(table, t.display().to_string(), None, settings)?;
         rows.push(row(&survey, name, "published", None, settings, opts)?);
     }
     let base = base.context("nothing to compare: no method and no published table")?;

@@ -339,9 +339,9 @@ impl Survey {
             truth,
             doa_source: String::new(),
         }
-        .with_doas(doas_deg, doa_source)
+        .with_doas(doas_deg, doa_source, cut)
         .with_context(|| format!("poses from {}", pose_path.display()))?;
-        Ok(Self { cut, ..survey })
+        Ok(survey)
     }
 
     /// What a user should know about the map when no occupancy map was given: where the
@@ -354,21 +354,35 @@ impl Survey {
         })
     }
 
-    /// The same survey heard through other DoAs (a table, and where it came from): several
-    /// DoA sources compared on one map, poses and truth, read once.
+    /// The same survey heard through other DoAs (a table, where it came from, and per
+    /// stop whether the SSL cut its row, when it says; see [`Survey::cut`]): several DoA
+    /// sources compared on one map, poses and truth, read once.
     ///
     /// # Errors
-    /// If the table has not one row per pose.
-    pub fn with_doas(self, doas_deg: Table, doa_source: String) -> Result<Self> {
+    /// If the table or the flags have not one row per pose.
+    pub fn with_doas(
+        self,
+        doas_deg: Table,
+        doa_source: String,
+        cut: Option<Vec<bool>>,
+    ) -> Result<Self> {
         ensure!(
             doas_deg.len() == self.poses.len(),
             "{} rows of DoAs ({doa_source}) but {} poses: they must match one to one",
             doas_deg.len(),
             self.poses.len()
         );
+        if let Some(cut) = &cut {
+            ensure!(
+                cut.len() == self.poses.len(),
+                "{} row-cut flags ({doa_source}) but {} poses: they must match one to one",
+                cut.len(),
+                self.poses.len()
+            );
+        }
         Ok(Self {
             doas_deg,
-            cut: None,
+            cut,
             doa_source,
             ..self
         })
