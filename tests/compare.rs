@@ -160,3 +160,23 @@ fn an_unknown_method_or_a_data_set_without_truth_is_a_clear_error() {
     ]);
     assert_clear_error(&o, &["ground truth"]);
 }
+
+#[test]
+fn compare_maps_a_data_set_without_an_occupancy_map_around_its_stops() {
+    // The same data set with map/ removed: the exact table still maps onto the sources,
+    // and stderr says where they were searched.
+    let dir = tempdir();
+    let root = dataset(&dir);
+    std::fs::remove_dir_all(root.join("map")).unwrap();
+    let out = path(&dir, "report");
+    let o = compare(&root, &out, "mvdr", "2", &["--json", "--open-margin", "4"]);
+    let note = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        note.contains("no occupancy map") && note.contains("4 m"),
+        "{note}"
+    );
+    let r = json(&o);
+    let rows = r["rows"].as_array().unwrap();
+    let exact = rows.iter().find(|x| x["kind"] == "published").unwrap();
+    assert!(exact["ospa"]["mean"].as_f64().unwrap() < 0.1, "{exact}");
+}

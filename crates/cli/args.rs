@@ -168,6 +168,10 @@ pub struct CompareArgs {
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
+    /// Without an occupancy map in the data set: how far from the stops to search for
+    /// sources (m; default 3), as for `map`.
+    #[arg(long, value_name = "M")]
+    pub open_margin: Option<f64>,
     /// The settings (the method is each row's own).
     #[command(flatten)]
     pub settings: SettingsArgs,

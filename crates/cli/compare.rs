@@ -43,6 +43,9 @@ pub struct CompareOptions {
     pub ospa_c: f64,
     /// OSPA order.
     pub ospa_p: f64,
+    /// Without an occupancy map: the search margin around the stops (m; default
+    /// [`crate::pipeline::OPEN_MARGIN_M`]).
+    pub open_margin_m: Option<f64>,
 }
 
 /// One row of the comparison: a method of ours, or a published table.
@@ -132,6 +135,7 @@ pub fn compare(
     );
     let inputs = SurveyInputs {
         dataset: Some(root.to_owned()),
+        open_margin_m: opts.open_margin_m,
         ..SurveyInputs::default()
     };
     let n = settings.ssl.num_peaks;
@@ -152,6 +156,9 @@ pub fn compare(
                 None => {
                     let first =
                         Survey::load_with_doas(&inputs, s, Some((table.clone(), source.clone())))?;
+                    if let Some(note) = first.map_note() {
+                        eprintln!("{note}");
+                    }
                     base = Some(first.clone());
                     first
                 }

@@ -349,7 +349,7 @@ impl Survey {
     pub fn map_note(&self) -> Option<String> {
         self.open_margin_m.map(|m| {
             format!(
-                "note: no occupancy map given: the sources are searched within {m} m of the stops (--open-margin; --map map.yaml for a surveyed map)"
+                "note: no occupancy map given: the sources are searched within {m} m of the stops (--open-margin M to change it; a map in map/ or --map bounds the search by the room)"
             )
         })
     }

@@ -18,6 +18,7 @@ pub fn run(a: &CompareArgs) -> Result<Outcome> {
         seed0: a.seed,
         ospa_c: a.report.ospa_c,
         ospa_p: a.report.ospa_p,
+        open_margin_m: a.open_margin,
     };
     let t0 = std::time::Instant::now();
     // One line per stage; the stages' own progress bars (localising, mapping) show the rest.
