@@ -1080,33 +1080,22 @@ impl Mapper {
             .flat_map(|(k, row)| row.iter().map(move |&b| (k, b)))
             .map(|(k, b)| (poses[k].position(), b, k))
             .collect();
-        // Each tier weighs the stops (how much one agreeing stop counts) and asks for a
-        // total: every stop alike; only thresholded stops; and thresholded stops with the
-        // cut ones at the exchange rate the first two quorums set between them.
-        let every = vec![1.0; poses.len()];
-        let thresholded: Vec<f64> = complete.iter().map(|&k| f64::from(u8::from(k))).collect();
+        // Each tier counts a thresholded stop as one and a cut stop as `rate`, and asks for
+        // a total: every stop alike; only thresholded stops; and cut stops at the exchange
+        // rate the first two quorums set between them.
         let (all, thr) = (c.vote_min_stops, c.vote_min_thresholded_stops);
-        let rate = if thr > 0 {
-            thr as f64 / all as f64
-        } else {
-            0.0
-        };
-        let mixed: Vec<f64> = complete
-            .iter()
-            .map(|&k| if k { 1.0 } else { rate })
-            .collect();
-        let tiers = [
-            (&every[..], all),
-            (&thresholded[..], thr),
-            (&mixed[..], thr),
-        ];
+        let tiers = [(1.0, all), (0.0, thr), (thr as f64 / all as f64, thr)];
         let (est, rays) =
             tiers
                 .into_iter()
                 .filter(|&(_, need)| need > 0)
-                .find_map(|(weights, need)| {
+                .find_map(|(rate, need)| {
+                    let weights: Vec<f64> = complete
+                        .iter()
+                        .map(|&k| if k { 1.0 } else { rate })
+                        .collect();
                     let need = need.max(c.min_observations);
-                    self.vote_among(poses, bearings, &rays, weights, need, &check)
+                    self.vote_among(poses, bearings, &rays, &weights, need, &check)
                 })?;
         // The crossings of its rays near it stand for its cloud (the picture's particles
         // and the covariance ellipse).
@@ -1931,26 +1920,22 @@ mod tests {
                 .is_none()
         );
         assert_eq!(bearings, left);
+        // B, from its four stops.
+        let is_b = |b: &Source| {
+            (b.x - 4.0).abs() < 0.05 && (b.y + 1.2).abs() < 0.05 && b.observations == 4
+        };
         // Two thresholded and two cut are 3.2: B is a source.
         let mut two = one.clone();
         two[8] = true;
         let b = mapper
             .vote(&poses, &mut bearings.clone(), &heard, &two, &[], 2)
             .expect("B has 2 thresholded and 2 cut agreeing stops");
-        assert!(
-            (b.x - 4.0).abs() < 0.05 && (b.y + 1.2).abs() < 0.05,
-            "{b:?}"
-        );
-        assert_eq!(b.observations, 4);
+        assert!(is_b(&b), "{b:?}");
         // But four thresholded stops agreeing on B are a source.
         let b = mapper
             .vote(&poses, &mut bearings, &heard, &thresholded, &[], 2)
             .expect("B has 4 agreeing thresholded stops");
-        assert!(
-            (b.x - 4.0).abs() < 0.05 && (b.y + 1.2).abs() < 0.05,
-            "{b:?}"
-        );
-        assert_eq!(b.observations, 4);
+        assert!(is_b(&b), "{b:?}");
         // With the second quorum off, B is not found.
         let strict = Mapper::new(
             &map,

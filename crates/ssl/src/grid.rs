@@ -114,6 +114,21 @@ impl DirectionGrid {
         360.0 / self.az_deg.len() as f64
     }
 
+    /// The azimuth cell nearest `azimuth_deg` (any angle; wrapped).
+    pub fn azimuth_cell(&self, azimuth_deg: f64) -> usize {
+        let n = self.num_azimuths();
+        let from_first = crate::wrap_deg(azimuth_deg - self.az_deg[0]).rem_euclid(360.0);
+        (from_first / self.az_step_deg()).round() as usize % n
+    }
+
+    /// The azimuth cells `i` whose centre lies within `deg` degrees of cell `at` (at least
+    /// one cell either side, at most half the circle), circularly.
+    pub(crate) fn azimuth_window(&self, at: usize, deg: f64) -> impl Iterator<Item = usize> {
+        let n = self.num_azimuths();
+        let reach = ((deg / self.az_step_deg()).round() as usize).clamp(1, n / 2);
+        (0..=2 * reach).map(move |d| (at + n + d - reach) % n)
+    }
+
     /// Number of directions.
     pub fn len(&self) -> usize {
         self.az_deg.len() * self.el_deg.len()
@@ -646,6 +661,23 @@ mod tests {
         assert!((u[0] - 1.0).abs() < 1e-12 && u[1].abs() < 1e-12);
         let u = g.unit(270); // azimuth 90: +y
         assert!((u[1] - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_nearest_azimuth_cell_is_the_one_least_far_round_the_circle() {
+        for step in [1.0, 2.5, 7.0] {
+            let g = DirectionGrid::new(step, ElevationRange::default()).unwrap();
+            let az = g.azimuths();
+            for k in 0..2000 {
+                let a = -400.0 + 0.37 * k as f64;
+                let far = |i: usize| crate::wrap_deg(az[i] - a).abs();
+                let best = (0..az.len()).map(far).fold(f64::INFINITY, f64::min);
+                assert!((far(g.azimuth_cell(a)) - best).abs() < 1e-9, "{step} {a}");
+            }
+            let window: Vec<usize> = g.azimuth_window(0, 2.0 * step).collect();
+            let n = az.len();
+            assert_eq!(window, [n - 2, n - 1, 0, 1, 2], "{step}");
+        }
     }
 
     #[test]

@@ -10,7 +10,7 @@ use crate::config::{Pooling, SslConfig};
 use crate::error::{ConfigError, Error, Result};
 use crate::grid::{DirectionGrid, PairScratch};
 use crate::method::music::SubspaceScratch;
-use crate::spectrum::{AngularSpectrum, Doa, wrap_deg};
+use crate::spectrum::{AngularSpectrum, Doa};
 use crate::stft::{Spectrogram, Stft};
 
 /// A block more than this many dB below the recording's loudest casts no dominance vote
@@ -481,18 +481,6 @@ impl Localizer {
         let n = doas.len();
         let ratio = self.config.sidelobe_ratio;
         let mut scratch = Scratch::default();
-        let azimuths = self.grid.azimuths();
-        let na = azimuths.len();
-        let reach = ((2.0 / self.grid.az_step_deg()).round() as usize).max(1);
-        let cell = |az: f64| -> usize {
-            (0..na)
-                .min_by(|&a, &b| {
-                    wrap_deg(azimuths[a] - az)
-                        .abs()
-                        .total_cmp(&wrap_deg(azimuths[b] - az).abs())
-                })
-                .unwrap_or(0)
-        };
         // The kept peaks, each with its plane wave's profile once a weaker peak needs it.
         let mut kept: Vec<(Doa, Option<Vec<f32>>)> = Vec::new();
         let mut last = None;
@@ -500,7 +488,7 @@ impl Localizer {
             // A peak that was the strongest direction of a block is not a sidelobe: in a
             // block where a source sounds, its main lobe stands above its sidelobes.
             if !kept.is_empty() && p.dominant_blocks == 0 {
-                let at = cell(p.azimuth_deg);
+                let at = self.grid.azimuth_cell(p.azimuth_deg);
                 let mut sidelobe = 0.0f64;
                 for (k, profile) in &mut kept {
                     if profile.is_none() {
@@ -511,8 +499,11 @@ impl Localizer {
                         )?);
                     }
                     let profile = profile.as_deref().unwrap_or_default();
-                    let here = (0..=2 * reach)
-                        .map(|d| profile[(at + na + d - reach) % na])
+                    // Within 2 degrees: the sidelobe may stand a cell or two aside.
+                    let here = self
+                        .grid
+                        .azimuth_window(at, 2.0)
+                        .map(|j| profile[j])
                         .fold(0.0f32, f32::max);
                     sidelobe = sidelobe.max(k.relative * f64::from(here));
                 }
@@ -579,9 +570,7 @@ impl Localizer {
         let (profile, _) = self
             .spectrum_with_scratch(&audio, scratch)?
             .azimuth_profile();
-        let mut sorted = profile.clone();
-        let mid = sorted.len() / 2;
-        let median = *sorted.select_nth_unstable_by(mid, f32::total_cmp).1;
+        let median = crate::spectrum::median(&profile);
         let top = profile.iter().copied().fold(f32::MIN, f32::max);
         let span = (top - median).max(f32::MIN_POSITIVE);
         Ok(profile.iter().map(|v| (v - median) / span).collect())

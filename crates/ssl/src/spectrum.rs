@@ -48,6 +48,14 @@ pub struct AngularSpectrum {
     votes: Vec<u32>,
 }
 
+/// The median of `values` (the upper one of an even count): the background that
+/// [`Doa::relative`] heights are measured from.
+pub(crate) fn median(values: &[f32]) -> f32 {
+    let mut s = values.to_vec();
+    let mid = s.len() / 2;
+    *s.select_nth_unstable_by(mid, f32::total_cmp).1
+}
+
 /// Wraps an angle in degrees to `[-180, 180)`.
 pub fn wrap_deg(a: f64) -> f64 {
     let w = (a + 180.0).rem_euclid(360.0) - 180.0;
@@ -148,21 +156,17 @@ impl AngularSpectrum {
             }
         }
         cands.sort_by(|a, b| b.2.total_cmp(&a.2));
-        let median = {
-            let mut s: Vec<f32> = v.clone();
-            let mid = s.len() / 2;
-            f64::from(*s.select_nth_unstable_by(mid, f32::total_cmp).1)
-        };
+        let median = f64::from(median(&v));
         let top = cands.first().map_or(median, |c| c.2);
         let span = top - median;
         // Votes within 2 degrees (at least one cell) either side of the peak cell.
-        let reach = ((2.0 / step).round() as usize).clamp(1, n / 2);
         let dominant = |i: usize| -> u32 {
             if self.votes.is_empty() {
                 return 0;
             }
-            (0..=2 * reach)
-                .map(|d| self.votes[(i + n + d - reach) % n])
+            self.grid
+                .azimuth_window(i, 2.0)
+                .map(|j| self.votes[j])
                 .sum()
         };
         // The dip to the nearest higher cell on each side (circularly), the higher of the
