@@ -55,6 +55,96 @@ fn map_from_a_doa_table_finds_every_source() {
 }
 
 #[test]
+fn explain_names_each_sources_doas_and_where_a_missed_sources_doas_went() {
+    // The three sources' exact DoAs, and a fourth true source that no stop heard of its
+    // own.
+    let dir = tempdir();
+    let root = dataset(&dir);
+    std::fs::write(
+        root.join("src_gt.txt"),
+        "s1 [1.5, 1.5, 0]\ns2 [4.0, -1.2, 0]\ns3 [5.5, 2.0, 0]\ns4 [2.0, -2.5, 0]\n",
+    )
+    .unwrap();
+    let table = root.join("doas.csv");
+    let base = [
+        "map",
+        "--dataset",
+        arg(&root),
+        "--doas",
+        arg(&table),
+        "--num",
+        "3",
+        "--seed",
+        "4",
+        "--explain",
+    ];
+    let v = json(&iasm(&[&base[..], &["--json"]].concat()));
+    let e = &v["explain"];
+    let sources = e["sources"].as_array().unwrap();
+    assert_eq!(sources.len(), 3, "{v}");
+    for s in sources {
+        // One DoA of each of the twenty stops, each through the source.
+        let rays = s["rays"].as_array().unwrap();
+        let stops: Vec<u64> = rays.iter().map(|r| r["stop"].as_u64().unwrap()).collect();
+        assert_eq!(stops, (0..20).collect::<Vec<u64>>(), "{s}");
+        assert!(
+            rays.iter().all(|r| r["miss_deg"].as_f64().unwrap() < 0.5),
+            "{s}"
+        );
+    }
+    assert_eq!(e["unexplained"].as_array().unwrap().len(), 0, "{e}");
+    let missed = e["missed"].as_array().unwrap();
+    assert_eq!(missed.len(), 1, "{e}");
+    assert_eq!(missed[0]["truth"], 4);
+    // Where a heard source's bearing passes within 5 degrees of the unheard one's, its
+    // DoA is listed, taken by the mapped source standing at that heard source.
+    let hidden = [2.0f64, -2.5];
+    let bearing = |(x, y, _): (f64, f64, f64), q: [f64; 2]| (q[1] - y).atan2(q[0] - x);
+    let mut want = Vec::new();
+    for (k, &pose) in drive().iter().enumerate() {
+        let to = bearing(pose, hidden);
+        let nearest = TRUTH
+            .iter()
+            .map(|&q| (q, ssl::wrap_deg((bearing(pose, q) - to).to_degrees()).abs()))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .unwrap();
+        if nearest.1 <= 5.0 {
+            let q = nearest.0;
+            let at = sources
+                .iter()
+                .position(|s| {
+                    (s["x"].as_f64().unwrap() - q[0]).hypot(s["y"].as_f64().unwrap() - q[1]) < 0.05
+                })
+                .unwrap();
+            want.push((k as u64, at as u64 + 1));
+        }
+    }
+    assert!(
+        !want.is_empty(),
+        "the layout hides the unheard source behind a heard one"
+    );
+    let heard: Vec<(u64, u64)> = missed[0]["heard"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|h| (h["stop"].as_u64().unwrap(), h["taken_by"].as_u64().unwrap()))
+        .collect();
+    assert_eq!(heard, want, "{e}");
+    // The same on the terminal.
+    let o = iasm(&base);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.contains("every DoA is explained by a source"),
+        "{text}"
+    );
+    let line = format!(
+        "true source 4 (2.00, -2.50), no mapped source within 1 m: DoAs within 5° at {}: ",
+        want[0].0
+    );
+    assert!(text.contains(&line), "{text}");
+}
+
+#[test]
 fn without_an_occupancy_map_the_sources_are_searched_around_the_stops() {
     // The same survey with its map/ folder removed: the same three sources, a note on
     // stderr saying where they were searched, and the margin in the JSON.

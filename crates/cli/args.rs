@@ -397,6 +397,12 @@ pub struct MapArgs {
     /// partly of the fit.
     #[arg(long, value_name = "FILE")]
     pub write_aligned_truth: Option<PathBuf>,
+    /// Also say why the map holds what it holds: the DoAs each source explains (stop,
+    /// azimuth, miss), the DoAs no source explains, and, with ground truth, where the DoAs
+    /// of each true source the map missed went (unheard, taken by another source, or
+    /// left unexplained). In JSON: the `explain` object
+    #[arg(long)]
+    pub explain: bool,
     /// How the map is drawn.
     #[command(flatten)]
     pub figure: FigureArgs,

@@ -10,6 +10,8 @@
 //! - [`scenes`]: scene files (with the suite's `[expect]`), and writing a rendered scene.
 //! - [`suite`]: the synthetic-room regression suite.
 //! - [`score`]: the DoA score against known sources.
+//! - [`explain`]: which DoAs each source of a map explains, which none does, and where a
+//!   missed true source's DoAs went.
 //! - [`compare`]: every SSL method side by side on one data set, DoAs to maps.
 //! - [`figure`]: every figure (the map picture, the comparison's plots), PNG or SVG.
 //! - [`online`]: mapping while the robot records (a session, a folder follower).
@@ -23,6 +25,7 @@ pub mod args;
 pub mod cmd;
 pub mod compare;
 pub mod dataset;
+pub mod explain;
 pub mod figure;
 pub mod online;
 pub mod output;

@@ -499,6 +499,11 @@ pub struct MapResult {
     pub particles: usize,
     /// DoAs that no source explained.
     pub unexplained: usize,
+    /// Those DoAs, per stop: world bearings (rad), in each row's order (not serialised).
+    /// Where a source was missed, they show what the stops heard of it that no source
+    /// took.
+    #[serde(skip)]
+    pub unexplained_bearings: Vec<Vec<f64>>,
     /// Sources that the rounds or the vote found and [`Mapper::drop_implausible`] removed
     /// (on the robot's path, or contradicted by stops that heard nothing); their DoAs
     /// count as unexplained.
@@ -742,6 +747,7 @@ impl Mapper {
             rounds,
             particles: self.m,
             unexplained: bearings.iter().map(Vec::len).sum(),
+            unexplained_bearings: bearings.to_vec(),
             removed,
         }
     }

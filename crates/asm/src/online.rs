@@ -347,6 +347,7 @@ impl OnlineMapper {
             rounds: self.rounds,
             particles: self.mapper.num_particles(),
             unexplained: self.pool.iter().map(Vec::len).sum(),
+            unexplained_bearings: self.pool.clone(),
             removed: self.removed,
         }
     }

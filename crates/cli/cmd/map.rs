@@ -11,6 +11,7 @@ use ssl::SslConfig;
 
 use crate::Outcome;
 use crate::args::MapArgs;
+use crate::explain::{Explanation, explain};
 use crate::figure::MapFigure;
 use crate::pipeline::Survey;
 use crate::settings::DEFAULT_ARRAY;
@@ -44,6 +45,9 @@ struct MapReport<'a> {
     /// Without an occupancy map: how far from the stops the sources were searched for (m).
     #[serde(skip_serializing_if = "Option::is_none")]
     open_margin_m: Option<f64>,
+    /// With `--explain`: where every DoA went (see `iasm::explain`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    explain: Option<Explanation>,
 }
 
 #[derive(Clone, Copy, Serialize)]
@@ -86,6 +90,17 @@ pub fn run(a: &MapArgs) -> Result<Outcome> {
         .truth
         .as_deref()
         .and_then(|t| asm::align::align(&result.positions(), t, a.report.ospa_c));
+    let explanation = a.explain.then(|| {
+        explain(
+            &result,
+            &survey.poses,
+            &survey.doas_deg,
+            survey.cut.as_deref(),
+            survey.truth.as_deref(),
+            a.report.ospa_c,
+            crate::compare::HIT_DEG,
+        )
+    });
     let report = MapReport {
         schema_version: SCHEMA_VERSION,
         doas: &survey.doa_source,
@@ -101,6 +116,7 @@ pub fn run(a: &MapArgs) -> Result<Outcome> {
         ospa: o,
         alignment,
         open_margin_m: survey.open_margin_m,
+        explain: explanation,
     };
     if let Some(out) = &a.out {
         crate::output::write_atomic(out, serde_json::to_string_pretty(&report)?.as_bytes())?;
@@ -206,6 +222,9 @@ pub fn run(a: &MapArgs) -> Result<Outcome> {
             o.p, o.c, o.value.total, o.value.localization, o.value.cardinality
         );
     }
+    if let Some(e) = &report.explain {
+        print_explanation(e, a.report.ospa_c);
+    }
     if let Some(f) = alignment {
         println!(
             "Matched sources {:.3} m from the truth; {:.3} m after the best similarity transform of the map (scale {:.3}, rotation {:+.2}°, shift ({:+.3}, {:+.3}) m; {} pairs): much less means the poses' and the truth's frames disagree",
@@ -219,6 +238,52 @@ pub fn run(a: &MapArgs) -> Result<Outcome> {
         );
     }
     Ok(Outcome::Success)
+}
+
+/// `--explain` on the terminal: one line per source, per stop with DoAs left, per missed
+/// true source.
+fn print_explanation(e: &Explanation, c: f64) {
+    println!("Where the DoAs went (stop: azimuth in the array frame, miss or error in degrees):");
+    for s in &e.sources {
+        let rays: Vec<String> = s
+            .rays
+            .iter()
+            .map(|r| format!("{}: {:.1} ({:.1})", r.stop, r.azimuth_deg, r.miss_deg))
+            .collect();
+        println!("  source {} explains {}", s.source, rays.join(", "));
+    }
+    if e.unexplained.is_empty() {
+        println!("  every DoA is explained by a source");
+    }
+    for s in &e.unexplained {
+        let az: Vec<String> = s.azimuths_deg.iter().map(|a| format!("{a:.1}")).collect();
+        let cut = match s.cut {
+            Some(true) => " (the SSL found more peaks than N there)",
+            _ => "",
+        };
+        println!("  stop {} unexplained: {}{cut}", s.stop, az.join(", "));
+    }
+    for m in &e.missed {
+        let heard: Vec<String> = m
+            .heard
+            .iter()
+            .map(|h| {
+                let by = h
+                    .taken_by
+                    .map_or_else(|| "unexplained".to_owned(), |k| format!("source {k}"));
+                format!("{}: {:+.1} ({by})", h.stop, h.error_deg)
+            })
+            .collect();
+        let heard = if heard.is_empty() {
+            "no stop".to_owned()
+        } else {
+            heard.join(", ")
+        };
+        println!(
+            "  true source {} ({:.2}, {:.2}), no mapped source within {c} m: DoAs within {}° at {heard}",
+            m.truth, m.x, m.y, e.tol_deg
+        );
+    }
 }
 
 fn write_sources_csv(path: &Path, r: &MapResult) -> Result<()> {

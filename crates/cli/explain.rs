@@ -1,0 +1,351 @@
+//! Why a map holds what it holds: the DoAs each source explains, the DoAs no source took,
+//! and, when the truth is known, what the stops heard of each true source the map missed.
+//!
+//! I-ASM never labels a DoA before mapping; the implicit association does (see
+//! [`asm::assoc`]). So when a source is missing or misplaced, the question a user asks is
+//! where its DoAs went: never heard (the SSL's recall), heard but taken by another source
+//! (the association), or heard and left unexplained, too few or too scattered to make a
+//! source (the mapper's evidence rules, e.g. [`asm::IasmConfig::min_observations`] and
+//! the vote's quorums). [`explain`] answers it from one map, without a debugger: it is
+//! what every hand-built tracer of this project's sessions printed.
+
+use asm::ospa::assignment;
+use asm::{MapResult, Pose};
+use serde::Serialize;
+
+use crate::dataset::Table;
+
+/// One DoA a source explains.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct RayNote {
+    /// The stop (from 0, in the poses' order).
+    pub stop: usize,
+    /// Azimuth in the array frame (degrees), as the DoA table holds it.
+    pub azimuth_deg: f64,
+    /// How far the DoA misses the bearing from its stop to the source (degrees).
+    pub miss_deg: f64,
+}
+
+/// A mapped source and the DoAs it explains.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SourceRays {
+    /// Its number in the map's table (from 1).
+    pub source: usize,
+    /// x (m).
+    pub x: f64,
+    /// y (m).
+    pub y: f64,
+    /// Its DoAs, in stop order.
+    pub rays: Vec<RayNote>,
+}
+
+/// The DoAs of one stop that no source explains.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct StopLeft {
+    /// The stop (from 0).
+    pub stop: usize,
+    /// Their azimuths in the array frame (degrees), in the row's order.
+    pub azimuths_deg: Vec<f64>,
+    /// Whether the SSL cut the row at N (it found more peaks there than it reported);
+    /// `None` for a DoA table, whose rows do not say.
+    pub cut: Option<bool>,
+}
+
+/// A DoA near a true source's bearing, and what became of it.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Heard {
+    /// The stop (from 0).
+    pub stop: usize,
+    /// Azimuth in the array frame (degrees).
+    pub azimuth_deg: f64,
+    /// Its error against the bearing to the true source (degrees, signed).
+    pub error_deg: f64,
+    /// The mapped source that explains it (its number, from 1); `None` when no source
+    /// does.
+    pub taken_by: Option<usize>,
+}
+
+/// A true source that no mapped source stands for.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Missed {
+    /// Its number in the truth (from 1).
+    pub truth: usize,
+    /// x (m).
+    pub x: f64,
+    /// y (m).
+    pub y: f64,
+    /// The DoAs within `tol_deg` of its bearing, in stop order (at most one per stop,
+    /// the nearest).
+    pub heard: Vec<Heard>,
+}
+
+/// Why a map holds what it holds (see the module docs).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Explanation {
+    /// Every mapped source with its DoAs.
+    pub sources: Vec<SourceRays>,
+    /// The stops with DoAs that no source explains.
+    pub unexplained: Vec<StopLeft>,
+    /// With the truth: the true sources that the optimal assignment of the OSPA metric
+    /// leaves without a mapped source within its cutoff `c`.
+    pub missed: Vec<Missed>,
+    /// A missed source's DoAs are those within this many degrees of its bearing.
+    pub tol_deg: f64,
+}
+
+/// Explains `result`, a map of the survey with `poses` and DoA table `doas` (degrees,
+/// array frame; `cut` per stop when the SSL said), against `truth` when it is known:
+/// a true source counts as mapped when the OSPA assignment pairs it with a source within
+/// `c` metres.
+///
+/// # Panics
+/// If `poses`, `doas` and `result`'s unexplained rows (or `cut`) differ in length: they
+/// come from one survey.
+pub fn explain(
+    result: &MapResult,
+    poses: &[Pose],
+    doas: &Table,
+    cut: Option<&[bool]>,
+    truth: Option<&[[f64; 2]]>,
+    c: f64,
+    tol_deg: f64,
+) -> Explanation {
+    assert_eq!(poses.len(), doas.len(), "one DoA row per pose");
+    assert_eq!(
+        poses.len(),
+        result.unexplained_bearings.len(),
+        "one unexplained row per pose"
+    );
+    let azimuth = |stop: usize, world: f64| ssl::wrap_deg((world - poses[stop].theta).to_degrees());
+    let sources: Vec<SourceRays> = result
+        .sources
+        .iter()
+        .enumerate()
+        .map(|(i, s)| SourceRays {
+            source: i + 1,
+            x: s.x,
+            y: s.y,
+            rays: s
+                .rays
+                .iter()
+                .map(|r| RayNote {
+                    stop: r.stop,
+                    azimuth_deg: azimuth(r.stop, r.bearing),
+                    miss_deg: r.miss([s.x, s.y]).to_degrees(),
+                })
+                .collect(),
+        })
+        .collect();
+    let unexplained: Vec<StopLeft> = result
+        .unexplained_bearings
+        .iter()
+        .enumerate()
+        .filter(|(_, row)| !row.is_empty())
+        .map(|(stop, row)| StopLeft {
+            stop,
+            azimuths_deg: row.iter().map(|&b| azimuth(stop, b)).collect(),
+            cut: cut.map(|c| c[stop]),
+        })
+        .collect();
+    let missed = truth.map_or_else(Vec::new, |truth| {
+        let mapped = mapped_truth(&result.positions(), truth, c);
+        truth
+            .iter()
+            .enumerate()
+            .filter(|&(k, _)| !mapped[k])
+            .map(|(k, &q)| Missed {
+                truth: k + 1,
+                x: q[0],
+                y: q[1],
+                heard: heard_of(q, result, poses, doas, tol_deg),
+            })
+            .collect()
+    });
+    Explanation {
+        sources,
+        unexplained,
+        missed,
+        tol_deg,
+    }
+}
+
+/// Which true sources the OSPA assignment pairs with an estimate within `c`.
+fn mapped_truth(est: &[[f64; 2]], truth: &[[f64; 2]], c: f64) -> Vec<bool> {
+    let dist = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]).min(c);
+    let mut mapped = vec![false; truth.len()];
+    if est.is_empty() {
+        return mapped;
+    }
+    if truth.len() <= est.len() {
+        let cost: Vec<Vec<f64>> = truth
+            .iter()
+            .map(|&t| est.iter().map(|&e| dist(t, e)).collect())
+            .collect();
+        for (k, j) in assignment(&cost).into_iter().enumerate() {
+            mapped[k] = dist(truth[k], est[j]) < c;
+        }
+    } else {
+        let cost: Vec<Vec<f64>> = est
+            .iter()
+            .map(|&e| truth.iter().map(|&t| dist(t, e)).collect())
+            .collect();
+        for (i, k) in assignment(&cost).into_iter().enumerate() {
+            mapped[k] = dist(truth[k], est[i]) < c;
+        }
+    }
+    mapped
+}
+
+/// At each stop, the DoA nearest the bearing to `q` if within `tol_deg`, and which source
+/// (if any) explains it.
+fn heard_of(
+    q: [f64; 2],
+    result: &MapResult,
+    poses: &[Pose],
+    doas: &Table,
+    tol_deg: f64,
+) -> Vec<Heard> {
+    let mut heard = Vec::new();
+    for (stop, (pose, row)) in poses.iter().zip(doas).enumerate() {
+        let to = pose.bearing_to(q);
+        let nearest = row
+            .iter()
+            .flatten()
+            .map(|&az| {
+                let world = pose.world_bearing(az.to_radians());
+                (az, world, asm::wrap_rad(world - to).to_degrees())
+            })
+            .min_by(|a, b| a.2.abs().total_cmp(&b.2.abs()));
+        let Some((az, world, err)) = nearest.filter(|n| n.2.abs() <= tol_deg) else {
+            continue;
+        };
+        let same = |b: f64| asm::wrap_rad(b - world).abs() < 1e-9;
+        let taken_by = result
+            .sources
+            .iter()
+            .position(|s| s.rays.iter().any(|r| r.stop == stop && same(r.bearing)))
+            .map(|i| i + 1);
+        heard.push(Heard {
+            stop,
+            azimuth_deg: az,
+            error_deg: err,
+            taken_by,
+        });
+    }
+    heard
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use asm::map::{Cell, OccupancyMap};
+    use asm::{IasmConfig, Mapper};
+    use rand::SeedableRng;
+    use rand::rngs::StdRng;
+
+    /// Exact DoAs of the sources in `heard_by[k]` at stop `k` (array frame, degrees).
+    fn table(poses: &[Pose], sources: &[[f64; 2]], heard_by: &[Vec<usize>]) -> Table {
+        poses
+            .iter()
+            .zip(heard_by)
+            .map(|(p, who)| {
+                who.iter()
+                    .map(|&s| {
+                        Some(ssl::wrap_deg(
+                            (p.bearing_to(sources[s]) - p.theta).to_degrees(),
+                        ))
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// The default mapper's map of `doas` in a free 8 x 6 m room.
+    fn map_of(poses: &[Pose], doas: &Table, seed: u64) -> MapResult {
+        let map = OccupancyMap::new(160, 120, 0.05, [0.0, 0.0], vec![Cell::Free; 160 * 120]);
+        let rad: Vec<Vec<f64>> = doas
+            .iter()
+            .map(|r| r.iter().flatten().map(|a| a.to_radians()).collect())
+            .collect();
+        Mapper::new(&map, &IasmConfig::default())
+            .unwrap()
+            .run(poses, &rad, &mut StdRng::seed_from_u64(seed))
+            .unwrap()
+    }
+
+    #[test]
+    fn a_source_heard_by_two_stops_is_missed_and_its_doas_are_shown_unexplained() {
+        // Source 0 heard by all six stops, source 1 by stops 4 and 5 only: two bearings
+        // always meet, so the mapper (three stops at least) leaves them, and the
+        // explanation says where they are.
+        let poses: Vec<Pose> = (0..6)
+            .map(|k| Pose::new(1.0 + 0.8 * k as f64, 2.0, 0.3))
+            .collect();
+        let sources = [[3.0, 4.5], [6.0, 0.5]];
+        let heard_by = [vec![0], vec![0], vec![0], vec![0], vec![0, 1], vec![0, 1]];
+        let doas = table(&poses, &sources, &heard_by);
+        let result = map_of(&poses, &doas, 1);
+        assert_eq!(result.sources.len(), 1);
+        let e = explain(&result, &poses, &doas, None, Some(&sources), 1.0, 5.0);
+        // The mapped source explains one DoA per stop, each within a hair of its bearing.
+        assert_eq!(e.sources.len(), 1);
+        let stops: Vec<usize> = e.sources[0].rays.iter().map(|r| r.stop).collect();
+        assert_eq!(stops, vec![0, 1, 2, 3, 4, 5]);
+        assert!(e.sources[0].rays.iter().all(|r| r.miss_deg < 0.1));
+        // The two DoAs of source 1 are left, at the azimuths the table holds.
+        let left: Vec<(usize, Vec<f64>)> = e
+            .unexplained
+            .iter()
+            .map(|s| (s.stop, s.azimuths_deg.clone()))
+            .collect();
+        assert_eq!(left.len(), 2);
+        for (stop, az) in left {
+            assert_eq!(az.len(), 1);
+            approx::assert_abs_diff_eq!(az[0], doas[stop][1].unwrap(), epsilon = 1e-9);
+        }
+        // Source 1 is the one missed, heard exactly by stops 4 and 5, taken by nobody.
+        assert_eq!(e.missed.len(), 1);
+        assert_eq!(e.missed[0].truth, 2);
+        let heard: Vec<(usize, Option<usize>)> = e.missed[0]
+            .heard
+            .iter()
+            .map(|h| (h.stop, h.taken_by))
+            .collect();
+        assert_eq!(heard, vec![(4, None), (5, None)]);
+        assert!(e.missed[0].heard.iter().all(|h| h.error_deg.abs() < 1e-6));
+    }
+
+    #[test]
+    fn a_doa_taken_by_another_source_is_named() {
+        // A missed source's DoA that lies near another source's bearing is reported as
+        // taken by that source.
+        let poses: Vec<Pose> = (0..5)
+            .map(|k| Pose::new(1.0 + 0.8 * k as f64, 2.0, 0.0))
+            .collect();
+        let sources = [[3.0, 4.5]];
+        let doas = table(&poses, &sources, &vec![vec![0]; 5]);
+        let result = map_of(&poses, &doas, 2);
+        assert_eq!(result.sources.len(), 1);
+        // A second true source 1.5 m beyond the first along stop 2's bearing: stop 2's
+        // DoA points at both, and the mapped source has it.
+        let p = poses[2].position();
+        let b = poses[2].bearing_to(sources[0]);
+        let hidden = [p[0] + 4.0 * b.cos(), p[1] + 4.0 * b.sin()];
+        let truth = [sources[0], hidden];
+        let e = explain(
+            &result,
+            &poses,
+            &doas,
+            Some(&[false; 5]),
+            Some(&truth),
+            1.0,
+            5.0,
+        );
+        assert_eq!(e.missed.len(), 1);
+        assert_eq!(e.missed[0].truth, 2);
+        let stop2: Vec<&Heard> = e.missed[0].heard.iter().filter(|h| h.stop == 2).collect();
+        assert_eq!(stop2.len(), 1);
+        assert_eq!(stop2[0].taken_by, Some(1));
+        assert!(e.unexplained.is_empty());
+    }
+}
