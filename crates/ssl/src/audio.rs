@@ -20,7 +20,8 @@ impl Audio {
     ///
     /// # Errors
     /// [`Error::RaggedAudio`] if there is no channel, a channel is empty, or the channels
-    /// differ in length; [`Error::Config`] if `sample_rate` is zero.
+    /// differ in length; [`Error::NonFiniteSample`] if a sample is NaN or infinite (the
+    /// first one); [`Error::Config`] if `sample_rate` is zero.
     pub fn new(sample_rate: u32, channels: Vec<Vec<f32>>) -> Result<Self> {
         if sample_rate == 0 {
             return Err(crate::ConfigError::SampleRate.into());
@@ -28,6 +29,18 @@ impl Audio {
         let n = channels.first().map_or(0, Vec::len);
         if n == 0 || channels.iter().any(|c| c.len() != n) {
             return Err(Error::RaggedAudio);
+        }
+        // A NaN would make every spectrum it touches NaN and the localisation find nothing,
+        // silently; the check is one vectorised pass, far below the STFT's cost.
+        for (c, ch) in channels.iter().enumerate() {
+            if !ch.iter().fold(true, |ok, v| ok & v.is_finite()) {
+                let sample = ch.iter().position(|v| !v.is_finite()).unwrap_or(0);
+                return Err(Error::NonFiniteSample {
+                    channel: c + 1,
+                    sample,
+                    value: ch[sample],
+                });
+            }
         }
         Ok(Self {
             sample_rate,
@@ -86,6 +99,12 @@ pub fn read_wav(path: &Path) -> Result<Audio> {
         hound::Error::IoError(_) => {
             wav_err("not a WAV file (too short for a RIFF/WAVE header)".into())
         }
+        // hound refuses a float format of other than 32 bits while reading the header.
+        hound::Error::FormatError("bits per sample is not 32") => wav_err(
+            "float samples of other than 32 bits (e.g. 64-bit doubles) are not supported: \
+             convert to 32-bit float or 16/24-bit PCM (e.g. `sox in.wav -b 32 -e floating-point out.wav`)"
+                .into(),
+        ),
         hound::Error::FormatError(m) => wav_err(format!("not a valid WAV file: {m}")),
         other => wav_err(format!("not a supported WAV file: {other}")),
     })?;
@@ -173,8 +192,20 @@ pub fn read_wav(path: &Path) -> Result<Audio> {
     if read < declared || declared % n_ch as u64 != 0 {
         return Err(truncated(read));
     }
-    Audio::new(spec.sample_rate, channels).map_err(|_| Error::EmptyWav {
-        path: path.to_owned(),
+    Audio::new(spec.sample_rate, channels).map_err(|e| match e {
+        Error::NonFiniteSample {
+            channel,
+            sample,
+            value,
+        } => Error::NonFiniteWav {
+            path: path.to_owned(),
+            channel,
+            sample,
+            value,
+        },
+        _ => Error::EmptyWav {
+            path: path.to_owned(),
+        },
     })
 }
 
@@ -282,6 +313,77 @@ mod tests {
                     ..
                 }
             ),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn a_nan_or_infinite_sample_is_refused_with_its_channel_and_place() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("nan.wav");
+        let mut w = hound::WavWriter::create(&p, spec(32, hound::SampleFormat::Float)).unwrap();
+        // Interleaved: sample 2 of channel 2 (the sixth value) is NaN.
+        for v in [0.1, 0.2, 0.1, 0.2, 0.1, f32::NAN, 0.1, 0.2] {
+            w.write_sample(v).unwrap();
+        }
+        w.finalize().unwrap();
+        let e = read_wav(&p).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                Error::NonFiniteWav {
+                    channel: 2,
+                    sample: 2,
+                    ..
+                }
+            ),
+            "{e}"
+        );
+        assert!(e.to_string().contains("nan.wav"), "{e}");
+        let e = Audio::new(8000, vec![vec![0.0, f32::INFINITY], vec![0.0; 2]]).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                Error::NonFiniteSample {
+                    channel: 1,
+                    sample: 1,
+                    ..
+                }
+            ),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn a_64_bit_float_wav_is_named_as_unsupported() {
+        // A valid WAV (IEEE float, format 3) of 64-bit samples, written by hand: hound reads
+        // 32-bit floats only, and the error says what to convert to.
+        let (channels, rate, bits) = (2u16, 16_000u32, 64u16);
+        let data: Vec<u8> = [0.5f64, -0.5, 0.25, 0.0]
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        let block = channels * bits / 8;
+        let mut b = Vec::new();
+        b.extend_from_slice(b"RIFF");
+        b.extend_from_slice(&(36 + data.len() as u32).to_le_bytes());
+        b.extend_from_slice(b"WAVEfmt ");
+        b.extend_from_slice(&16u32.to_le_bytes());
+        b.extend_from_slice(&3u16.to_le_bytes());
+        b.extend_from_slice(&channels.to_le_bytes());
+        b.extend_from_slice(&rate.to_le_bytes());
+        b.extend_from_slice(&(rate * u32::from(block)).to_le_bytes());
+        b.extend_from_slice(&block.to_le_bytes());
+        b.extend_from_slice(&bits.to_le_bytes());
+        b.extend_from_slice(b"data");
+        b.extend_from_slice(&(data.len() as u32).to_le_bytes());
+        b.extend_from_slice(&data);
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("double.wav");
+        std::fs::write(&p, b).unwrap();
+        let e = read_wav(&p).unwrap_err().to_string();
+        assert!(
+            e.contains("double.wav") && e.contains("64-bit") && e.contains("32-bit float"),
             "{e}"
         );
     }

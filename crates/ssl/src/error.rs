@@ -196,6 +196,29 @@ pub enum Error {
     /// In-memory audio whose channels are empty or of different lengths.
     #[error("audio channels must be non-empty and of equal length")]
     RaggedAudio,
+    /// A sample that is NaN or infinite (a float WAV written from a failed computation):
+    /// its every frame's spectrum would be NaN, and no direction could be found.
+    #[error("channel {channel} holds a non-finite sample ({value}) at sample {sample}")]
+    NonFiniteSample {
+        /// The channel (from 1).
+        channel: usize,
+        /// The sample's index in the channel (from 0).
+        sample: usize,
+        /// The sample.
+        value: f32,
+    },
+    /// [`Error::NonFiniteSample`] in a file.
+    #[error("{path}: channel {channel} holds a non-finite sample ({value}) at sample {sample}")]
+    NonFiniteWav {
+        /// The file.
+        path: PathBuf,
+        /// The channel (from 1).
+        channel: usize,
+        /// The sample's index in the channel (from 0).
+        sample: usize,
+        /// The sample.
+        value: f32,
+    },
     /// The audio's channel count differs from the array's microphone count.
     #[error("audio has {got} channels but the array has {expected} microphones")]
     ChannelMismatch {
