@@ -238,4 +238,7 @@ fn the_shipped_array_file_is_the_iasm6_preset() {
         iasm::settings::Settings::load(Some(&root.join("fixtures/ssl-mbss-like.toml"))).unwrap();
     assert_eq!((s.ssl.frame_len, s.ssl.block_frames), (Some(4096), 1));
     assert_eq!((s.ssl.num_peaks, s.iasm.num_doas), (4, 4));
+    let s = iasm::settings::Settings::load(Some(&root.join("fixtures/ssl-pra-like.toml"))).unwrap();
+    assert_eq!((s.ssl.az_step_deg, s.ssl.block_frames), (1.0, 1_000_000));
+    assert_eq!(s.ssl.elevation, Some(ssl::ElevationRange::PLANE));
 }

@@ -143,7 +143,9 @@ pub struct SslConfig {
     /// [`ElevationRange::auto`]: -60 to 60 degrees for a 3-D array, 0 for a planar one.
     pub elevation: Option<ElevationRange>,
     /// Frames per block: statistics are averaged within a block, then blocks are pooled
-    /// (`>= 1`). Default: 4 (53 ms at the default frame and hop at 48 kHz).
+    /// (`>= 1`). Default: 4 (53 ms at the default frame and hop at 48 kHz). A value beyond
+    /// a recording's frames makes one block of the whole recording (one spectrum per
+    /// recording, as pyroomacoustics computes by default).
     pub block_frames: usize,
     /// How block spectra are pooled. Default: [`Pooling::Max`].
     pub pooling: Pooling,

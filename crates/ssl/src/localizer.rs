@@ -137,6 +137,9 @@ pub struct Located {
     pub cut: bool,
 }
 
+/// Frames of the synthetic plane wave of [`Localizer::plane_wave_profile`] at most.
+const WAVE_MAX_FRAMES: usize = 8;
+
 /// A validated, precomputed SSL front end for one array and sample rate.
 ///
 /// Building it plans the FFT, the window, the direction grid and every pair's delay
@@ -210,7 +213,13 @@ impl Localizer {
             .unwrap_or_else(|| crate::ElevationRange::auto(array));
         let grid = DirectionGrid::new(config.az_step_deg, elevation)?;
         let estimator = crate::method::estimator(config, array, &grid, fs, bins.clone(), frame_len);
-        let wave_len = frame_len + (config.block_frames - 1) * stft.hop();
+        // One block of the wave, but no more than `WAVE_MAX_FRAMES` frames: a block longer
+        // than the wave is the whole wave (one block, as for a recording shorter than a
+        // block), and the profile of a stationary periodic noise does not change with its
+        // length. Without the cap, `block_frames` set to pool one spectrum per recording
+        // (pyroomacoustics' use) planned an FFT of 50 million samples.
+        let wave_frames = config.block_frames.min(WAVE_MAX_FRAMES);
+        let wave_len = frame_len + (wave_frames - 1) * stft.hop();
         let wave_fft = realfft::RealFftPlanner::<f32>::new().plan_fft_inverse(wave_len);
         // A fixed sequence of phases (xorshift64): every call hears the same wave.
         let mut state: u64 = 0x9E37_79B9_7F4A_7C15;
