@@ -173,6 +173,22 @@ fn r8_a_settings_files_n_stands_unless_num_is_given() {
     assert_eq!(v["sources"].as_array().unwrap().len(), 3, "{v}");
 }
 
+/// A value the settings file's checks refuse names the file; one that only the recording's
+/// sample rate makes wrong (a hop longer than the frame at that rate) names the recording.
+#[test]
+fn a_refused_setting_names_the_file_it_came_from() {
+    let dir = tempdir();
+    let cfg = path(&dir, "c.toml");
+    let wav = path(&dir, "a.wav");
+    write_wav(&wav, &plane_wave_recording(&iasm6(), &[30.0], SEED), FS);
+    std::fs::write(&cfg, "[ssl]\naz_step_deg = 0.0\n").unwrap();
+    let o = iasm(&["ssl", arg(&wav), "--config", arg(&cfg)]);
+    assert_clear_error(&o, &["c.toml", "[ssl]", "azimuth step 0"]);
+    std::fs::write(&cfg, "[ssl]\nhop = 5000\n").unwrap();
+    let o = iasm(&["ssl", arg(&wav), "--config", arg(&cfg)]);
+    assert_clear_error(&o, &["a.wav", "[ssl]", "hop 5000"]);
+}
+
 // See: issue 8
 #[test]
 fn r8_two_different_ns_in_one_file_are_a_clear_error() {

@@ -4,7 +4,7 @@
 
 use std::path::PathBuf;
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use asm::{Profile, Variant};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use ssl::{Method, Pooling};
@@ -254,7 +254,10 @@ impl SettingsArgs {
         if let Some(v) = self.pool_top {
             s.ssl.pool_top = v;
         }
-        s.validate()?;
+        s.validate().with_context(|| match &self.config {
+            Some(p) => format!("settings {} with the command's flags", p.display()),
+            None => "the command's flags".to_owned(),
+        })?;
         Ok(s)
     }
 }

@@ -67,7 +67,10 @@ pub fn run(cli: &args::Cli) -> anyhow::Result<Outcome> {
         }
         args::Command::Regress { dir, config, json } => {
             let settings = settings::Settings::load(config.as_deref())?;
-            settings.validate()?;
+            anyhow::Context::with_context(settings.validate(), || match config {
+                Some(p) => format!("settings {}", p.display()),
+                None => "the default settings".to_owned(),
+            })?;
             cmd::regress::run(dir, &settings, *json)
         }
         args::Command::Eval(a) => {

@@ -108,8 +108,10 @@ impl Session {
         let i = match self.localizers.iter().position(|l| l.sample_rate() == fs) {
             Some(i) => i,
             None => {
-                self.localizers
-                    .push(Localizer::new(&self.array, fs, &self.ssl)?);
+                self.localizers.push(
+                    Localizer::new(&self.array, fs, &self.ssl)
+                        .with_context(|| format!("[ssl] settings at {fs} Hz"))?,
+                );
                 self.localizers.len() - 1
             }
         };

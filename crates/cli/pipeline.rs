@@ -73,7 +73,16 @@ pub fn localise_files(
                 match c.iter().find(|l| l.sample_rate() == audio.sample_rate()) {
                     Some(l) => l.clone(),
                     None => {
-                        let l = Arc::new(Localizer::new(array, audio.sample_rate(), config)?);
+                        let l = Localizer::new(array, audio.sample_rate(), config).with_context(
+                            || {
+                                format!(
+                                    "[ssl] settings for {} ({} Hz)",
+                                    f.display(),
+                                    audio.sample_rate()
+                                )
+                            },
+                        )?;
+                        let l = Arc::new(l);
                         c.push(l.clone());
                         l
                     }
@@ -147,7 +156,8 @@ pub fn localise_audio(
     let Some(first) = windows.first() else {
         return Ok(Vec::new());
     };
-    let loc = Localizer::new(array, first.sample_rate(), config)?;
+    let loc = Localizer::new(array, first.sample_rate(), config)
+        .with_context(|| format!("[ssl] settings at {} Hz", first.sample_rate()))?;
     windows
         .par_iter()
         .enumerate()
@@ -660,7 +670,12 @@ impl Simulated {
     /// # Errors
     /// Settings refused for this array and rate.
     pub fn survey(&self, ssl: &SslConfig) -> Result<Survey> {
-        let loc = Localizer::new(&self.array, self.scene.scene.fs, ssl)?;
+        let loc = Localizer::new(&self.array, self.scene.scene.fs, ssl).with_context(|| {
+            format!(
+                "[ssl] settings for scene {} ({} Hz)",
+                self.scene.scene.name, self.scene.scene.fs
+            )
+        })?;
         let rows: Vec<Located> = self
             .audio
             .par_iter()
