@@ -481,25 +481,30 @@ pub fn read_sources(path: &Path) -> Result<Vec<[f64; 2]>> {
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("reading ground truth {}", path.display()))?;
     let mut out = Vec::new();
-    for line in text.lines() {
-        let inner = match (line.find('['), line.find(']')) {
-            (Some(a), Some(b)) if a < b => &line[a + 1..b],
-            _ => line,
+    for (i, line) in text.lines().enumerate() {
+        let bracketed = match (line.find('['), line.find(']')) {
+            (Some(a), Some(b)) if a < b => Some(&line[a + 1..b]),
+            _ => None,
         };
-        let nums: Vec<f64> = inner
+        let inner = bracketed.unwrap_or(line);
+        let tokens: Vec<&str> = inner
             .split([',', ' ', '\t', ';'])
             .filter(|s| !s.is_empty())
-            .map_while(|s| s.parse::<f64>().ok())
             .collect();
-        if nums.len() >= 2
-            && nums.len()
-                == inner
-                    .split([',', ' ', '\t', ';'])
-                    .filter(|s| !s.is_empty())
-                    .count()
-        {
-            out.push([nums[0], nums[1]]);
+        let nums: Vec<f64> = tokens.iter().map_while(|s| s.parse::<f64>().ok()).collect();
+        // A header or a line of prose (the published format opens with one) holds no
+        // position; a line that starts as one, or a bracketed one, must be one whole.
+        if bracketed.is_none() && nums.is_empty() {
+            continue;
         }
+        ensure!(
+            nums.len() >= 2 && nums.len() == tokens.len() && nums.iter().all(|v| v.is_finite()),
+            "{}: line {}: {:?} is not a source position (x, y[, z] in metres)",
+            path.display(),
+            i + 1,
+            line.trim()
+        );
+        out.push([nums[0], nums[1]]);
     }
     ensure!(
         !out.is_empty(),
@@ -675,6 +680,25 @@ mod tests {
         )
         .unwrap();
         assert_eq!(read_sources(&p).unwrap(), vec![[1.25, 0.6], [1.25, -0.6]]);
+    }
+
+    #[test]
+    fn a_ground_truth_row_that_is_not_a_position_is_named_not_skipped() {
+        // Skipping it would score every map against a truth one source short.
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("src_gt.csv");
+        std::fs::write(&p, "x,y,z\n1.5,0.6,0.3\n2.5,-0.6,0.3\n").unwrap();
+        assert_eq!(read_sources(&p).unwrap(), vec![[1.5, 0.6], [2.5, -0.6]]);
+        for (bad, line) in [
+            ("x,y,z\n1.5,0.6,0.3\n2.5,abc,0.3\n", "line 3"),
+            ("x,y,z\nNaN,0.6,0.3\n", "line 2"),
+            ("x,y\n1.5\n", "line 2"),
+            ("s1 [1.5, 0.6, 0]\ns2 [2.5 -0.6]\ns3 [oops]\n", "line 3"),
+        ] {
+            std::fs::write(&p, bad).unwrap();
+            let e = format!("{:#}", read_sources(&p).unwrap_err());
+            assert!(e.contains(line) && e.contains("src_gt.csv"), "{bad:?}: {e}");
+        }
     }
 
     #[test]

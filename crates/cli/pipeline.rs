@@ -310,12 +310,16 @@ impl Survey {
                 t.display().to_string(),
             )
         } else {
-            let files = match (&inputs.audio, &ds) {
-                (Some(dir), _) => list_files(dir, "wav")?,
-                (None, Some(d)) => d.audio.clone(),
+            let (files, folder) = match (&inputs.audio, &ds) {
+                (Some(dir), _) => (list_files(dir, "wav")?, dir.clone()),
+                (None, Some(d)) => (d.audio.clone(), d.root.join("audio")),
                 (None, None) => bail!("give --doas TABLE, --audio DIR or --dataset DIR"),
             };
-            ensure!(!files.is_empty(), "no WAV file to localise");
+            ensure!(
+                !files.is_empty(),
+                "{}: no WAV file to localise",
+                folder.display()
+            );
             ensure!(
                 files.len() == poses.len(),
                 "{} recordings but {} poses in {}: they must match one to one",
