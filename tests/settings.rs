@@ -20,6 +20,7 @@ num_peaks = 2
 min_sep_deg = 15.0
 min_relative = 0.2
 dominance_blocks = 3
+subband_votes = 5
 min_prominence = 0.1
 sidelobe_ratio = 2.0
 min_significance = 6.0

@@ -17,7 +17,7 @@ use ssl::Method;
 
 use crate::dataset::{Dataset, Table, read_table};
 use crate::pipeline::{
-    Survey, SurveyInputs, VariantStats, doa_table, evaluate, first_columns, localise_files,
+    Survey, SurveyInputs, VariantStats, evaluate, first_columns, localise_files, mapped_table,
 };
 use crate::score::{Diagnostics, DoaScore, diagnose, score_doas};
 use crate::settings::Settings;
@@ -175,7 +175,7 @@ pub fn compare(
         s.ssl.method = method;
         let files = localise_files(&ds.audio, &array, &s.ssl)?;
         let ms = 1e3 * files.iter().map(|f| f.seconds).sum::<f64>() / files.len() as f64;
-        let table = doa_table(files.iter().map(|f| &f.doas[..]), n);
+        let table = mapped_table(files.iter().map(|f| (&f.doas[..], &f.extra[..])), n);
         let cut = Some(files.iter().map(|f| f.cut).collect());
         let survey = survey(table, format!("ssl:{method}"), cut, &s)?;
         tell(format!("{method}: {} maps", opts.runs));

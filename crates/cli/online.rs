@@ -116,7 +116,7 @@ impl Session {
             }
         };
         let row = self.localizers[i].locate_row_with_scratch(audio, &mut self.scratch)?;
-        Ok((row.doas.iter().map(|d| d.azimuth_deg).collect(), row.cut))
+        Ok((row.all().map(|d| d.azimuth_deg).collect(), row.cut))
     }
 
     /// Localises `audio` (the recording `name`, heard at `pose`) and adds it as the next
@@ -157,10 +157,17 @@ impl Session {
     ) -> Result<StopRecord> {
         let t0 = Instant::now();
         let rad: Vec<f64> = doas_deg.iter().map(|a| a.to_radians()).collect();
+        // A table's row past N is cut to N, as `iasm map` reads a table; a row the SSL cut
+        // keeps its extra DoAs.
         let n = self.mapper.mapper().config().num_doas;
+        let keep = if cut == Some(true) {
+            rad.len()
+        } else {
+            rad.len().min(n)
+        };
         let u = self
             .mapper
-            .add_row(pose, &rad[..rad.len().min(n)], cut)
+            .add_row(pose, &rad[..keep], cut)
             .with_context(|| format!("stop {} ({name})", self.poses.len() + 1))?;
         self.poses.push(pose);
         if self.recompute {

@@ -46,6 +46,10 @@ pub struct FileDoas {
     /// Not serialised: the DoA output is the DoAs.
     #[serde(skip)]
     pub cut: bool,
+    /// In a cut row, the directions beyond N that the band's octaves heard
+    /// ([`ssl::Located::extra`]): the mapper takes them after the DoAs.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub extra: Vec<Doa>,
     /// The time it took to read and localise it on one thread (s). Not serialised: the
     /// DoA output stays the same from run to run.
     #[serde(skip)]
@@ -88,7 +92,7 @@ pub fn localise_files(
                     }
                 }
             };
-            let Located { doas, cut } = loc
+            let Located { doas, cut, extra } = loc
                 .locate_row_with_scratch(&audio, scratch)
                 .with_context(|| format!("localising {}", f.display()))?;
             bar.inc(1);
@@ -96,6 +100,7 @@ pub fn localise_files(
                 file: f.clone(),
                 doas,
                 cut,
+                extra,
                 seconds: t0.elapsed().as_secs_f64(),
             })
         })
@@ -173,6 +178,20 @@ pub fn localise_audio(
 pub fn doa_table<'a>(rows: impl IntoIterator<Item = &'a [Doa]>, n: usize) -> Table {
     rows.into_iter()
         .map(|r| (0..n).map(|i| r.get(i).map(|d| d.azimuth_deg)).collect())
+        .collect()
+}
+
+/// The table the mapper takes from the SSL's rows: each row's `N` DoAs (empty cells where
+/// it has fewer), then its extra ones ([`ssl::Located::extra`]), the extra columns as many
+/// as the most any row has (none when no row has any: then it is [`doa_table`]'s).
+pub fn mapped_table<'a>(rows: impl IntoIterator<Item = (&'a [Doa], &'a [Doa])>, n: usize) -> Table {
+    let rows: Vec<_> = rows.into_iter().collect();
+    let width = rows.iter().map(|(_, e)| e.len()).max().unwrap_or(0);
+    rows.into_iter()
+        .map(|(d, e)| {
+            let cells = (0..n).map(|i| d.get(i)).chain((0..width).map(|i| e.get(i)));
+            cells.map(|c| c.map(|d| d.azimuth_deg)).collect()
+        })
         .collect()
 }
 
@@ -301,7 +320,10 @@ impl Survey {
                 .with_context(|| format!("localising {}", rec.display()))?;
             cut = Some(rows.iter().map(|r| r.cut).collect());
             (
-                doa_table(rows.iter().map(|r| &r.doas[..]), settings.ssl.num_peaks),
+                mapped_table(
+                    rows.iter().map(|r| (&r.doas[..], &r.extra[..])),
+                    settings.ssl.num_peaks,
+                ),
                 format!("ssl:{}", settings.ssl.method),
             )
         } else if let Some(t) = &inputs.doas {
@@ -330,7 +352,10 @@ impl Survey {
             let rows = localise_files(&files, &settings.mic_array()?, &settings.ssl)?;
             cut = Some(rows.iter().map(|r| r.cut).collect());
             (
-                doa_table(rows.iter().map(|r| &r.doas[..]), settings.ssl.num_peaks),
+                mapped_table(
+                    rows.iter().map(|r| (&r.doas[..], &r.extra[..])),
+                    settings.ssl.num_peaks,
+                ),
                 format!("ssl:{}", settings.ssl.method),
             )
         };
@@ -692,7 +717,10 @@ impl Simulated {
             map: self.map.clone(),
             open_margin_m: None,
             poses: self.scene.stops.clone(),
-            doas_deg: doa_table(rows.iter().map(|r| &r.doas[..]), ssl.num_peaks),
+            doas_deg: mapped_table(
+                rows.iter().map(|r| (&r.doas[..], &r.extra[..])),
+                ssl.num_peaks,
+            ),
             cut: Some(rows.iter().map(|r| r.cut).collect()),
             truth: Some(self.truth.clone()),
             doa_source: format!("ssl:{}", ssl.method),

@@ -651,7 +651,6 @@ impl Mapper {
         cut: Option<&[bool]>,
         rng: &mut impl Rng,
     ) -> Result<MapResult> {
-        let mut bearings = self.world_bearings(poses, doas_rad)?;
         if let Some(cut) = cut
             && cut.len() != poses.len()
         {
@@ -660,6 +659,7 @@ impl Mapper {
                 cut: cut.len(),
             });
         }
+        let mut bearings = self.world_bearings_cut(poses, doas_rad, cut)?;
         let complete: Vec<bool> = bearings
             .iter()
             .enumerate()
@@ -906,6 +906,25 @@ impl Mapper {
     /// # Errors
     /// As [`Mapper::run`].
     pub fn world_bearings(&self, poses: &[Pose], doas_rad: &[Vec<f64>]) -> Result<Vec<Vec<f64>>> {
+        self.world_bearings_cut(poses, doas_rad, None)
+    }
+
+    /// Whether a row of `len` DoAs is one the mapper takes: at most `N`, or, in a row the
+    /// SSL says it cut at `N` (`cut`), `N` more beyond them (the extra DoAs its octaves
+    /// heard: `ssl::Located::extra`).
+    pub fn row_fits(&self, len: usize, cut: Option<bool>) -> bool {
+        let n = self.config.num_doas;
+        len <= n || (cut == Some(true) && len <= 2 * n)
+    }
+
+    /// [`Mapper::world_bearings`], with each row's cut flag when the SSL gives them
+    /// ([`Mapper::row_fits`]).
+    fn world_bearings_cut(
+        &self,
+        poses: &[Pose],
+        doas_rad: &[Vec<f64>],
+        cut: Option<&[bool]>,
+    ) -> Result<Vec<Vec<f64>>> {
         if poses.is_empty() {
             return Err(Error::NoPoses);
         }
@@ -918,12 +937,12 @@ impl Mapper {
         if let Some(index) = poses.iter().position(|p| !p.is_finite()) {
             return Err(Error::NonFinitePose { index });
         }
-        let n = self.config.num_doas;
-        if let Some(index) = doas_rad.iter().position(|r| r.len() > n) {
+        let fits = |k: usize| self.row_fits(doas_rad[k].len(), cut.map(|c| c[k]));
+        if let Some(index) = (0..doas_rad.len()).find(|&k| !fits(k)) {
             return Err(Error::TooManyDoas {
                 index,
                 got: doas_rad[index].len(),
-                n,
+                n: self.config.num_doas,
             });
         }
         Ok(doas_rad
@@ -2196,6 +2215,47 @@ mod tests {
                 got: 5,
                 n: 4
             })
+        ));
+    }
+
+    /// A row the SSL cut at N may hold N extra DoAs after its N (`ssl::Located::extra`),
+    /// and they are mapped: with N = 1, every stop's row holds the first source and, as
+    /// its extra DoA, the second; both are found within 0.1 m. Without the cut flags the
+    /// same rows are refused, as is a cut row of more than 2N.
+    #[test]
+    fn a_cut_rows_extra_doas_are_mapped() {
+        let sources = [[2.0, 1.5], [4.0, -1.5]];
+        let (map, poses, doas) = scene(&sources, 8);
+        let config = IasmConfig {
+            num_doas: 1,
+            ..IasmConfig::default()
+        };
+        let mapper = Mapper::new(&map, &config).unwrap();
+        let mut rng = StdRng::seed_from_u64(SEED);
+        let cut = vec![true; poses.len()];
+        let found = mapper
+            .run_rows(&poses, &doas, Some(&cut), &mut rng)
+            .unwrap();
+        assert_eq!(found.sources.len(), 2, "{:?}", found.sources);
+        for s in sources {
+            let d = found
+                .sources
+                .iter()
+                .map(|e| (e.x - s[0]).hypot(e.y - s[1]))
+                .fold(f64::INFINITY, f64::min);
+            assert!(d < 0.1, "{s:?}: {:?}", found.sources);
+        }
+        let uncut = vec![false; poses.len()];
+        for flags in [None, Some(&uncut[..])] {
+            assert!(matches!(
+                mapper.run_rows(&poses, &doas, flags, &mut rng),
+                Err(Error::TooManyDoas { got: 2, n: 1, .. })
+            ));
+        }
+        let three: Vec<Vec<f64>> = doas.iter().map(|r| vec![r[0], r[1], 0.0]).collect();
+        assert!(matches!(
+            mapper.run_rows(&poses, &three, Some(&cut), &mut rng),
+            Err(Error::TooManyDoas { got: 3, n: 1, .. })
         ));
     }
 

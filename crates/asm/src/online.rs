@@ -144,12 +144,11 @@ impl OnlineMapper {
         if !pose.is_finite() {
             return Err(Error::NonFinitePose { index: stop });
         }
-        let n = self.mapper.config().num_doas;
-        if doas_rad.len() > n {
+        if !self.mapper.row_fits(doas_rad.len(), cut) {
             return Err(Error::TooManyDoas {
                 index: stop,
                 got: doas_rad.len(),
-                n,
+                n: self.mapper.config().num_doas,
             });
         }
         let row: Vec<f64> = doas_rad

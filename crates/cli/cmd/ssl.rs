@@ -290,11 +290,14 @@ fn print_rows(rows: &[FileDoas], config: &SslConfig, array: &MicArray, json: boo
         writeln!(out, "{}", serde_json::to_string_pretty(&r)?)?;
         return Ok(());
     }
+    // The extra DoAs of a cut row (`ssl::Located::extra`) follow its N, marked `+`.
     for r in rows {
-        let cells: Vec<String> = r
-            .doas
-            .iter()
-            .map(|d| format!("{:7.1}° ({:.3})", d.azimuth_deg, d.strength))
+        let cell = |mark: &str, d: &ssl::Doa| {
+            let az = format!("{mark}{:.1}", d.azimuth_deg);
+            format!("{az:>7}° ({:.3})", d.strength)
+        };
+        let cells: Vec<String> = (r.doas.iter().map(|d| cell("", d)))
+            .chain(r.extra.iter().map(|d| cell("+", d)))
             .collect();
         writeln!(out, "{}\t{}", r.file.display(), cells.join("  "))?;
     }

@@ -8,9 +8,9 @@ use crate::array::MicArray;
 use crate::audio::Audio;
 use crate::config::{Pooling, SslConfig};
 use crate::error::{ConfigError, Error, Result};
-use crate::grid::{DirectionGrid, PairScratch};
+use crate::grid::{DirectionGrid, ElevationRange, PairScratch};
 use crate::method::music::SubspaceScratch;
-use crate::spectrum::{AngularSpectrum, Doa};
+use crate::spectrum::{AngularSpectrum, Doa, wrap_deg};
 use crate::stft::{Spectrogram, Stft};
 
 /// A block more than this many dB below the recording's loudest casts no dominance vote
@@ -109,6 +109,8 @@ pub struct Scratch {
     pub(crate) spec: Spectrogram,
     /// A tile of blocks' lag functions and spectra (the pairwise methods).
     pub(crate) lag_tile: crate::grid::LagTile,
+    /// One octave of the recording's STFT ([`SslConfig::subband_votes`]).
+    pub(crate) octave: Spectrogram,
 }
 
 /// Whether this CPU can run the AVX2+FMA builds of the hot kernels (the lag sums, the
@@ -135,7 +137,34 @@ pub struct Located {
     /// telling as a shorter one (what it does not hold was not heard); a cut one holds the
     /// strongest `N` of more.
     pub cut: bool,
+    /// In a cut row, the directions beyond `N` that the band's octaves heard as the
+    /// strongest of enough blocks ([`SslConfig::subband_votes`]), most votes first, none
+    /// within [`SslConfig::min_sep_deg`] of a DoA of the row: sources the `N` strongest
+    /// pooled peaks left out. Each has the full band's pooled values at its direction, and
+    /// its octaves' votes as [`Doa::dominant_blocks`]. Empty in a row that was not cut.
+    pub extra: Vec<Doa>,
 }
+
+impl Located {
+    /// The row's DoAs and then its extra ones.
+    pub fn all(&self) -> impl Iterator<Item = &Doa> {
+        self.doas.iter().chain(&self.extra)
+    }
+}
+
+/// The lower edges of the octaves whose block maxima vote for the extra DoAs of a cut row
+/// ([`SslConfig::subband_votes`]); the band's top closes the last.
+const SUBBAND_EDGES_HZ: [f64; 3] = [700.0, 1500.0, 3000.0];
+
+/// The octaves' grid ([`SslConfig::subband_votes`]) is no finer than this in azimuth and
+/// elevation (degrees).
+const SUBBAND_AZ_STEP_DEG: f64 = 2.0;
+const SUBBAND_EL_STEP_DEG: f64 = 20.0;
+
+/// Peaks of different octaves within this many degrees are one direction: an octave's
+/// peak of one source scatters by a few degrees from another's (its beam is up to four
+/// times as wide, and reflections pull it differently), as measured in session 15.
+const SUBBAND_MERGE_DEG: f64 = 6.0;
 
 /// Frames of the synthetic plane wave of [`Localizer::plane_wave_profile`] at most.
 const WAVE_MAX_FRAMES: usize = 8;
@@ -156,6 +185,9 @@ pub struct Localizer {
     /// its fixed phases, one per bin.
     wave_fft: std::sync::Arc<dyn realfft::ComplexToReal<f32>>,
     wave_phases: Vec<f64>,
+    /// One localizer per octave of [`SslConfig::subband_votes`] (none when it is 0), each
+    /// pooling its own bins of this localizer's STFT.
+    subbands: Vec<Localizer>,
 }
 
 impl std::fmt::Debug for Localizer {
@@ -231,6 +263,31 @@ impl Localizer {
                 (state >> 11) as f64 / (1u64 << 53) as f64 * std::f64::consts::TAU
             })
             .collect();
+        let mut subbands = Vec::new();
+        if config.subband_votes > 0 {
+            let tops = SUBBAND_EDGES_HZ.iter().skip(1).copied().chain([fmax]);
+            for (lo, hi) in SUBBAND_EDGES_HZ.iter().zip(tops) {
+                let (lo, hi) = (lo.max(config.fmin_hz), hi.min(fmax));
+                // An octave the band does not reach, or holds no bin of, casts no vote.
+                if lo >= hi || (lo / spacing).ceil() > (hi / spacing).floor() {
+                    continue;
+                }
+                // A coarser grid than the full band's: an octave's block maximum only
+                // votes, within `SUBBAND_MERGE_DEG`, and costs a third as much to find.
+                let octave = SslConfig {
+                    fmin_hz: lo,
+                    fmax_hz: hi,
+                    subband_votes: 0,
+                    az_step_deg: config.az_step_deg.max(SUBBAND_AZ_STEP_DEG),
+                    elevation: Some(ElevationRange {
+                        step_deg: elevation.step_deg.max(SUBBAND_EL_STEP_DEG),
+                        ..elevation
+                    }),
+                    ..config.clone()
+                };
+                subbands.push(Self::new(array, sample_rate, &octave)?);
+            }
+        }
         Ok(Self {
             array: array.clone(),
             sample_rate,
@@ -241,6 +298,7 @@ impl Localizer {
             estimator,
             wave_fft,
             wave_phases,
+            subbands,
         })
     }
 
@@ -304,15 +362,22 @@ impl Localizer {
             });
         }
         let mut spec = std::mem::take(&mut scratch.spec);
-        self.stft
-            .analyze_into(audio, self.bins.clone(), &mut spec)?;
+        let analysed = self.stft.analyze_into(audio, self.bins.clone(), &mut spec);
+        let pooled = analysed.map(|()| self.pool(&spec, scratch));
+        scratch.spec = spec;
+        pooled
+    }
+
+    /// The pooled spectrum of the blocks of `spec` (this localizer's band, or a wider one
+    /// of the same STFT: see [`Spectrogram::band_into`]), its dominance votes with it.
+    fn pool(&self, spec: &Spectrogram, scratch: &mut Scratch) -> AngularSpectrum {
         let nf = spec.num_frames();
         let n_blocks = (nf / self.config.block_frames).max(1);
         // Blocks split the frames as evenly as possible and cover all of them.
         let frames = |b: usize| b * nf / n_blocks..(b + 1) * nf / n_blocks;
         let dominance = self.config.dominance_blocks > 0;
         let energy = if dominance || self.config.decay_gate_db > 0.0 {
-            block_energies(&spec, n_blocks, &frames)
+            block_energies(spec, n_blocks, &frames)
         } else {
             Vec::new()
         };
@@ -376,15 +441,14 @@ impl Localizer {
             }
         };
         self.estimator
-            .estimate_blocks(&spec, &ranges, &mut block, scratch, &mut sink);
+            .estimate_blocks(spec, &ranges, &mut block, scratch, &mut sink);
         if self.config.pooling == Pooling::Max {
             for (p, t) in pooled.iter_mut().zip(top.chunks_exact(k)) {
                 *p = t.iter().sum::<f32>() / k as f32;
             }
         }
         scratch.block = block;
-        scratch.spec = spec;
-        Ok(AngularSpectrum::new(self.grid.clone(), pooled).with_votes(votes))
+        AngularSpectrum::new(self.grid.clone(), pooled).with_votes(votes)
     }
 
     /// [`Localizer::gate`] on the blocks of `spec` (the tests' entry).
@@ -450,11 +514,9 @@ impl Localizer {
         // The N strongest resolved peaks, and the next one: the row is cut when that one
         // passes the thresholds too (the peaks are taken strongest first, so the first N
         // are those of a search for N).
-        let mut peaks = self.spectrum_with_scratch(audio, scratch)?.resolved_peaks(
-            n + 1,
-            self.config.min_sep_deg,
-            self.config.min_prominence,
-        );
+        let spectrum = self.spectrum_with_scratch(audio, scratch)?;
+        let mut peaks =
+            spectrum.resolved_peaks(n + 1, self.config.min_sep_deg, self.config.min_prominence);
         let next = (peaks.len() > n).then(|| peaks.remove(n));
         let stands_out = |d: &Doa| {
             let dominant = self.config.dominance_blocks;
@@ -479,7 +541,111 @@ impl Localizer {
             .map(|d| (floor <= 0.0 || d.significance >= floor).then_some(d));
         let doas: Vec<Doa> = significant.by_ref().take(checked).flatten().collect();
         let cut = significant.next().flatten().is_some();
-        Ok(Located { doas, cut })
+        let extra = if cut && !self.subbands.is_empty() {
+            let extra = self.octave_doas(&spectrum, &doas, scratch);
+            let z = self.significance(&scratch.spec, &extra);
+            extra
+                .into_iter()
+                .zip(z)
+                .map(|(d, significance)| Doa { significance, ..d })
+                .filter(|d| floor <= 0.0 || d.significance >= floor)
+                .collect()
+        } else {
+            Vec::new()
+        };
+        Ok(Located { doas, cut, extra })
+    }
+
+    /// The extra DoAs of a cut row ([`Located::extra`]) before the significance floor:
+    /// each octave of the band pooled on its own (the STFT in `scratch`), its resolved
+    /// peaks with their block votes, merged across octaves within
+    /// [`SUBBAND_MERGE_DEG`]; those with [`SslConfig::subband_votes`] votes or more and no
+    /// DoA of `row` within [`SslConfig::min_sep_deg`], at most `N` of them, most votes
+    /// first, read off the full band's pooled `spectrum`.
+    fn octave_doas(
+        &self,
+        spectrum: &AngularSpectrum,
+        row: &[Doa],
+        scratch: &mut Scratch,
+    ) -> Vec<Doa> {
+        let c = &self.config;
+        let spec = std::mem::take(&mut scratch.spec);
+        let mut octave = std::mem::take(&mut scratch.octave);
+        // (azimuth, votes) of every octave's peaks that dominated a block.
+        let mut peaks: Vec<(f64, u32)> = Vec::new();
+        for sub in &self.subbands {
+            spec.band_into(sub.bins.clone(), &mut octave);
+            let pooled = sub.pool(&octave, scratch);
+            peaks.extend(
+                pooled
+                    .resolved_peaks(2 * c.num_peaks, c.min_sep_deg, c.min_prominence)
+                    .into_iter()
+                    .filter(|p| p.dominant_blocks > 0)
+                    .map(|p| (p.azimuth_deg, p.dominant_blocks)),
+            );
+        }
+        scratch.spec = spec;
+        scratch.octave = octave;
+        // Greedily, the peak with the most votes takes every peak within the merge
+        // distance: their votes summed, their azimuths averaged by votes.
+        peaks.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.total_cmp(&b.0)));
+        let mut merged: Vec<(f64, u32)> = Vec::new();
+        while let Some(&(at, _)) = peaks.first() {
+            let (near, rest): (Vec<_>, Vec<_>) = peaks
+                .into_iter()
+                .partition(|p| wrap_deg(p.0 - at).abs() <= SUBBAND_MERGE_DEG);
+            let votes: u32 = near.iter().map(|p| p.1).sum();
+            let offset: f64 = near
+                .iter()
+                .map(|p| wrap_deg(p.0 - at) * f64::from(p.1))
+                .sum::<f64>()
+                / f64::from(votes);
+            merged.push((wrap_deg(at + offset), votes));
+            peaks = rest;
+        }
+        merged.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.total_cmp(&b.0)));
+        // Each direction is read off the full band's spectrum: at its strongest local
+        // maximum within the merge distance (the octaves' coarser grid and their scatter
+        // place it a few degrees off), else at its own cell.
+        let maxima = spectrum.peaks(self.grid.num_azimuths(), 0.0);
+        let (profile, el_at) = spectrum.azimuth_profile();
+        let median = f64::from(crate::spectrum::median(&profile));
+        let span = maxima.first().map_or(0.0, |d| d.strength - median);
+        let mut extra: Vec<Doa> = Vec::new();
+        for (azimuth_deg, votes) in merged {
+            if (votes as usize) < c.subband_votes || extra.len() == c.num_peaks {
+                break;
+            }
+            let near = |d: &&Doa| wrap_deg(d.azimuth_deg - azimuth_deg).abs() <= SUBBAND_MERGE_DEG;
+            let doa = match maxima.iter().find(near) {
+                Some(d) => Doa {
+                    dominant_blocks: votes,
+                    ..*d
+                },
+                None => {
+                    let cell = self.grid.azimuth_cell(azimuth_deg);
+                    let strength = f64::from(profile[cell]);
+                    Doa {
+                        azimuth_deg,
+                        elevation_deg: self.grid.elevations()[el_at[cell]],
+                        strength,
+                        relative: if span > 0.0 {
+                            (strength - median) / span
+                        } else {
+                            0.0
+                        },
+                        dominant_blocks: votes,
+                        prominence: 0.0,
+                        significance: 0.0,
+                    }
+                }
+            };
+            let apart = |d: &Doa| wrap_deg(d.azimuth_deg - doa.azimuth_deg).abs() > c.min_sep_deg;
+            if row.iter().all(apart) && extra.iter().all(apart) {
+                extra.push(doa);
+            }
+        }
+        extra
     }
 
     /// `doas` and `next` (strongest first) without the peaks that do not stand more than

@@ -194,6 +194,26 @@ impl Spectrogram {
         }
     }
 
+    /// Writes into `out` the part of this spectrogram in `bins` (a sub-band: the same
+    /// frames and channels), reusing `out`'s memory.
+    ///
+    /// # Panics
+    /// If `bins` does not lie within [`Spectrogram::bins`].
+    pub fn band_into(&self, bins: Range<usize>, out: &mut Spectrogram) {
+        assert!(
+            self.bins.start <= bins.start && bins.end <= self.bins.end,
+            "a sub-band of the kept bins"
+        );
+        let (n, lo) = (self.bins.len(), bins.start - self.bins.start);
+        out.data.clear();
+        for row in self.data.chunks_exact(n.max(1)) {
+            out.data.extend_from_slice(&row[lo..lo + bins.len()]);
+        }
+        out.num_frames = self.num_frames;
+        out.num_channels = self.num_channels;
+        out.bins = bins;
+    }
+
     /// The kept bins of one channel in one frame.
     ///
     /// # Panics

@@ -820,3 +820,72 @@ fn a_sources_sidelobes_are_not_reported_as_sources() {
         "sidelobes reported in only {seen} of 9 cases without the test"
     );
 }
+
+/// Three sources of equal power: two white noises and a voiced one (harmonics of 150 Hz,
+/// falling 6 dB per octave). Over the band the noises stand highest; from 700 Hz up the
+/// voiced source wins the octaves' blocks, where its harmonics stand far above the noises'
+/// share of each bin. With N = 2 the row holds the two noises and is cut, and the voiced
+/// source is reported beyond N within 1.5 degrees, with its octaves' votes; with the votes
+/// off, or with N = 3 (the row then holds all three and is not cut), nothing is reported
+/// beyond N. A lone source gives nothing beyond N = 1 either: every octave's maxima fall on
+/// it.
+#[test]
+fn a_source_an_octave_hears_is_reported_beyond_n_in_a_cut_row() {
+    let array = MicArray::default();
+    let sources = [
+        (-150.0, 0.0, Signal::Noise),
+        (-30.0, 0.0, Signal::Noise),
+        (90.0, 0.0, Signal::Harmonic(150.0)),
+    ];
+    let audio = render(&array, &sources, 0.6, 30.0, SEED + 11);
+    let lone = render(&array, &[(40.0, 0.0, Signal::Noise)], 0.6, 30.0, SEED + 12);
+    for method in [Method::GccPhat, Method::Mvdr, Method::SrpPhat] {
+        let row = |audio: &Audio, num_peaks, subband_votes| {
+            let config = SslConfig {
+                method,
+                num_peaks,
+                subband_votes,
+                ..SslConfig::default()
+            };
+            Localizer::new(&array, FS, &config)
+                .unwrap()
+                .locate_row_with_scratch(audio, &mut ssl::Scratch::default())
+                .unwrap()
+        };
+        let (two, off, three) = (row(&audio, 2, 4), row(&audio, 2, 0), row(&audio, 3, 4));
+        let near = |d: &ssl::Doa, az: f64, tol: f64| wrap_deg(d.azimuth_deg - az).abs() <= tol;
+        assert!(two.cut, "{method}: {two:?}");
+        for az in [-150.0, -30.0] {
+            assert!(
+                two.doas.iter().any(|d| near(d, az, 2.0)),
+                "{method}: {two:?}"
+            );
+        }
+        assert_eq!(two.extra.len(), 1, "{method}: {two:?}");
+        assert!(near(&two.extra[0], 90.0, 1.5), "{method}: {two:?}");
+        assert!(two.extra[0].dominant_blocks >= 4, "{method}: {two:?}");
+        assert_eq!(two.all().count(), 3);
+        assert_eq!((off.doas, off.extra.len()), (two.doas, 0), "{method}");
+        assert!(!three.cut && three.extra.is_empty(), "{method}: {three:?}");
+        // Every peak reported, as MBSS Locate does, so that the lone source's row is cut
+        // at N = 1 by its ripples.
+        let bare = SslConfig {
+            method,
+            num_peaks: 1,
+            min_relative: 0.0,
+            min_prominence: 0.0,
+            sidelobe_ratio: 0.0,
+            min_significance: 0.0,
+            ..SslConfig::default()
+        };
+        let one = Localizer::new(&array, FS, &bare)
+            .unwrap()
+            .locate_row_with_scratch(&lone, &mut ssl::Scratch::default())
+            .unwrap();
+        assert!(
+            one.cut && near(&one.doas[0], 40.0, 2.0),
+            "{method}: {one:?}"
+        );
+        assert!(one.extra.is_empty(), "{method}: {one:?}");
+    }
+}
