@@ -531,24 +531,31 @@ impl Localizer {
         let checked = doas.len();
         doas.extend(next);
         // Every DoA's significance (cheap beside the spectrum: one pass over the frames,
-        // then a few thousand terms per DoA); those below the floor are noise.
-        let z = self.significance(&scratch.spec, &doas);
-        let floor = self.config.min_significance;
-        let mut significant = doas
-            .into_iter()
-            .zip(z)
-            .map(|(d, significance)| Doa { significance, ..d })
-            .map(|d| (floor <= 0.0 || d.significance >= floor).then_some(d));
-        let doas: Vec<Doa> = significant.by_ref().take(checked).flatten().collect();
-        let cut = significant.next().flatten().is_some();
-        let extra = if cut && !self.subbands.is_empty() {
-            let extra = self.octave_doas(&spectrum, &doas, scratch);
-            let z = self.significance(&scratch.spec, &extra);
-            extra
-                .into_iter()
+        // then a few thousand terms per DoA); those below the floor are noise. The pass
+        // over the frames is made once, for the row and its extra DoAs alike.
+        let mut coherence = None;
+        let mut significant = |doas: Vec<Doa>, spec: &Spectrogram| {
+            let z = if doas.is_empty() {
+                Vec::new()
+            } else {
+                let g = coherence.get_or_insert_with(|| self.coherence(spec));
+                self.significance(g, &doas)
+            };
+            let floor = self.config.min_significance;
+            doas.into_iter()
                 .zip(z)
                 .map(|(d, significance)| Doa { significance, ..d })
-                .filter(|d| floor <= 0.0 || d.significance >= floor)
+                .map(move |d| (floor <= 0.0 || d.significance >= floor).then_some(d))
+                .collect::<Vec<_>>()
+        };
+        let mut row = significant(doas, &scratch.spec).into_iter();
+        let doas: Vec<Doa> = row.by_ref().take(checked).flatten().collect();
+        let cut = row.next().flatten().is_some();
+        let extra = if cut && !self.subbands.is_empty() {
+            let extra = self.octave_doas(&spectrum, &doas, scratch);
+            significant(extra, &scratch.spec)
+                .into_iter()
+                .flatten()
                 .collect()
         } else {
             Vec::new()
@@ -751,20 +758,11 @@ impl Localizer {
         Ok(profile.iter().map(|v| (v - median) / span).collect())
     }
 
-    /// Each DoA's [`Doa::significance`] in `spec`: with `u` each channel's unit phasors,
-    /// `G_ij(b) = sum_f u_i u_j^*` over all frames, and the statistic
-    /// `sum_(i<j) sum_b Re(G_ij(b) e^(-i w_b tau_ij)) / (F B P)` at the pairs' delays
-    /// `tau_ij` of the direction, divided by its standard deviation under independent
-    /// noise, `1 / sqrt(2 F B P)` (each term then has mean 0 and variance 1/2).
-    fn significance(&self, spec: &Spectrogram, doas: &[Doa]) -> Vec<f64> {
-        if doas.is_empty() {
-            return Vec::new();
-        }
+    /// The PHAT coherence of `spec` that [`Localizer::significance`] steers: with `u`
+    /// each channel's unit phasors, `G_ij(b) = sum_f u_i u_j^*` over all frames, for every
+    /// pair `i < j` and bin `b`.
+    fn coherence(&self, spec: &Spectrogram) -> Coherence {
         let m = self.array.len();
-        let pos = self.array.positions();
-        let fs = f64::from(self.sample_rate);
-        let c = self.config.speed_of_sound;
-        let frame_len = self.stft.frame_len() as f64;
         let nf = spec.num_frames();
         let bins = spec.bins();
         let nb = bins.len();
@@ -801,6 +799,32 @@ impl Localizer {
                 }
             }
         }
+        Coherence {
+            frames: nf,
+            bins,
+            pairs,
+            re: gr,
+            im: gi,
+        }
+    }
+
+    /// Each DoA's [`Doa::significance`] in the recording whose [`Coherence`] is `g`: the
+    /// statistic `sum_(i<j) sum_b Re(G_ij(b) e^(-i w_b tau_ij)) / (F B P)` at the pairs'
+    /// delays `tau_ij` of the direction, divided by its standard deviation under
+    /// independent noise, `1 / sqrt(2 F B P)` (each term then has mean 0 and variance 1/2).
+    fn significance(&self, g: &Coherence, doas: &[Doa]) -> Vec<f64> {
+        let pos = self.array.positions();
+        let fs = f64::from(self.sample_rate);
+        let c = self.config.speed_of_sound;
+        let frame_len = self.stft.frame_len() as f64;
+        let Coherence {
+            frames: nf,
+            bins,
+            pairs,
+            re: gr,
+            im: gi,
+        } = g;
+        let (nf, nb, np) = (*nf, bins.len(), pairs.len());
         let sigma0 = (1.0 / (2.0 * nf as f64 * nb as f64 * np as f64)).sqrt();
         doas.iter()
             .map(|d| {
@@ -828,6 +852,19 @@ impl Localizer {
             })
             .collect()
     }
+}
+
+/// A recording's PHAT coherence per microphone pair and bin ([`Localizer::coherence`]).
+struct Coherence {
+    /// Frames summed.
+    frames: usize,
+    /// The FFT bins, as the spectrogram kept them.
+    bins: Range<usize>,
+    /// The pairs `(i, j)`, `i < j`.
+    pairs: Vec<(usize, usize)>,
+    /// Real and imaginary parts of `G`, per pair then bin.
+    re: Vec<f32>,
+    im: Vec<f32>,
 }
 
 /// Each block's energy: all channels, the band's bins.
