@@ -301,8 +301,10 @@ pub struct SslConfig {
     /// suite's and held-out scenes, in every row, 3 votes added 13 real DoAs and 90 false
     /// ones, 4 added 6 and 45, 5 none and 20 (`BENCHMARKS.md`, session 15); in cut rows
     /// only, on the authors' recordings, every threshold from 3 to 8 maps all ten sources
-    /// in every run, and 4 keeps 46 of 53 of 3's added DoAs (session 16). The octaves'
-    /// spectra cost about 4 ms per 3-s recording, in cut rows only.
+    /// in every run, and 4 keeps 46 of 53 of 3's added DoAs (session 16). The pairwise
+    /// methods' octave spectra cost about 4 ms per 3-s recording, in cut rows only; MUSIC
+    /// and NormMUSIC sum their octaves' groups apart in the band's own pass
+    /// ([`crate::SpectrumEstimator::estimate_blocks_parts`]), about 1 ms in every row.
     pub subband_votes: usize,
     /// Blocks whose energy (all channels, the band) lies more than this many dB below the
     /// loudest block of the preceding `decay_window_s` are left out of the pooling (`>= 0`;

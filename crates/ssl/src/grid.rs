@@ -121,6 +121,27 @@ impl DirectionGrid {
         (from_first / self.az_step_deg()).round() as usize % n
     }
 
+    /// For each direction of `other`, this grid's direction nearest it in azimuth and
+    /// elevation (itself, when `other`'s steps are whole multiples of this grid's and its
+    /// elevations start at one of this grid's).
+    pub(crate) fn nearest_of(&self, other: &DirectionGrid) -> Vec<usize> {
+        let n_az = self.num_azimuths();
+        let nearest_el = |el: f64| {
+            (0..self.el_deg.len())
+                .min_by(|&a, &b| {
+                    (self.el_deg[a] - el)
+                        .abs()
+                        .total_cmp(&(self.el_deg[b] - el).abs())
+                })
+                .unwrap_or(0)
+        };
+        let els: Vec<usize> = other.el_deg.iter().map(|&e| nearest_el(e)).collect();
+        let azs: Vec<usize> = other.az_deg.iter().map(|&a| self.azimuth_cell(a)).collect();
+        els.iter()
+            .flat_map(|&e| azs.iter().map(move |&a| e * n_az + a))
+            .collect()
+    }
+
     /// The azimuth cells `i` whose centre lies within `deg` degrees of cell `at` (at least
     /// one cell either side, at most half the circle), circularly.
     pub(crate) fn azimuth_window(&self, at: usize, deg: f64) -> impl Iterator<Item = usize> {

@@ -64,6 +64,40 @@ pub trait SpectrumEstimator: Send + Sync {
     ) {
         each_block(self, stft, blocks, block, scratch, sink);
     }
+
+    /// Whether [`SpectrumEstimator::estimate_blocks_parts`] gives the spectra of parts of
+    /// the band in the same pass as the band's. Default: no.
+    fn estimates_parts(&self) -> bool {
+        false
+    }
+
+    /// [`SpectrumEstimator::estimate_blocks`], and in the same pass each block's spectrum
+    /// of each of `parts` (bin ranges relative to the band, disjoint) at the grid
+    /// directions `dirs`, into `part_out` (part-major, then block, then one value per
+    /// direction of `dirs`): to within a constant factor per part, what an estimator of
+    /// that part alone would write there (the estimator says how its part's plan differs).
+    /// Returns whether it wrote them; the default does not, and an estimator that shares
+    /// no work between the band and its parts should not either (a localizer of each part
+    /// is then as fast).
+    ///
+    /// # Panics
+    /// As [`SpectrumEstimator::estimate_into`].
+    #[allow(clippy::too_many_arguments)]
+    fn estimate_blocks_parts(
+        &self,
+        stft: &Spectrogram,
+        blocks: &[Range<usize>],
+        parts: &[Range<usize>],
+        dirs: &[usize],
+        part_out: &mut Vec<f32>,
+        block: &mut [f32],
+        scratch: &mut Scratch,
+        sink: &mut dyn FnMut(usize, &[f32]),
+    ) -> bool {
+        let _ = (parts, dirs, part_out);
+        self.estimate_blocks(stft, blocks, block, scratch, sink);
+        false
+    }
 }
 
 /// [`SpectrumEstimator::estimate_blocks`] block by block, through `estimate_into`: the
@@ -111,6 +145,35 @@ pub struct Scratch {
     pub(crate) lag_tile: crate::grid::LagTile,
     /// One octave of the recording's STFT ([`SslConfig::subband_votes`]).
     pub(crate) octave: Spectrogram,
+    /// The octaves' block spectra of the last recording, when its estimator gave them in
+    /// the band's own pass ([`SpectrumEstimator::estimate_blocks_parts`]).
+    pub(crate) parts: OctaveParts,
+}
+
+/// The octaves' block spectra that the band's pass gave ([`Scratch::parts`]).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct OctaveParts {
+    /// Octave-major, then block (of `blocks`), then direction of the octaves' grid.
+    spectra: Vec<f32>,
+    /// The blocks estimated (those the band's pooling kept), ascending.
+    blocks: Vec<usize>,
+    /// Whether they are this recording's.
+    valid: bool,
+}
+
+/// Where [`Localizer::pool`] takes its block spectra from.
+#[derive(Clone, Copy)]
+enum Blocks<'a> {
+    /// The localizer's estimator.
+    Estimate,
+    /// The estimator, and the octaves' spectra in the same pass, into [`Scratch::parts`].
+    EstimateWithOctaves,
+    /// The spectra of `blocks` (ascending), one after the other: an octave's share of
+    /// [`Scratch::parts`].
+    Stored {
+        spectra: &'a [f32],
+        blocks: &'a [usize],
+    },
 }
 
 /// Whether this CPU can run the AVX2+FMA builds of the hot kernels (the lag sums, the
@@ -188,6 +251,12 @@ pub struct Localizer {
     /// One localizer per octave of [`SslConfig::subband_votes`] (none when it is 0), each
     /// pooling its own bins of this localizer's STFT.
     subbands: Vec<Localizer>,
+    /// Whether the estimator gives the octaves' block spectra in the band's own pass
+    /// ([`SpectrumEstimator::estimate_blocks_parts`]).
+    shared_octaves: bool,
+    /// The band's grid direction nearest each of the octaves' (all the octaves' grids are
+    /// one).
+    octave_dirs: Vec<usize>,
 }
 
 impl std::fmt::Debug for Localizer {
@@ -264,6 +333,7 @@ impl Localizer {
             })
             .collect();
         let mut subbands = Vec::new();
+        let shared_octaves = config.subband_votes > 0 && estimator.estimates_parts();
         if config.subband_votes > 0 {
             let tops = SUBBAND_EDGES_HZ.iter().skip(1).copied().chain([fmax]);
             for (lo, hi) in SUBBAND_EDGES_HZ.iter().zip(tops) {
@@ -274,13 +344,16 @@ impl Localizer {
                 }
                 // A coarser grid than the full band's: an octave's block maximum only
                 // votes, within `SUBBAND_MERGE_DEG`, and costs a third as much to find.
+                // Whole multiples of the band's steps, so that when the band's pass gives
+                // the octaves' spectra its directions are among the band's.
+                let coarser = |step: f64, at_least: f64| step * (at_least / step).round().max(1.0);
                 let octave = SslConfig {
                     fmin_hz: lo,
                     fmax_hz: hi,
                     subband_votes: 0,
-                    az_step_deg: config.az_step_deg.max(SUBBAND_AZ_STEP_DEG),
+                    az_step_deg: coarser(grid.az_step_deg(), SUBBAND_AZ_STEP_DEG),
                     elevation: Some(ElevationRange {
-                        step_deg: elevation.step_deg.max(SUBBAND_EL_STEP_DEG),
+                        step_deg: coarser(elevation.step_deg, SUBBAND_EL_STEP_DEG),
                         ..elevation
                     }),
                     ..config.clone()
@@ -288,6 +361,9 @@ impl Localizer {
                 subbands.push(Self::new(array, sample_rate, &octave)?);
             }
         }
+        let octave_dirs = subbands
+            .first()
+            .map_or_else(Vec::new, |s: &Localizer| grid.nearest_of(&s.grid));
         Ok(Self {
             array: array.clone(),
             sample_rate,
@@ -298,7 +374,9 @@ impl Localizer {
             estimator,
             wave_fft,
             wave_phases,
+            octave_dirs,
             subbands,
+            shared_octaves,
         })
     }
 
@@ -349,6 +427,16 @@ impl Localizer {
         audio: &Audio,
         scratch: &mut Scratch,
     ) -> Result<AngularSpectrum> {
+        self.spectrum_from(audio, scratch, Blocks::Estimate)
+    }
+
+    /// [`Localizer::spectrum_with_scratch`], the block spectra taken from `blocks`.
+    fn spectrum_from(
+        &self,
+        audio: &Audio,
+        scratch: &mut Scratch,
+        blocks: Blocks<'_>,
+    ) -> Result<AngularSpectrum> {
         if audio.num_channels() != self.array.len() {
             return Err(Error::ChannelMismatch {
                 expected: self.array.len(),
@@ -363,14 +451,20 @@ impl Localizer {
         }
         let mut spec = std::mem::take(&mut scratch.spec);
         let analysed = self.stft.analyze_into(audio, self.bins.clone(), &mut spec);
-        let pooled = analysed.map(|()| self.pool(&spec, scratch));
+        let pooled = analysed.map(|()| self.pool(&spec, scratch, blocks));
         scratch.spec = spec;
         pooled
     }
 
     /// The pooled spectrum of the blocks of `spec` (this localizer's band, or a wider one
-    /// of the same STFT: see [`Spectrogram::band_into`]), its dominance votes with it.
-    fn pool(&self, spec: &Spectrogram, scratch: &mut Scratch) -> AngularSpectrum {
+    /// of the same STFT: see [`Spectrogram::band_into`]), its dominance votes with it;
+    /// the block spectra from `source`. Stored spectra pool only the blocks they hold.
+    fn pool(
+        &self,
+        spec: &Spectrogram,
+        scratch: &mut Scratch,
+        source: Blocks<'_>,
+    ) -> AngularSpectrum {
         let nf = spec.num_frames();
         let n_blocks = (nf / self.config.block_frames).max(1);
         // Blocks split the frames as evenly as possible and cover all of them.
@@ -381,7 +475,12 @@ impl Localizer {
         } else {
             Vec::new()
         };
-        let keep = self.gate(&energy, n_blocks, nf);
+        let mut keep = self.gate(&energy, n_blocks, nf);
+        if let Blocks::Stored { blocks, .. } = source {
+            for (b, k) in keep.iter_mut().enumerate() {
+                *k = *k && blocks.binary_search(&b).is_ok();
+            }
+        }
         let kept = keep.iter().filter(|&&k| k).count();
         // Per azimuth cell, the blocks whose strongest direction lies there (see
         // `SslConfig::dominance_blocks`). A block holding half the energy of the one before
@@ -440,8 +539,40 @@ impl Localizer {
                     .for_each(|(p, &v)| *p += v / kept as f32),
             }
         };
-        self.estimator
-            .estimate_blocks(spec, &ranges, &mut block, scratch, &mut sink);
+        match source {
+            Blocks::Estimate => self
+                .estimator
+                .estimate_blocks(spec, &ranges, &mut block, scratch, &mut sink),
+            Blocks::EstimateWithOctaves => {
+                let mut parts = std::mem::take(&mut scratch.parts);
+                let octaves: Vec<Range<usize>> = self
+                    .subbands
+                    .iter()
+                    .map(|s| s.bins.start - self.bins.start..s.bins.end - self.bins.start)
+                    .collect();
+                parts.valid = self.estimator.estimate_blocks_parts(
+                    spec,
+                    &ranges,
+                    &octaves,
+                    &self.octave_dirs,
+                    &mut parts.spectra,
+                    &mut block,
+                    scratch,
+                    &mut sink,
+                );
+                parts.blocks.clone_from(&kept_blocks);
+                scratch.parts = parts;
+            }
+            Blocks::Stored { spectra, blocks } => {
+                let nd = self.grid.len();
+                for (i, b) in kept_blocks.iter().enumerate() {
+                    let at = blocks
+                        .binary_search(b)
+                        .expect("only stored blocks are kept");
+                    sink(i, &spectra[at * nd..(at + 1) * nd]);
+                }
+            }
+        }
         if self.config.pooling == Pooling::Max {
             for (p, t) in pooled.iter_mut().zip(top.chunks_exact(k)) {
                 *p = t.iter().sum::<f32>() / k as f32;
@@ -514,7 +645,12 @@ impl Localizer {
         // The N strongest resolved peaks, and the next one: the row is cut when that one
         // passes the thresholds too (the peaks are taken strongest first, so the first N
         // are those of a search for N).
-        let spectrum = self.spectrum_with_scratch(audio, scratch)?;
+        let source = if self.shared_octaves {
+            Blocks::EstimateWithOctaves
+        } else {
+            Blocks::Estimate
+        };
+        let spectrum = self.spectrum_from(audio, scratch, source)?;
         let mut peaks =
             spectrum.resolved_peaks(n + 1, self.config.min_sep_deg, self.config.min_prominence);
         let next = (peaks.len() > n).then(|| peaks.remove(n));
@@ -578,11 +714,21 @@ impl Localizer {
         let c = &self.config;
         let spec = std::mem::take(&mut scratch.spec);
         let mut octave = std::mem::take(&mut scratch.octave);
+        let parts = std::mem::take(&mut scratch.parts);
+        let per_octave = parts.blocks.len() * self.octave_dirs.len();
         // (azimuth, votes) of every octave's peaks that dominated a block.
         let mut peaks: Vec<(f64, u32)> = Vec::new();
-        for sub in &self.subbands {
+        for (o, sub) in self.subbands.iter().enumerate() {
             spec.band_into(sub.bins.clone(), &mut octave);
-            let pooled = sub.pool(&octave, scratch);
+            let source = if self.shared_octaves && parts.valid {
+                Blocks::Stored {
+                    spectra: &parts.spectra[o * per_octave..(o + 1) * per_octave],
+                    blocks: &parts.blocks,
+                }
+            } else {
+                Blocks::Estimate
+            };
+            let pooled = sub.pool(&octave, scratch, source);
             peaks.extend(
                 pooled
                     .resolved_peaks(2 * c.num_peaks, c.min_sep_deg, c.min_prominence)
@@ -593,6 +739,7 @@ impl Localizer {
         }
         scratch.spec = spec;
         scratch.octave = octave;
+        scratch.parts = parts;
         // Greedily, the peak with the most votes takes every peak within the merge
         // distance: their votes summed, their azimuths averaged by votes.
         peaks.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.total_cmp(&b.0)));
