@@ -71,32 +71,42 @@ pub trait SpectrumEstimator: Send + Sync {
         false
     }
 
-    /// [`SpectrumEstimator::estimate_blocks`], and in the same pass each block's spectrum
-    /// of each of `parts` (bin ranges relative to the band, disjoint) at the grid
-    /// directions `dirs`, into `part_out` (part-major, then block, then one value per
-    /// direction of `dirs`): to within a constant factor per part, what an estimator of
-    /// that part alone would write there (the estimator says how its part's plan differs).
-    /// Returns whether it wrote them; the default does not, and an estimator that shares
-    /// no work between the band and its parts should not either (a localizer of each part
-    /// is then as fast).
+    /// [`SpectrumEstimator::estimate_blocks`], and in the same pass what each of `parts`
+    /// (bin ranges relative to the band; a bin in two counts in the first) contributes,
+    /// kept in `scratch` for
+    /// [`SpectrumEstimator::part_spectra`]. Returns whether it kept them; the default does
+    /// not, and an estimator that shares no work between the band and its parts should
+    /// not either (a localizer of each part is then as fast).
     ///
     /// # Panics
     /// As [`SpectrumEstimator::estimate_into`].
-    #[allow(clippy::too_many_arguments)]
     fn estimate_blocks_parts(
         &self,
         stft: &Spectrogram,
         blocks: &[Range<usize>],
         parts: &[Range<usize>],
-        dirs: &[usize],
-        part_out: &mut Vec<f32>,
         block: &mut [f32],
         scratch: &mut Scratch,
         sink: &mut dyn FnMut(usize, &[f32]),
     ) -> bool {
-        let _ = (parts, dirs, part_out);
+        let _ = parts;
         self.estimate_blocks(stft, blocks, block, scratch, sink);
         false
+    }
+
+    /// After [`SpectrumEstimator::estimate_blocks_parts`] kept them (and before the next
+    /// call of it), each block's spectrum of part `part` at the grid directions `dirs`,
+    /// into `out` (block-major, one value per direction of `dirs`): to within a constant
+    /// factor, what an estimator of that part alone would write there (the estimator says
+    /// how its part's plan differs). The band's other estimates in between
+    /// ([`SpectrumEstimator::estimate_blocks`], [`SpectrumEstimator::estimate_into`]) leave
+    /// them as they are.
+    ///
+    /// # Panics
+    /// If the parts were not kept; the default always panics.
+    fn part_spectra(&self, part: usize, dirs: &[usize], scratch: &mut Scratch, out: &mut Vec<f32>) {
+        let _ = (part, dirs, scratch, out);
+        unreachable!("part_spectra without estimate_blocks_parts keeping the parts")
     }
 }
 
@@ -145,19 +155,19 @@ pub struct Scratch {
     pub(crate) lag_tile: crate::grid::LagTile,
     /// One octave of the recording's STFT ([`SslConfig::subband_votes`]).
     pub(crate) octave: Spectrogram,
-    /// The octaves' block spectra of the last recording, when its estimator gave them in
-    /// the band's own pass ([`SpectrumEstimator::estimate_blocks_parts`]).
+    /// The octaves' blocks of the last recording, when its estimator kept the octaves'
+    /// contributions in the band's own pass ([`SpectrumEstimator::estimate_blocks_parts`]).
     pub(crate) parts: OctaveParts,
+    /// One octave's block spectra.
+    pub(crate) part_spectra: Vec<f32>,
 }
 
-/// The octaves' block spectra that the band's pass gave ([`Scratch::parts`]).
+/// The octaves' blocks that the band's pass kept the contributions of ([`Scratch::parts`]).
 #[derive(Clone, Debug, Default)]
 pub(crate) struct OctaveParts {
-    /// Octave-major, then block (of `blocks`), then direction of the octaves' grid.
-    spectra: Vec<f32>,
     /// The blocks estimated (those the band's pooling kept), ascending.
     blocks: Vec<usize>,
-    /// Whether they are this recording's.
+    /// Whether the estimator kept this recording's octaves.
     valid: bool,
 }
 
@@ -166,7 +176,8 @@ pub(crate) struct OctaveParts {
 enum Blocks<'a> {
     /// The localizer's estimator.
     Estimate,
-    /// The estimator, and the octaves' spectra in the same pass, into [`Scratch::parts`].
+    /// The estimator, keeping the octaves' contributions in the same pass
+    /// ([`Scratch::parts`]).
     EstimateWithOctaves,
     /// The spectra of `blocks` (ascending), one after the other: an octave's share of
     /// [`Scratch::parts`].
@@ -550,16 +561,9 @@ impl Localizer {
                     .iter()
                     .map(|s| s.bins.start - self.bins.start..s.bins.end - self.bins.start)
                     .collect();
-                parts.valid = self.estimator.estimate_blocks_parts(
-                    spec,
-                    &ranges,
-                    &octaves,
-                    &self.octave_dirs,
-                    &mut parts.spectra,
-                    &mut block,
-                    scratch,
-                    &mut sink,
-                );
+                parts.valid = self
+                    .estimator
+                    .estimate_blocks_parts(spec, &ranges, &octaves, &mut block, scratch, &mut sink);
                 parts.blocks.clone_from(&kept_blocks);
                 scratch.parts = parts;
             }
@@ -715,14 +719,16 @@ impl Localizer {
         let spec = std::mem::take(&mut scratch.spec);
         let mut octave = std::mem::take(&mut scratch.octave);
         let parts = std::mem::take(&mut scratch.parts);
-        let per_octave = parts.blocks.len() * self.octave_dirs.len();
+        let mut spectra = std::mem::take(&mut scratch.part_spectra);
         // (azimuth, votes) of every octave's peaks that dominated a block.
         let mut peaks: Vec<(f64, u32)> = Vec::new();
         for (o, sub) in self.subbands.iter().enumerate() {
             spec.band_into(sub.bins.clone(), &mut octave);
             let source = if self.shared_octaves && parts.valid {
+                self.estimator
+                    .part_spectra(o, &self.octave_dirs, scratch, &mut spectra);
                 Blocks::Stored {
-                    spectra: &parts.spectra[o * per_octave..(o + 1) * per_octave],
+                    spectra: &spectra,
                     blocks: &parts.blocks,
                 }
             } else {
@@ -740,6 +746,7 @@ impl Localizer {
         scratch.spec = spec;
         scratch.octave = octave;
         scratch.parts = parts;
+        scratch.part_spectra = spectra;
         // Greedily, the peak with the most votes takes every peak within the merge
         // distance: their votes summed, their azimuths averaged by votes.
         peaks.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.total_cmp(&b.0)));

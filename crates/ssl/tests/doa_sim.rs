@@ -874,12 +874,12 @@ fn a_source_an_octave_hears_is_reported_beyond_n_in_a_cut_row() {
         assert!(near(&two.extra[0], 90.0, 1.5), "{method}: {two:?}");
         assert!(two.extra[0].dominant_blocks >= 4, "{method}: {two:?}");
         assert_eq!(two.all().count(), 3);
-        // The same row without the extras (to rounding: the subspace methods sum the
-        // octaves' groups apart when the votes are on).
+        // The same row without the extras (to rounding: with the votes on, the band's
+        // spectrum is the sum of its octaves' and the rest's, summed apart).
         assert!(off.extra.is_empty(), "{method}: {off:?}");
         assert_eq!(off.doas.len(), two.doas.len(), "{method}");
         for (a, b) in off.doas.iter().zip(&two.doas) {
-            assert!(near(a, b.azimuth_deg, 1e-6), "{method}: {a:?} {b:?}");
+            assert!(near(a, b.azimuth_deg, 1e-3), "{method}: {a:?} {b:?}");
         }
         assert!(!three.cut && three.extra.is_empty(), "{method}: {three:?}");
         // Every peak reported, as MBSS Locate does, so that the lone source's row is cut

@@ -194,8 +194,11 @@ pub(crate) struct SubspaceScratch {
     g_im: Vec<f32>,
     /// Per block, the spectrum being summed over groups.
     outs: Vec<f32>,
-    /// The same for each part of the band ([`Music::estimate_blocks_parts`]).
+    /// The same for each part of the band ([`Music::estimate_blocks_parts`]), part-major,
+    /// and how many blocks and parts they hold.
     part_sums: Vec<f32>,
+    part_blocks: usize,
+    part_count: usize,
 }
 
 impl Music {
@@ -507,14 +510,13 @@ impl SpectrumEstimator for Music {
     /// Each part holds the band's groups whose centre bin lies in it, each weighted as in
     /// the band's sum: a part's spectrum is what a plan of those groups alone gives, times
     /// their share of the band's groups. The groups' decompositions and steering are the
-    /// band's own, so the parts cost one more pass of the sums over groups.
+    /// band's own: each group's pseudo-spectrum is summed into its part's sum instead of
+    /// the band's, and the band's is their total.
     fn estimate_blocks_parts(
         &self,
         stft: &Spectrogram,
         blocks: &[Range<usize>],
         parts: &[Range<usize>],
-        dirs: &[usize],
-        part_out: &mut Vec<f32>,
         block: &mut [f32],
         scratch: &mut Scratch,
         sink: &mut dyn FnMut(usize, &[f32]),
@@ -532,8 +534,6 @@ impl SpectrumEstimator for Music {
         let split = Split {
             part_of: &part_of,
             parts: parts.len(),
-            dirs,
-            out: part_out,
         };
         self.all_blocks(
             stft,
@@ -544,6 +544,26 @@ impl SpectrumEstimator for Music {
             Some(split),
         );
         true
+    }
+
+    fn part_spectra(&self, part: usize, dirs: &[usize], scratch: &mut Scratch, out: &mut Vec<f32>) {
+        let s = &scratch.subspace;
+        let (nd, nb) = (self.n_dirs, s.part_blocks);
+        assert!(part < s.part_count, "part {part} was not kept");
+        // The sums are in the steered order ([`Antipodes`]).
+        let mut slot_of: Vec<usize> = (0..nd).collect();
+        if let Some(h) = &self.antipodes {
+            for (slot, &d) in h.order.iter().enumerate() {
+                slot_of[d] = slot;
+            }
+        }
+        let sums = &s.part_sums[part * nb * nd..(part + 1) * nb * nd];
+        let out = zeroed(out, nb * dirs.len());
+        for (row, out) in sums.chunks_exact(nd).zip(out.chunks_exact_mut(dirs.len())) {
+            for (o, &d) in out.iter_mut().zip(dirs) {
+                *o = row[slot_of[d]];
+            }
+        }
     }
 }
 
@@ -556,10 +576,6 @@ struct Split<'a> {
     /// Per group, its part, or [`NO_PART`].
     part_of: &'a [usize],
     parts: usize,
-    /// The grid directions each part is wanted at.
-    dirs: &'a [usize],
-    /// Part-major, then block, then one of `dirs`.
-    out: &'a mut Vec<f32>,
 }
 
 impl Music {
@@ -578,7 +594,7 @@ impl Music {
         block: &mut [f32],
         s: &mut SubspaceScratch,
         sink: &mut dyn FnMut(usize, &[f32]),
-        mut split: Option<Split<'_>>,
+        split: Option<Split<'_>>,
     ) {
         let (m, ng, nb, nd) = (self.mics, self.centres.len(), blocks.len(), self.n_dirs);
         let np = m * (m - 1) / 2;
@@ -619,6 +635,8 @@ impl Music {
             outs,
             proj,
             part_sums,
+            part_blocks,
+            part_count,
             ..
         } = s;
         // Half the directions steered when the grid holds their antipodes, each row of
@@ -648,9 +666,13 @@ impl Music {
         let g_im = zeroed(g_im, np * W);
         let xs = zeroed(proj, nb * row);
         let outs = zeroed(outs, nb * nd);
-        // The parts' sums, in the steered order as `outs`, each group's in its part's.
+        // The parts' sums, in the steered order as `outs`, each group's in its part's (a
+        // pass without parts leaves the last ones as they are).
         let n_parts = split.as_ref().map_or(0, |p| p.parts);
-        let part_sums = zeroed(part_sums, n_parts * nb * nd);
+        if split.is_some() {
+            zeroed(part_sums, n_parts * nb * nd);
+            (*part_blocks, *part_count) = (nb, n_parts);
+        }
         for k in 0..ng {
             let kernel = PairKernel {
                 terms: &terms[k * nb * stride..(k + 1) * nb * stride],
@@ -670,27 +692,10 @@ impl Music {
             };
             accumulate(xs, &segs, target, &affine[k * nb..(k + 1) * nb], &scale);
         }
-        if let Some(p) = &mut split {
-            // The band's sum is its parts' and the rest's; each part is read at the
-            // directions wanted, through the steered order.
-            let mut slot_of: Vec<usize> = (0..nd).collect();
-            if let Some(order) = order {
-                for (slot, &d) in order.iter().enumerate() {
-                    slot_of[d] = slot;
-                }
-            }
-            let slots: Vec<usize> = p.dirs.iter().map(|&d| slot_of[d]).collect();
-            let out = zeroed(p.out, n_parts * nb * slots.len());
-            for (part, out) in part_sums
-                .chunks_exact(nb * nd)
-                .zip(out.chunks_exact_mut(nb * slots.len()))
-            {
+        if split.is_some() {
+            // The band's sum is its parts' and the rest's.
+            for part in part_sums.chunks_exact(nb * nd) {
                 outs.iter_mut().zip(part).for_each(|(o, v)| *o += v);
-                for (row, out) in part.chunks_exact(nd).zip(out.chunks_exact_mut(slots.len())) {
-                    for (o, &slot) in out.iter_mut().zip(&slots) {
-                        *o = row[slot];
-                    }
-                }
             }
         }
         for (b, o) in outs.chunks_exact(nd).enumerate() {
@@ -1672,13 +1677,10 @@ mod tests {
             music.estimate_blocks(&spec, &blocks, &mut buf, &mut scratch, &mut |_, v| {
                 alone.push(v.to_vec())
             });
-            let mut part_out = Vec::new();
             let gave = music.estimate_blocks_parts(
                 &spec,
                 &blocks,
                 &parts,
-                &dirs,
-                &mut part_out,
                 &mut buf,
                 &mut scratch,
                 &mut |_, v| with_parts.push(v.to_vec()),
@@ -1688,7 +1690,6 @@ mod tests {
             for (a, b) in alone.iter().flatten().zip(with_parts.iter().flatten()) {
                 assert!(close(*a, *b), "the band: {a} against {b}");
             }
-            assert_eq!(part_out.len(), parts.len() * blocks.len() * dirs.len());
             for (p, part) in parts.iter().enumerate() {
                 let bins = band.start + part.start..band.start + part.end;
                 let own = plan(&array, &grid, (fs, c), bins.clone(), frame_len, None);
@@ -1696,12 +1697,20 @@ mod tests {
                 assert_eq!((own.centres.len(), music.centres.len()), ([6, 11][p], 20));
                 let mut sub = Spectrogram::default();
                 spec.band_into(bins, &mut sub);
+                // Read before and after the part's own plan runs on the same scratch: a
+                // pass without parts leaves them.
+                let mut part_out = Vec::new();
+                music.part_spectra(p, &dirs, &mut scratch, &mut part_out);
                 let mut want = Vec::new();
                 own.estimate_blocks(&sub, &blocks, &mut buf, &mut scratch, &mut |_, v| {
                     want.push(v.to_vec())
                 });
+                let mut again = Vec::new();
+                music.part_spectra(p, &dirs, &mut scratch, &mut again);
+                assert_eq!(part_out, again);
+                assert_eq!(part_out.len(), blocks.len() * dirs.len());
                 for (b, want) in want.iter().enumerate() {
-                    let at = (p * blocks.len() + b) * dirs.len();
+                    let at = b * dirs.len();
                     for (i, &d) in dirs.iter().enumerate() {
                         let got = part_out[at + i];
                         assert!(
