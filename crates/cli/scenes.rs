@@ -26,6 +26,9 @@ pub struct Expect {
     /// Seeds the scene runs with (`seed`, `seed + 1`, ...). Default:
     /// [`crate::suite::DEFAULT_SEEDS`].
     pub seeds: Option<usize>,
+    /// Maps per seed's rendering, each with its own particle draw. Default:
+    /// [`crate::suite::DEFAULT_MAP_SEEDS`].
+    pub map_seeds: Option<usize>,
     /// Lowest acceptable mean DoA score (hit within 5 degrees), for every method.
     pub doa_score_min: Option<f64>,
     /// Highest acceptable mean OSPA (m, p = 1, c = 1) of the I-ASM maps, for every method.
