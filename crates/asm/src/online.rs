@@ -72,6 +72,9 @@ pub struct OnlineMapper {
     /// Whether each stop's row holds every peak the SSL let through (see
     /// [`Mapper::run_rows`]).
     complete: Vec<bool>,
+    /// Whether the SSL said it cut each stop's row at `N` (see
+    /// [`Mapper::drop_implausible_cut`]).
+    said_cut: Vec<bool>,
     /// Every stop's unexplained DoAs.
     pool: Vec<Vec<f64>>,
     sources: Vec<Source>,
@@ -98,6 +101,7 @@ impl OnlineMapper {
             poses: Vec::new(),
             bearings: Vec::new(),
             complete: Vec::new(),
+            said_cut: Vec::new(),
             pool: Vec::new(),
             sources: Vec::new(),
             rounds: 0,
@@ -158,6 +162,7 @@ impl OnlineMapper {
             .collect();
         self.poses.push(pose);
         self.complete.push(self.mapper.complete(row.len(), cut));
+        self.said_cut.push(cut == Some(true));
         self.bearings.push(row.clone());
         self.pool.push(row);
 
@@ -178,11 +183,12 @@ impl OnlineMapper {
                 self.search(&mut update);
             }
             // As the batch mapper does before its merge.
-            self.removed += self.mapper.drop_implausible(
+            self.removed += self.mapper.drop_implausible_cut(
                 &mut self.sources,
                 &self.poses,
                 &self.bearings,
                 &self.complete,
+                &self.said_cut,
                 &mut self.pool,
             );
             self.mapper.merge(&mut self.sources);
@@ -200,9 +206,13 @@ impl OnlineMapper {
         }
         let mut rng = StdRng::seed_from_u64(self.seed);
         let mut pool = self.bearings.clone();
-        let r = self
-            .mapper
-            .run_bearings_complete(&self.poses, &mut pool, &self.complete, &mut rng);
+        let r = self.mapper.run_bearings_complete(
+            &self.poses,
+            &mut pool,
+            &self.complete,
+            &self.said_cut,
+            &mut rng,
+        );
         self.pool = pool;
         self.rounds += r.rounds;
         self.sources = r.sources;
@@ -279,11 +289,12 @@ impl OnlineMapper {
         let mut k = dissolved.iter();
         self.sources
             .retain(|_| !*k.next().expect("one flag per source"));
-        let contradicted = self.mapper.drop_implausible(
+        let contradicted = self.mapper.drop_implausible_cut(
             &mut self.sources,
             &self.poses,
             &self.bearings,
             &self.complete,
+            &self.said_cut,
             &mut self.pool,
         );
         self.removed += contradicted;
