@@ -62,11 +62,7 @@ impl Pairwise for GccPhat {
             for c in 0..n_ch {
                 let dst = &mut unit[(k * n_ch + c) * nb..(k * n_ch + c + 1) * nb];
                 for (u, x) in dst.iter_mut().zip(stft.frame(f, c)) {
-                    let m = x.norm();
-                    // A bin with no energy carries no phase: it stays 0 and votes for nothing.
-                    if m > f32::MIN_POSITIVE {
-                        *u = x / m;
-                    }
+                    *u = super::unit_phasor(*x);
                 }
             }
         }

@@ -43,6 +43,21 @@ pub(crate) fn block_cross(
     }
 }
 
+/// `x / |x|`, or 0 for a bin with no energy (it carries no phase and votes for nothing):
+/// PHAT's whitening. `|x|` is the square root of the sum of squares rather than libm's
+/// `hypot`, whose care against overflow cost 4.5 % of a GCC-PHAT run (`perf`) for values
+/// that cannot overflow here: an STFT of samples in `[-1, 1]`, or a block's sum of their
+/// products, lies many orders of magnitude below `f32::MAX`'s square root.
+#[inline]
+pub(crate) fn unit_phasor(x: Complex32) -> Complex32 {
+    let p = x.re * x.re + x.im * x.im;
+    if p > f32::MIN_POSITIVE {
+        x * (1.0 / p.sqrt())
+    } else {
+        Complex32::default()
+    }
+}
+
 /// The estimator of `config.method` for `array`, `grid`, the band's `bins` of a
 /// `frame_len`-point FFT at `fs` (Hz).
 pub(crate) fn estimator(

@@ -18,8 +18,6 @@
 use std::ops::Range;
 use std::sync::Arc;
 
-use realfft::num_complex::Complex32;
-
 use crate::Scratch;
 use crate::grid::{PairLags, Pairwise, Target};
 use crate::localizer::zeroed;
@@ -60,13 +58,7 @@ impl Pairwise for SrpPhat {
         let coefficients = |_, pair, gr: &mut [f32], gi: &mut [f32], _: &mut [f32]| {
             super::block_cross(stft, frames.clone(), pair, cross);
             for (b, c) in cross.iter().enumerate() {
-                let m = c.norm();
-                // A bin with no energy carries no phase: it votes for nothing.
-                let u = if m > f32::MIN_POSITIVE {
-                    c / m
-                } else {
-                    Complex32::default()
-                };
+                let u = super::unit_phasor(*c);
                 gr[b] = u.re;
                 gi[b] = u.im;
             }
