@@ -149,22 +149,15 @@ pub fn read_wav(path: &Path) -> Result<Audio> {
         // to find the channel, no per-sample capacity check.
         let stride = width * n_ch;
         let whole = bytes.len() / stride;
-        // One loop per format, each channel's bytes at a fixed offset in every frame: no
-        // branch and no slice bounds per sample.
         for (c, ch) in channels.iter_mut().enumerate() {
-            let frames = bytes[..whole * stride].chunks_exact(stride);
-            let at = c * width;
-            if int16 {
-                ch.extend(
-                    frames.map(|f| {
-                        f32::from(i16::from_le_bytes([f[at], f[at + 1]])) * (1.0 / 32768.0)
-                    }),
-                );
-            } else {
-                ch.extend(
-                    frames.map(|f| f32::from_le_bytes([f[at], f[at + 1], f[at + 2], f[at + 3]])),
-                );
-            }
+            ch.extend(bytes[..whole * stride].chunks_exact(stride).map(|f| {
+                let b = &f[c * width..];
+                if int16 {
+                    f32::from(i16::from_le_bytes([b[0], b[1]])) * (1.0 / 32768.0)
+                } else {
+                    f32::from_le_bytes([b[0], b[1], b[2], b[3]])
+                }
+            }));
         }
         read
     } else {
