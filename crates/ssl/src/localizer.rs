@@ -179,8 +179,8 @@ enum Blocks<'a> {
     /// The estimator, keeping the octaves' contributions in the same pass
     /// ([`Scratch::parts`]).
     EstimateWithOctaves,
-    /// The spectra of `blocks` (ascending), one after the other: an octave's share of
-    /// [`Scratch::parts`].
+    /// The spectra of `blocks` (ascending), one after the other: an octave's, read from
+    /// the band's pass ([`SpectrumEstimator::part_spectra`]).
     Stored {
         spectra: &'a [f32],
         blocks: &'a [usize],
