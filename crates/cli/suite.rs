@@ -329,16 +329,7 @@ mod tests {
 
     #[test]
     fn a_scene_with_no_seeds_is_a_clear_error() {
-        let dir = tempfile::tempdir().unwrap();
-        let p = dir.path().join("s.toml");
-        std::fs::write(
-            &p,
-            "fs = 8000\nclip_s = 0.1\n[room]\ndims = [5.0, 4.0, 3.0]\n\
-             absorption = [0.6, 0.6, 0.6, 0.6, 0.6, 0.6]\n[array]\npreset = \"iasm6\"\n\
-             height = 0.8\n[[sources]]\npos = [1.0, 3.0, 1.0]\n[trajectory]\n\
-             poses = [[1.0, 1.0, 0.0]]\n[expect]\nseeds = 0\n",
-        )
-        .unwrap();
+        let (_dir, p) = one_talker("seeds = 0\n");
         let e = format!("{:#}", run_scene(&p, &Settings::default()).unwrap_err());
         assert!(e.contains("s.toml") && e.contains("expect.seeds"), "{e}");
     }

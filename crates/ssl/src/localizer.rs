@@ -262,9 +262,6 @@ pub struct Localizer {
     /// One localizer per octave of [`SslConfig::subband_votes`] (none when it is 0), each
     /// pooling its own bins of this localizer's STFT.
     subbands: Vec<Localizer>,
-    /// Whether the estimator gives the octaves' block spectra in the band's own pass
-    /// ([`SpectrumEstimator::estimate_blocks_parts`]).
-    shared_octaves: bool,
     /// The band's grid direction nearest each of the octaves' (all the octaves' grids are
     /// one).
     octave_dirs: Vec<usize>,
@@ -344,7 +341,6 @@ impl Localizer {
             })
             .collect();
         let mut subbands = Vec::new();
-        let shared_octaves = config.subband_votes > 0 && estimator.estimates_parts();
         if config.subband_votes > 0 {
             let tops = SUBBAND_EDGES_HZ.iter().skip(1).copied().chain([fmax]);
             for (lo, hi) in SUBBAND_EDGES_HZ.iter().zip(tops) {
@@ -387,8 +383,14 @@ impl Localizer {
             wave_phases,
             octave_dirs,
             subbands,
-            shared_octaves,
         })
+    }
+
+    /// Whether the octaves' block spectra come from the band's own pass
+    /// ([`SpectrumEstimator::estimate_blocks_parts`]) rather than from the octave
+    /// localizers.
+    fn shared_octaves(&self) -> bool {
+        !self.subbands.is_empty() && self.estimator.estimates_parts()
     }
 
     /// The array.
@@ -649,7 +651,7 @@ impl Localizer {
         // The N strongest resolved peaks, and the next one: the row is cut when that one
         // passes the thresholds too (the peaks are taken strongest first, so the first N
         // are those of a search for N).
-        let source = if self.shared_octaves {
+        let source = if self.shared_octaves() {
             Blocks::EstimateWithOctaves
         } else {
             Blocks::Estimate
@@ -724,7 +726,7 @@ impl Localizer {
         let mut peaks: Vec<(f64, u32)> = Vec::new();
         for (o, sub) in self.subbands.iter().enumerate() {
             spec.band_into(sub.bins.clone(), &mut octave);
-            let source = if self.shared_octaves && parts.valid {
+            let source = if self.shared_octaves() && parts.valid {
                 self.estimator
                     .part_spectra(o, &self.octave_dirs, scratch, &mut spectra);
                 Blocks::Stored {

@@ -124,6 +124,8 @@ struct Antipodes {
     /// The grid direction of each output slot: the steered half, then their antipodes in
     /// the same order.
     order: Vec<usize>,
+    /// Its inverse: the output slot of each grid direction.
+    slot_of: Vec<usize>,
     start_re: Vec<f32>,
     start_im: Vec<f32>,
     step_re: Vec<f32>,
@@ -294,13 +296,18 @@ impl Music {
         let mut tables: [Vec<f32>; 4] = Default::default();
         self.gather_into(&half, &mut tables);
         let [start_re, start_im, step_re, step_im] = tables;
-        let order = half
+        let order: Vec<usize> = half
             .iter()
             .copied()
             .chain(half.iter().map(|&d| anti(d)))
             .collect();
+        let mut slot_of = vec![0; order.len()];
+        for (slot, &d) in order.iter().enumerate() {
+            slot_of[d] = slot;
+        }
         Some(Antipodes {
             order,
+            slot_of,
             start_re,
             start_im,
             step_re,
@@ -551,17 +558,12 @@ impl SpectrumEstimator for Music {
         let (nd, nb) = (self.n_dirs, s.part_blocks);
         assert!(part < s.part_count, "part {part} was not kept");
         // The sums are in the steered order ([`Antipodes`]).
-        let mut slot_of: Vec<usize> = (0..nd).collect();
-        if let Some(h) = &self.antipodes {
-            for (slot, &d) in h.order.iter().enumerate() {
-                slot_of[d] = slot;
-            }
-        }
+        let slot = |d: usize| self.antipodes.as_ref().map_or(d, |h| h.slot_of[d]);
         let sums = &s.part_sums[part * nb * nd..(part + 1) * nb * nd];
         let out = zeroed(out, nb * dirs.len());
         for (row, out) in sums.chunks_exact(nd).zip(out.chunks_exact_mut(dirs.len())) {
             for (o, &d) in out.iter_mut().zip(dirs) {
-                *o = row[slot_of[d]];
+                *o = row[slot(d)];
             }
         }
     }
@@ -1750,8 +1752,9 @@ mod tests {
             };
             assert!(symmetric, "{el:?} by {az}: halved");
             let mut seen = vec![false; grid.len()];
-            for &d in &h.order {
+            for (slot, &d) in h.order.iter().enumerate() {
                 assert!(!std::mem::replace(&mut seen[d], true), "{d} twice");
+                assert_eq!(h.slot_of[d], slot, "the inverse order");
             }
             assert!(seen.iter().all(|&s| s), "every direction");
             let half = grid.len() / 2;
