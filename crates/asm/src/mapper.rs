@@ -884,11 +884,9 @@ impl Mapper {
     /// than [`IasmConfig::min_observations`] in all, every other stop counting one. Never
     /// with the vote off (the paper profile).
     fn thinly_heard(&self, rays: &[Ray], said_cut: &[bool]) -> bool {
-        let c = &self.config;
-        if c.vote_min_stops == 0 || c.vote_min_thresholded_stops == 0 {
+        let Some(rate) = self.cut_rate() else {
             return false;
-        }
-        let rate = c.vote_min_thresholded_stops as f64 / c.vote_min_stops as f64;
+        };
         let mut stops: Vec<usize> = rays.iter().map(|r| r.stop).collect();
         stops.sort_unstable();
         stops.dedup();
@@ -896,7 +894,16 @@ impl Mapper {
             .iter()
             .map(|&k| if said_cut[k] { rate } else { 1.0 })
             .sum();
-        evidence < c.min_observations as f64 - 1e-9
+        evidence < self.config.min_observations as f64 - 1e-9
+    }
+
+    /// What a stop whose row was cut at `N` weighs against one that heard all it
+    /// reported: the vote's two quorums' exchange rate, `vote_min_thresholded_stops /
+    /// vote_min_stops` (3/5 with the defaults); `None` when either quorum is off.
+    fn cut_rate(&self) -> Option<f64> {
+        let c = &self.config;
+        (c.vote_min_stops > 0 && c.vote_min_thresholded_stops > 0)
+            .then(|| c.vote_min_thresholded_stops as f64 / c.vote_min_stops as f64)
     }
 
     /// Whether the stops that heard nothing near a source at `q` explaining `rays` leave
@@ -1176,7 +1183,11 @@ impl Mapper {
         // a total: every stop alike; only thresholded stops; and cut stops at the exchange
         // rate the first two quorums set between them.
         let (all, thr) = (c.vote_min_stops, c.vote_min_thresholded_stops);
-        let tiers = [(1.0, all), (0.0, thr), (thr as f64 / all as f64, thr)];
+        let tiers = [
+            (1.0, all),
+            (0.0, thr),
+            (self.cut_rate().unwrap_or(0.0), thr),
+        ];
         let (est, rays) =
             tiers
                 .into_iter()
