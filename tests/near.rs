@@ -43,7 +43,16 @@ fn r9_near_sources_below_the_array_are_found_within_a_degree_and_a_half() {
             ..SslConfig::default()
         };
         let survey = sim.survey(&ssl).unwrap();
-        let d = diagnose(&survey.doas_deg, &survey.poses, &sim.truth, 1, 10.0, 5.0).unwrap();
+        let d = diagnose(
+            &survey.doas_deg,
+            &survey.poses,
+            &sim.truth,
+            1,
+            10.0,
+            5.0,
+            None,
+        )
+        .unwrap();
         // 0-1 m and 1-1.5 m: the bands where the real recordings err by 4-5 degrees.
         for b in &d.bands[..2] {
             assert!(b.doas >= 3, "{method}: {d:?}");

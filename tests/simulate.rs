@@ -170,3 +170,83 @@ fn r13_simulate_replaces_its_own_output_whole_and_refuses_other_folders() {
     names.sort();
     assert_eq!(names, ["sim", "small.toml"]);
 }
+
+#[test]
+fn a_kinects_linear_array_on_a_turning_robot_maps_each_talker_on_its_own_side() {
+    // The `two_talkers` room, heard through a Kinect's four microphones on a line along the
+    // heading: each DoA could be its mirror image in the line. The robot turns 25 degrees
+    // per stop as it drives, so only the true side is consistent from stop to stop.
+    let dir = tempdir();
+    let poses: Vec<String> = (0..12)
+        .map(|k| format!("[{:.1}, 2.5, {:.1}]", 0.8 + 0.4 * k as f64, 25.0 * k as f64))
+        .collect();
+    let scene = format!(
+        r#"
+seed = 7
+fs = 16000
+clip_s = 0.6
+snr_db = 30.0
+[room]
+dims = [6.0, 5.0, 3.0]
+rt60 = 0.3
+[array]
+positions = {KINECT}
+height = 0.8
+[[sources]]
+pos = [2.0, 4.0, 0.9]
+signal = "speech_shaped"
+[[sources]]
+pos = [4.5, 1.0, 0.9]
+signal = "speech_shaped"
+[trajectory]
+poses = [{}]
+"#,
+        poses.join(", ")
+    );
+    let (file, out) = (path(&dir, "kt.toml"), path(&dir, "kt"));
+    let array =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/arrays/kinect.toml");
+    std::fs::write(&file, scene).unwrap();
+    let o = iasm(&["simulate", arg(&file), "--out", arg(&out)]);
+    assert!(o.status.success(), "{}", show(&o));
+    for method in ["gcc-phat", "mvdr"] {
+        let o = iasm(&[
+            "map",
+            "--dataset",
+            arg(&out),
+            "--array",
+            arg(&array),
+            "--method",
+            method,
+            "--num",
+            "3",
+            "--json",
+        ]);
+        assert!(o.status.success(), "{}", show(&o));
+        // The user is told what a linear array cannot hear.
+        assert!(
+            String::from_utf8_lossy(&o.stderr).contains("is linear"),
+            "{}",
+            show(&o)
+        );
+        let v = json(&o);
+        let sources = v["sources"].as_array().unwrap();
+        assert_eq!(sources.len(), 2, "{method}: {v}");
+        // The truth is (2.0, 4.0) and (4.5, 1.0); their mirror images in the path
+        // (y = 2.5 at the first stop's heading) would be 1.5 m away from each.
+        assert!(v["ospa"]["total"].as_f64().unwrap() < 0.15, "{method}: {v}");
+        assert!(
+            sources.iter().all(|s| s.get("mirror").is_none()),
+            "{method}: {v}"
+        );
+        assert_eq!(
+            v["params"]["mirror_axis_deg"].as_f64(),
+            Some(0.0),
+            "{method}"
+        );
+    }
+}
+
+/// A Kinect's microphones (m, array frame): a line along the heading.
+const KINECT: &str =
+    "[[-0.113, 0.0, 0.0], [0.036, 0.0, 0.0], [0.076, 0.0, 0.0], [0.113, 0.0, 0.0]]";

@@ -225,7 +225,8 @@ fn row(
         .as_ref()
         .context("the comparison needs ground truth (src_gt* in the data set)")?;
     let n = settings.ssl.num_peaks;
-    let doa = score_doas(&survey.doas_deg, &survey.poses, truth, n, HIT_DEG)?;
+    let mirror = survey.mirror_axis_deg;
+    let doa = score_doas(&survey.doas_deg, &survey.poses, truth, n, HIT_DEG, mirror)?;
     let diagnostics = diagnose(
         &survey.doas_deg,
         &survey.poses,
@@ -233,6 +234,7 @@ fn row(
         n,
         MATCH_DEG,
         HIT_DEG,
+        mirror,
     )?;
     let ospa = evaluate(
         survey,

@@ -70,12 +70,17 @@ impl Session {
         ospa_c: f64,
         ospa_p: f64,
     ) -> Result<Self> {
+        let array = settings.mic_array()?;
+        let config = asm::IasmConfig {
+            mirror_axis_deg: settings.iasm.mirror_axis_deg.or(array.mirror_axis_deg()),
+            ..settings.iasm.clone()
+        };
         Ok(Self {
-            array: settings.mic_array()?,
+            array,
             ssl: settings.ssl.clone(),
             localizers: Vec::new(),
             scratch: Scratch::default(),
-            mapper: OnlineMapper::new(Mapper::new(map, &settings.iasm)?, seed),
+            mapper: OnlineMapper::new(Mapper::new(map, &config)?, seed),
             truth,
             ospa_c,
             ospa_p,

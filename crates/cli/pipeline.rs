@@ -251,6 +251,23 @@ pub struct Survey {
     pub truth: Option<Vec<[f64; 2]>>,
     /// Where the DoAs came from: a table's path, or `ssl:<method>`.
     pub doa_source: String,
+    /// For a linear array, the azimuth of its line (degrees, array frame;
+    /// [`ssl::MicArray::mirror_axis_deg`]): the mapper takes each DoA and its mirror image
+    /// (see [`Survey::mapper_config`]). A DoA table is taken to be in the frame of the
+    /// settings' array.
+    pub mirror_axis_deg: Option<f64>,
+}
+
+/// What a user of a linear array must know, or `None` for any other array.
+pub fn linear_array_note(array: &MicArray) -> Option<String> {
+    array.mirror_axis_deg().map(|axis| {
+        format!(
+            "note: the array {} is linear (its line at {axis:.1} deg): it cannot tell a source at azimuth a from one at {:.1} - a, its mirror image; DoAs are reported between {axis:.1} and {:.1} deg, and the mapper weighs both sides (only a robot that turns tells them apart; a source it cannot place is marked with its mirror position)",
+            array.name(),
+            2.0 * axis,
+            axis + 180.0
+        )
+    })
 }
 
 impl Survey {
@@ -377,6 +394,7 @@ impl Survey {
             cut: None,
             truth,
             doa_source: String::new(),
+            mirror_axis_deg: settings.mic_array()?.mirror_axis_deg(),
         }
         .with_doas(doas_deg, doa_source, cut)
         .with_context(|| format!("poses from {}", pose_path.display()))?;
@@ -435,12 +453,21 @@ impl Survey {
             .collect()
     }
 
-    /// One I-ASM map with `config`, seeded by `seed`.
+    /// `config` as the mapper takes it for this survey: with the linear array's mirror axis
+    /// ([`Survey::mirror_axis_deg`]) unless `config` sets one.
+    pub fn mapper_config(&self, config: &IasmConfig) -> IasmConfig {
+        IasmConfig {
+            mirror_axis_deg: config.mirror_axis_deg.or(self.mirror_axis_deg),
+            ..config.clone()
+        }
+    }
+
+    /// One I-ASM map with `config` (see [`Survey::mapper_config`]), seeded by `seed`.
     ///
     /// # Errors
     /// As [`Mapper::new`] and [`Mapper::run`].
     pub fn map(&self, config: &IasmConfig, seed: u64) -> Result<MapResult> {
-        let mapper = Mapper::new(&self.map, config)?;
+        let mapper = Mapper::new(&self.map, &self.mapper_config(config))?;
         Ok(mapper.run_rows(
             &self.poses,
             &self.doas_rad(),
@@ -543,7 +570,7 @@ pub fn evaluate(
         .map(|&v| {
             let config = IasmConfig {
                 variant: v,
-                ..base.clone()
+                ..survey.mapper_config(base)
             };
             let mapper = Mapper::new(&survey.map, &config)?;
             let res: Vec<Run> = (0..runs as u64)
@@ -724,6 +751,7 @@ impl Simulated {
             cut: Some(rows.iter().map(|r| r.cut).collect()),
             truth: Some(self.truth.clone()),
             doa_source: format!("ssl:{}", ssl.method),
+            mirror_axis_deg: self.array.mirror_axis_deg(),
         })
     }
 
@@ -742,6 +770,7 @@ impl Simulated {
             &self.truth,
             settings.ssl.num_peaks.min(self.truth.len()),
             5.0,
+            survey.mirror_axis_deg,
         )?;
         let map = survey.map(&settings.iasm, seed)?;
         let ospa = ospa(&map.positions(), &self.truth, 1.0, 1.0);

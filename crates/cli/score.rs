@@ -6,11 +6,15 @@
 //! `|wrap(bearing - atan2(s_y - y, s_x - x))| <= tol`. A missing DoA is a miss. The score is
 //! hits / (N x recordings): 1 is perfect; a table of random bearings scores about the share
 //! of the circle that the sources' tolerance windows cover.
+//!
+//! For a linear array (`mirror_axis_deg`: its line's azimuth, [`ssl::MicArray::mirror_axis_deg`])
+//! a DoA and its mirror image in the line are one: both the DoA and the truth are folded to
+//! one side of the line ([`ssl::fold_azimuth`]) before they are compared.
 
 use anyhow::{Result, ensure};
 use asm::Pose;
 use serde::Serialize;
-use ssl::wrap_deg;
+use ssl::{fold_azimuth, wrap_deg};
 
 use crate::dataset::Table;
 
@@ -38,7 +42,8 @@ fn same_length(doas: &Table, poses: &[Pose]) -> Result<()> {
 }
 
 /// Scores the first `n` DoAs of every row of `doas` (degrees, array frame) heard at
-/// `poses`, against `sources` (m).
+/// `poses`, against `sources` (m); for a linear array at `mirror_axis_deg`, folded (see
+/// the module docs).
 ///
 /// # Errors
 /// If the table and the poses differ in length, or nothing is to be scored.
@@ -48,6 +53,7 @@ pub fn score_doas(
     sources: &[[f64; 2]],
     n: usize,
     tol_deg: f64,
+    mirror_axis_deg: Option<f64>,
 ) -> Result<DoaScore> {
     same_length(doas, poses)?;
     ensure!(
@@ -56,13 +62,13 @@ pub fn score_doas(
     );
     let (mut hits, mut err_sum) = (0usize, 0.0);
     for (row, pose) in doas.iter().zip(poses) {
-        for az in row.iter().take(n).flatten() {
-            let bearing = wrap_deg(az + pose.theta_deg());
+        for &az in row.iter().take(n).flatten() {
+            let az = fold_azimuth(az, mirror_axis_deg);
             let best = sources
                 .iter()
                 .map(|s| {
-                    let truth = (s[1] - pose.y).atan2(s[0] - pose.x).to_degrees();
-                    wrap_deg(bearing - truth).abs()
+                    let truth = pose.bearing_to(*s).to_degrees() - pose.theta_deg();
+                    wrap_deg(az - fold_azimuth(truth, mirror_axis_deg)).abs()
                 })
                 .fold(f64::INFINITY, f64::min);
             if best <= tol_deg {
@@ -121,7 +127,8 @@ pub struct Diagnostics {
 /// Diagnoses the first `n` DoAs of every row of `doas` (degrees, array frame) heard at
 /// `poses` against `sources` (m): each DoA is attributed to the source of nearest bearing
 /// if within `match_deg`, and its error filed under that source's distance; recall counts
-/// sources within 3 m found within `tol_deg`.
+/// sources within 3 m found within `tol_deg`; for a linear array at `mirror_axis_deg`,
+/// folded (see the module docs).
 ///
 /// # Errors
 /// As [`score_doas`].
@@ -132,6 +139,7 @@ pub fn diagnose(
     n: usize,
     match_deg: f64,
     tol_deg: f64,
+    mirror_axis_deg: Option<f64>,
 ) -> Result<Diagnostics> {
     same_length(doas, poses)?;
     let axis_dist = |a: f64| {
@@ -146,10 +154,16 @@ pub fn diagnose(
             .map(|s| {
                 let world = pose.bearing_to(*s).to_degrees();
                 let dist = (s[0] - pose.x).hypot(s[1] - pose.y);
-                (wrap_deg(world - pose.theta_deg()), dist)
+                let az = fold_azimuth(world - pose.theta_deg(), mirror_axis_deg);
+                (wrap_deg(az), dist)
             })
             .collect();
-        let azs: Vec<f64> = row.iter().take(n).flatten().copied().collect();
+        let azs: Vec<f64> = row
+            .iter()
+            .take(n)
+            .flatten()
+            .map(|&az| fold_azimuth(az, mirror_axis_deg))
+            .collect();
         for &az in &azs {
             let Some(&(t, dist)) = truth.iter().min_by(|a, b| {
                 wrap_deg(az - a.0)
@@ -224,14 +238,49 @@ mod tests {
         let poses = [Pose::from_degrees(0.0, 0.0, 90.0)];
         let sources = [[0.0, 5.0], [-5.0, 0.0]];
         let doas = vec![vec![Some(3.0), Some(84.0), None, Some(-170.0)]];
-        let s = score_doas(&doas, &poses, &sources, 4, 5.0).unwrap();
+        let s = score_doas(&doas, &poses, &sources, 4, 5.0, None).unwrap();
         // 3 -> hit (3 deg off); 84 -> miss (6 off); missing -> miss; -170 -> miss.
         assert_eq!((s.hits, s.total), (1, 4));
         assert!((s.score - 0.25).abs() < 1e-12);
         assert!((s.mean_hit_error_deg - 3.0).abs() < 1e-9);
         // Only the first N count.
-        assert_eq!(score_doas(&doas, &poses, &sources, 1, 5.0).unwrap().hits, 1);
-        assert_eq!(score_doas(&doas, &poses, &sources, 2, 6.5).unwrap().hits, 2);
+        assert_eq!(
+            score_doas(&doas, &poses, &sources, 1, 5.0, None)
+                .unwrap()
+                .hits,
+            1
+        );
+        assert_eq!(
+            score_doas(&doas, &poses, &sources, 2, 6.5, None)
+                .unwrap()
+                .hits,
+            2
+        );
+    }
+
+    #[test]
+    fn a_linear_arrays_doa_hits_a_source_on_either_side_of_its_line() {
+        // Facing +x, a line along the heading (axis 0): a source at (3, -3) (azimuth -45)
+        // is heard at +45, its mirror image. Folded, it is a hit; without the axis, a miss.
+        let poses = [Pose::from_degrees(0.0, 0.0, 0.0)];
+        let doas = vec![vec![Some(45.0)]];
+        let sources = [[3.0, -3.0]];
+        assert_eq!(
+            score_doas(&doas, &poses, &sources, 1, 5.0, Some(0.0))
+                .unwrap()
+                .hits,
+            1
+        );
+        assert_eq!(
+            score_doas(&doas, &poses, &sources, 1, 5.0, None)
+                .unwrap()
+                .hits,
+            0
+        );
+        let d = diagnose(&doas, &poses, &sources, 1, 10.0, 5.0, Some(0.0)).unwrap();
+        // 4.24 m away: the last band, and no pair within 3 m.
+        assert_eq!((d.bands[4].doas, d.near_pairs), (1, 0));
+        assert!(d.bands[4].mean_abs_err_deg < 1e-9);
     }
 
     #[test]
@@ -239,7 +288,7 @@ mod tests {
         // Facing -x (theta 180); a source behind-left at (-5, -0.1): world bearing ~ -178.9.
         let poses = [Pose::from_degrees(0.0, 0.0, 180.0)];
         let doas = vec![vec![Some(2.0)]]; // world bearing 182 = -178
-        let s = score_doas(&doas, &poses, &[[-5.0, -0.1]], 1, 5.0).unwrap();
+        let s = score_doas(&doas, &poses, &[[-5.0, -0.1]], 1, 5.0, None).unwrap();
         assert_eq!(s.hits, 1);
     }
 
@@ -252,7 +301,7 @@ mod tests {
         let poses = [Pose::from_degrees(0.0, 0.0, 0.0)];
         let sources = [[0.8, 0.8], [-3.0, 0.0]];
         let doas = vec![vec![Some(48.0), Some(-178.0), Some(-90.0)]];
-        let d = diagnose(&doas, &poses, &sources, 3, 10.0, 5.0).unwrap();
+        let d = diagnose(&doas, &poses, &sources, 3, 10.0, 5.0, None).unwrap();
         let b: Vec<(usize, f64, f64)> = d
             .bands
             .iter()
@@ -272,13 +321,13 @@ mod tests {
         // Only the near source is within 3 m (the far one is at exactly 3 m), and a DoA
         // 3 degrees off finds it.
         assert_eq!((d.near_pairs, d.recall_3m), (1, 1.0));
-        let d = diagnose(&doas, &poses, &sources, 3, 10.0, 2.0).unwrap();
+        let d = diagnose(&doas, &poses, &sources, 3, 10.0, 2.0, None).unwrap();
         assert_eq!(d.recall_3m, 0.0);
     }
 
     #[test]
     fn lengths_must_match() {
         let poses = [Pose::from_degrees(0.0, 0.0, 0.0)];
-        assert!(score_doas(&vec![], &poses, &[[1.0, 0.0]], 4, 5.0).is_err());
+        assert!(score_doas(&vec![], &poses, &[[1.0, 0.0]], 4, 5.0, None).is_err());
     }
 }

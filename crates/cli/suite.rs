@@ -86,8 +86,10 @@ impl SuiteReport {
 
     /// The report as a table.
     pub fn table(&self) -> String {
+        // The scene column as wide as its longest name, so that the columns stay aligned.
+        let w = self.rows.iter().map(|r| r.scene.len()).fold(22, usize::max);
         let mut s = format!(
-            "{:<22} {:<9} {:>5} {:>7} {:>2} {:>9} {:>7} {:>6} {:>9} {:>9}  {}\n",
+            "{:<w$} {:<9} {:>5} {:>7} {:>2} {:>9} {:>7} {:>6} {:>9} {:>9}  {}\n",
             "scene",
             "method",
             "stops",
@@ -113,7 +115,7 @@ impl SuiteReport {
                 format!("{lo}-{hi}")
             };
             s.push_str(&format!(
-                "{:<22} {:<9} {:>5} {:>7} {:>2} {:>9.3} {:>7} {:>5.0}% {:>9.3} {:>9.3}  {}\n",
+                "{:<w$} {:<9} {:>5} {:>7} {:>2} {:>9.3} {:>7} {:>5.0}% {:>9.3} {:>9.3}  {}\n",
                 r.scene,
                 r.method,
                 r.stops,

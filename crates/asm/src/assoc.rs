@@ -11,6 +11,10 @@
 //!
 //! Angle differences are wrapped to `(-pi, pi]`, so a DoA at +179 degrees explains a source
 //! at -179 degrees (the authors' code compares unwrapped angles and misses that case).
+//!
+//! DoAs of a linear array come in mirror pairs ([`associate_mirrored`]): a row holds each
+//! DoA and its mirror image in the array's line, and a source that takes one takes both,
+//! since they are one peak heard twice.
 
 use crate::Pose;
 use crate::wrap_rad;
@@ -24,6 +28,9 @@ pub struct Ray {
     pub from: [f64; 2],
     /// The DoA's world bearing (rad).
     pub bearing: f64,
+    /// For a linear array's DoA, its mirror image's world bearing (rad), taken out of the
+    /// row with it ([`associate_mirrored`]).
+    pub twin: Option<f64>,
 }
 
 impl Ray {
@@ -33,7 +40,25 @@ impl Ray {
         let to = (point[1] - self.from[1]).atan2(point[0] - self.from[0]);
         wrap_rad(to - self.bearing).abs()
     }
+
+    /// Puts the DoA (and its mirror image, if any) back into its stop's row of `bearings`:
+    /// a source that no longer holds it gives it back for the others.
+    pub fn give_back(&self, bearings: &mut [Vec<f64>]) {
+        bearings[self.stop].push(self.bearing);
+        bearings[self.stop].extend(self.twin);
+    }
 }
+
+/// The world bearing of the mirror image of the DoA at world bearing `bearing`, heard at
+/// `pose` by a linear array whose line lies at azimuth `axis` (rad, array frame):
+/// `2 (theta + axis) - bearing`. `None` when the two coincide (a DoA along the line).
+pub fn mirror_bearing(pose: &Pose, bearing: f64, axis: f64) -> Option<f64> {
+    let twin = wrap_rad(2.0 * (pose.theta + axis) - bearing);
+    (wrap_rad(twin - bearing).abs() > TWIN_TOL).then_some(twin)
+}
+
+/// A bearing within this (rad) of a DoA's computed mirror image is that image.
+const TWIN_TOL: f64 = 1e-9;
 
 /// Removes from `bearings` (per stop, world frame, rad) every DoA that a source at
 /// `source` explains under the paper's rule (see the module docs), and returns them as
@@ -47,6 +72,22 @@ pub fn associate(
     bearings: &mut [Vec<f64>],
     gamma: f64,
 ) -> Vec<Ray> {
+    associate_mirrored(source, poses, bearings, gamma, None)
+}
+
+/// [`associate`] for DoAs that may come in mirror pairs: with `axis` (a linear array's line,
+/// rad, array frame; see [`mirror_bearing`]), the DoA explained at a stop takes its mirror
+/// image out of the row too, into [`Ray::twin`].
+///
+/// # Panics
+/// As [`associate`].
+pub fn associate_mirrored(
+    source: [f64; 2],
+    poses: &[Pose],
+    bearings: &mut [Vec<f64>],
+    gamma: f64,
+    axis: Option<f64>,
+) -> Vec<Ray> {
     assert_eq!(poses.len(), bearings.len(), "one row of bearings per pose");
     let mut rays = Vec::new();
     for (stop, (p, row)) in poses.iter().zip(bearings.iter_mut()).enumerate() {
@@ -59,10 +100,16 @@ pub fn associate(
         if let Some((n, d)) = best
             && d < gamma
         {
+            let bearing = row.remove(n);
+            let twin = axis
+                .and_then(|a| mirror_bearing(p, bearing, a))
+                .and_then(|t| row.iter().position(|&b| wrap_rad(b - t).abs() <= TWIN_TOL))
+                .map(|i| row.remove(i));
             rays.push(Ray {
                 stop,
                 from: p.position(),
-                bearing: row.remove(n),
+                bearing,
+                twin,
             });
         }
     }
@@ -117,6 +164,30 @@ mod tests {
         assert_eq!(b[0], vec![GAMMA]);
         // A stop with no DoA left explains nothing.
         assert!(associate([5.0, 0.0], &poses, &mut b[1..], GAMMA).is_empty());
+    }
+
+    #[test]
+    fn a_linear_arrays_doa_takes_its_mirror_image_with_it() {
+        // A line along the heading (axis 0), robot heading 90 degrees at the origin: a DoA
+        // at world bearing 45 degrees (array frame -45) has its mirror at 2 * 90 - 45 =
+        // 135 degrees. A source at (1, 1) takes the first and its mirror; the other DoA
+        // (-30 degrees) and its own mirror (210 = -150 degrees) stay.
+        let poses = [Pose::new(0.0, 0.0, deg(90.0))];
+        let twin = |b: f64| mirror_bearing(&poses[0], deg(b), 0.0).unwrap();
+        assert!((twin(45.0) - deg(135.0)).abs() < 1e-12);
+        let mut b = vec![vec![deg(45.0), twin(45.0), deg(-30.0), twin(-30.0)]];
+        let rays = associate_mirrored([1.0, 1.0], &poses, &mut b, GAMMA, Some(0.0));
+        assert_eq!(rays.len(), 1);
+        assert_eq!(
+            (rays[0].bearing, rays[0].twin),
+            (deg(45.0), Some(twin(45.0)))
+        );
+        assert_eq!(b[0], vec![deg(-30.0), twin(-30.0)]);
+        // Given back, both return.
+        rays[0].give_back(&mut b);
+        assert_eq!(b[0].len(), 4);
+        // A DoA along the line is its own mirror image.
+        assert_eq!(mirror_bearing(&poses[0], deg(90.0), 0.0), None);
     }
 
     #[test]

@@ -15,6 +15,14 @@ pub enum ConfigError {
         /// Its value.
         value: f64,
     },
+    /// A parameter that must be finite is not.
+    #[error("{name} must be finite, got {value}")]
+    NotFinite {
+        /// The parameter.
+        name: &'static str,
+        /// Its value.
+        value: f64,
+    },
     /// A fraction outside `(0, 1]`.
     #[error("{name} must be in (0, 1], got {value}")]
     Fraction {

@@ -325,6 +325,17 @@ pub struct IasmConfig {
     /// (`speech_one_rt03_moved`, GCC-PHAT: 0.206 -> 0.047 m), the suite and arrangement II
     /// unchanged.
     pub beyond_map_m: f64,
+    /// For DoAs from a linear array: the azimuth of its line (degrees, array frame; the
+    /// `ssl` crate's `MicArray::mirror_axis_deg`). Such an array hears the angle to its
+    /// line only, so each DoA `a` is as much `2 * axis - a`, its mirror image, and the
+    /// mapper takes both: the particles weigh both bearings, a source that explains one
+    /// takes the other out of the row with it ([`crate::assoc::associate_mirrored`]), and
+    /// only a robot whose heading changes between stops tells the source from its image
+    /// (from one line of stops along the array's line the two are alike: such a source is
+    /// reported with [`Source::mirror`]). `None` (the default, both profiles): the array
+    /// is not linear, and a DoA is one bearing (and the field is left out of JSON).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mirror_axis_deg: Option<f64>,
 }
 
 /// Named sets of I-ASM parameters.
@@ -395,6 +406,7 @@ impl Default for IasmConfig {
             absence_ratio: 1.5,
             min_range_m: 0.3,
             beyond_map_m: 0.5,
+            mirror_axis_deg: None,
         }
     }
 }
@@ -445,6 +457,12 @@ impl IasmConfig {
                 return Err(ConfigError::NotPositive { name, value });
             }
         }
+        if let Some(value) = self.mirror_axis_deg.filter(|a| !a.is_finite()) {
+            return Err(ConfigError::NotFinite {
+                name: "mirror_axis_deg",
+                value,
+            });
+        }
         for (name, value) in [
             ("min_pts_frac", self.min_pts_frac),
             ("resample_frac", self.resample_frac),
@@ -491,6 +509,12 @@ pub struct Source {
     /// Whether the position was refined by bearing least squares (see
     /// [`IasmConfig::refine`]).
     pub refined: bool,
+    /// For a linear array's DoAs ([`IasmConfig::mirror_axis_deg`]): where the mirror images
+    /// of its DoAs meet, when they fit nearly as well as its own (the robot's headings did
+    /// not change enough between the stops that heard it to tell the two apart). The
+    /// source may be there instead. `None` otherwise.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mirror: Option<[f64; 2]>,
 }
 
 /// The result of one I-ASM run.
@@ -539,6 +563,8 @@ pub struct Mapper {
     gamma: f64,
     /// DoA standard deviation (rad).
     sigma: f64,
+    /// A linear array's line (rad, array frame; [`IasmConfig::mirror_axis_deg`]).
+    mirror: Option<f64>,
 }
 
 /// What one filtering round ends with.
@@ -595,7 +621,100 @@ impl Mapper {
             resample_below: (config.resample_frac * m as f64).ceil(),
             gamma: config.gamma_sigmas * sigma,
             sigma,
+            mirror: config.mirror_axis_deg.map(f64::to_radians),
         })
+    }
+
+    /// [`crate::assoc::associate_mirrored`] with this mapper's association range and
+    /// mirror axis: removes from `bearings` the DoAs a source at `source` explains (with
+    /// their mirror images, for a linear array) and returns them as rays.
+    ///
+    /// # Panics
+    /// If `poses` and `bearings` differ in length.
+    pub fn associate(
+        &self,
+        source: [f64; 2],
+        poses: &[Pose],
+        bearings: &mut [Vec<f64>],
+    ) -> Vec<Ray> {
+        crate::assoc::associate_mirrored(source, poses, bearings, self.gamma, self.mirror)
+    }
+
+    /// One stop's DoAs (array-frame azimuths, rad) as world bearings, non-finite ones
+    /// dropped; for a linear array, each followed by its mirror image
+    /// ([`IasmConfig::mirror_axis_deg`]).
+    pub fn stop_bearings(&self, pose: &Pose, doas_rad: &[f64]) -> Vec<f64> {
+        let mut row = Vec::with_capacity(2 * doas_rad.len());
+        for &a in doas_rad.iter().filter(|a| a.is_finite()) {
+            let b = pose.world_bearing(a);
+            row.push(b);
+            row.extend(
+                self.mirror
+                    .and_then(|axis| crate::assoc::mirror_bearing(pose, b, axis)),
+            );
+        }
+        row
+    }
+
+    /// How many DoAs `rows` (world bearings, one row per pose) hold, a mirror pair
+    /// counting once.
+    pub(crate) fn unexplained(&self, poses: &[Pose], rows: &[Vec<f64>]) -> usize {
+        poses
+            .iter()
+            .zip(rows)
+            .map(|(p, r)| self.doas_in(p, r))
+            .sum()
+    }
+
+    /// With DoAs from a linear array ([`IasmConfig::mirror_axis_deg`]), sets each source's
+    /// [`Source::mirror`]: where the mirror images of its DoAs meet, when that is more than
+    /// [`IasmConfig::merge_dist_m`] away, within the map, every image ray fits there
+    /// within `2 sigma`, and their squared misses in units of `sigma` sum to less than
+    /// [`MIRROR_CHI2`] more than the source's own. A DoA along the array's line is its own
+    /// image and counts for both.
+    pub(crate) fn mark_mirrors(&self, sources: &mut [Source]) {
+        if self.mirror.is_none() {
+            return;
+        }
+        for s in sources {
+            let images: Vec<Ray> = s
+                .rays
+                .iter()
+                .map(|r| Ray {
+                    bearing: r.twin.unwrap_or(r.bearing),
+                    twin: Some(r.bearing),
+                    ..*r
+                })
+                .collect();
+            let cost = |q: [f64; 2], rays: &[Ray]| -> f64 {
+                rays.iter().map(|r| (r.miss(q) / self.sigma).powi(2)).sum()
+            };
+            s.mirror = least_squares_crossing(&images)
+                .and_then(|start| fit_bearings(start, &images, self.sigma))
+                .filter(|(q, kept)| {
+                    kept.len() == images.len()
+                        && (q[0] - s.x).hypot(q[1] - s.y) > self.config.merge_dist_m
+                        && self.within_bounds(*q, 0.0)
+                        && cost(*q, &images) < cost([s.x, s.y], &s.rays) + MIRROR_CHI2
+                })
+                .map(|(q, _)| q);
+        }
+    }
+
+    /// How many DoAs a row of world bearings holds: a mirror pair
+    /// ([`Mapper::stop_bearings`]) counts once.
+    fn doas_in(&self, pose: &Pose, row: &[f64]) -> usize {
+        let Some(axis) = self.mirror else {
+            return row.len();
+        };
+        let twins = row
+            .iter()
+            .filter(|&&b| {
+                crate::assoc::mirror_bearing(pose, b, axis)
+                    .is_some_and(|t| row.iter().any(|&o| wrap_rad(o - t).abs() <= 1e-9))
+            })
+            .count();
+        row.len() - twins / 2
     }
 
     /// Particles per round, `M`.
@@ -606,11 +725,6 @@ impl Mapper {
     /// The parameters.
     pub fn config(&self) -> &IasmConfig {
         &self.config
-    }
-
-    /// The association range `gamma` (rad).
-    pub(crate) fn gamma(&self) -> f64 {
-        self.gamma
     }
 
     /// The DoA standard deviation (rad).
@@ -665,10 +779,13 @@ impl Mapper {
             });
         }
         let mut bearings = self.world_bearings_cut(poses, doas_rad, cut)?;
-        let complete: Vec<bool> = bearings
+        let complete: Vec<bool> = doas_rad
             .iter()
             .enumerate()
-            .map(|(k, row)| self.complete(row.len(), cut.map(|c| c[k])))
+            .map(|(k, row)| {
+                let heard = row.iter().filter(|a| a.is_finite()).count();
+                self.complete(heard, cut.map(|c| c[k]))
+            })
             .collect();
         let said_cut = cut.map_or_else(|| vec![false; poses.len()], <[bool]>::to_vec);
         Ok(self.run_bearings_complete(poses, &mut bearings, &complete, &said_cut, rng))
@@ -685,7 +802,11 @@ impl Mapper {
         bearings: &mut [Vec<f64>],
         rng: &mut impl Rng,
     ) -> MapResult {
-        let complete = self.complete_by_length(bearings);
+        let complete: Vec<bool> = poses
+            .iter()
+            .zip(bearings.iter())
+            .map(|(p, row)| self.complete(self.doas_in(p, row), None))
+            .collect();
         self.run_bearings_complete(poses, bearings, &complete, &vec![false; poses.len()], rng)
     }
 
@@ -751,11 +872,12 @@ impl Mapper {
         let removed =
             self.drop_implausible_cut(&mut sources, poses, &heard, complete, said_cut, bearings);
         self.merge(&mut sources);
+        self.mark_mirrors(&mut sources);
         MapResult {
             sources,
             rounds,
             particles: self.m,
-            unexplained: bearings.iter().map(Vec::len).sum(),
+            unexplained: self.unexplained(poses, bearings),
             unexplained_bearings: bearings.to_vec(),
             removed,
         }
@@ -849,7 +971,7 @@ impl Mapper {
             let kept = *k.next().expect("one flag per source");
             if !kept {
                 for r in s.rays.drain(..) {
-                    bearings[r.stop].push(r.bearing);
+                    r.give_back(bearings);
                 }
             }
             kept
@@ -1022,12 +1144,7 @@ impl Mapper {
         Ok(doas_rad
             .iter()
             .zip(poses)
-            .map(|(row, p)| {
-                row.iter()
-                    .filter(|a| a.is_finite())
-                    .map(|&a| p.world_bearing(a))
-                    .collect()
-            })
+            .map(|(row, p)| self.stop_bearings(p, row))
             .collect())
     }
 
@@ -1076,7 +1193,7 @@ impl Mapper {
             Variant::Ws => weighted_mean,
             Variant::Ca | Variant::Wdp => mean(&cluster),
         };
-        let mut rays = crate::assoc::associate(est, poses, bearings, self.gamma);
+        let mut rays = self.associate(est, poses, bearings);
         if rays.is_empty() {
             return Round::NothingExplained;
         }
@@ -1105,6 +1222,7 @@ impl Mapper {
             cluster,
             rays,
             refined,
+            mirror: None,
         })
     }
 
@@ -1226,6 +1344,7 @@ impl Mapper {
             cluster: cloud,
             rays,
             refined: true,
+            mirror: None,
         })
     }
 }
@@ -1319,7 +1438,7 @@ impl Mapper {
         // its DoAs back and the next is tried.
         proposals.sort_by(|a, b| b.1.total_cmp(&a.1));
         for &(q, _) in &proposals {
-            let mut rays = crate::assoc::associate(q, poses, bearings, self.gamma);
+            let mut rays = self.associate(q, poses, bearings);
             let est = refit(q, &mut rays, self.sigma, bearings).unwrap_or(q);
             let kept = rays.iter().filter(|r| counts[r.stop] > 0.0);
             let enough = quorum(kept.clone().map(|r| counts[r.stop]).sum(), kept.count());
@@ -1327,7 +1446,7 @@ impl Mapper {
                 return Some((est, rays));
             }
             for r in rays {
-                bearings[r.stop].push(r.bearing);
+                r.give_back(bearings);
             }
         }
         None
@@ -1455,11 +1574,39 @@ pub(crate) fn refit(
     rays.retain(|r| {
         let kept = *k.next().expect("one flag per ray");
         if !kept {
-            bearings[r.stop].push(r.bearing);
+            r.give_back(bearings);
         }
         kept
     });
     Some(p)
+}
+
+/// A source's mirror image ([`Source::mirror`]) is reported when its image rays' squared
+/// misses (in units of `sigma`) sum to less than this more than the source's own: the
+/// image is then at least `exp(-9 / 2)`, about 1/90, as likely under the mapper's Gaussian
+/// DoA model, the three-sigma rule for one number. A robot that turns by 10 degrees
+/// between the stops that hear a source moves the image rays by 20: at `sigma` = 5
+/// degrees, 16 per ray.
+pub const MIRROR_CHI2: f64 = 9.0;
+
+/// The point nearest every ray's line in the least-squares sense (perpendicular
+/// distances), or `None` when the lines are (nearly) parallel: a start for
+/// [`fit_bearings`] where no estimate is at hand.
+fn least_squares_crossing(rays: &[Ray]) -> Option<[f64; 2]> {
+    let (mut a11, mut a12, mut a22, mut b1, mut b2) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for r in rays {
+        let (c, s) = (r.bearing.cos(), r.bearing.sin());
+        // I - d d^T, the projection across the ray.
+        let (p11, p12, p22) = (1.0 - c * c, -c * s, 1.0 - s * s);
+        a11 += p11;
+        a12 += p12;
+        a22 += p22;
+        b1 += p11 * r.from[0] + p12 * r.from[1];
+        b2 += p12 * r.from[0] + p22 * r.from[1];
+    }
+    let det = a11 * a22 - a12 * a12;
+    (det.abs() > 1e-9 * (a11 + a22).powi(2))
+        .then(|| [(a22 * b1 - a12 * b2) / det, (a11 * b2 - a12 * b1) / det])
 }
 
 /// The position that minimises the squared wrapped angles between `rays` and the bearings
@@ -1601,6 +1748,97 @@ mod tests {
         (map, poses, doas)
     }
 
+    /// `doas` as a linear array along the heading hears them: each azimuth on the
+    /// counter-clockwise side of its line (`[0, pi]`), the mirror image of the true one
+    /// for a source on the right.
+    fn folded(doas: &[Vec<f64>]) -> Vec<Vec<f64>> {
+        doas.iter()
+            .map(|row| row.iter().map(|a| wrap_rad(*a).abs()).collect())
+            .collect()
+    }
+
+    #[test]
+    fn a_robot_that_turns_tells_a_linear_arrays_sources_from_their_mirror_images() {
+        // Two sources, one on each side of the path; the heading turns 0.3 rad per stop.
+        let truth = [[1.5, 1.5], [4.0, -1.2]];
+        let (map, poses, doas) = scene(&truth, 12);
+        let config = IasmConfig {
+            mirror_axis_deg: Some(0.0),
+            ..IasmConfig::default()
+        };
+        let mapper = Mapper::new(&map, &config).unwrap();
+        for seed in 0..3 {
+            let r = mapper
+                .run(&poses, &folded(&doas), &mut StdRng::seed_from_u64(seed))
+                .unwrap();
+            let found = r.positions();
+            assert_eq!(found.len(), 2, "seed {seed}: {found:?}");
+            for t in truth {
+                assert!(
+                    found
+                        .iter()
+                        .any(|f| (f[0] - t[0]).hypot(f[1] - t[1]) < 0.05),
+                    "seed {seed}: {t:?} not in {found:?}"
+                );
+            }
+            // The images' rays do not meet: nothing is marked, and nothing is left over.
+            assert!(r.sources.iter().all(|s| s.mirror.is_none()), "seed {seed}");
+            assert_eq!(r.unexplained, 0, "seed {seed}");
+        }
+    }
+
+    #[test]
+    fn a_straight_run_leaves_a_linear_arrays_source_and_its_mirror_image_alike() {
+        // Heading 0 at every stop along y = 0: the mirror image of (3, 1.5) is (3, -1.5),
+        // and the rays of the two meet equally well. One source, marked with the other.
+        let (map, _, _) = scene(&[], 2);
+        let poses: Vec<Pose> = (0..9)
+            .map(|i| Pose::new(0.75 * i as f64, 0.0, 0.0))
+            .collect();
+        let doas: Vec<Vec<f64>> = poses
+            .iter()
+            .map(|p| vec![p.bearing_to([3.0, 1.5])])
+            .collect();
+        let config = IasmConfig {
+            mirror_axis_deg: Some(0.0),
+            ..IasmConfig::default()
+        };
+        let r = Mapper::new(&map, &config)
+            .unwrap()
+            .run(&poses, &doas, &mut StdRng::seed_from_u64(SEED))
+            .unwrap();
+        assert_eq!(r.sources.len(), 1, "{:?}", r.positions());
+        let s = &r.sources[0];
+        let mirror = s
+            .mirror
+            .expect("a straight run cannot tell the sides apart");
+        assert!(
+            (s.x - 3.0).abs() < 0.05 && (s.y.abs() - 1.5).abs() < 0.05,
+            "{s:?}"
+        );
+        assert!(
+            (mirror[0] - 3.0).abs() < 0.05 && (mirror[1] + s.y).abs() < 0.05,
+            "{mirror:?}"
+        );
+        // Each row's DoA and its image were one DoA.
+        assert_eq!(r.unexplained, 0);
+    }
+
+    #[test]
+    fn a_mirror_axis_must_be_finite() {
+        let bad = IasmConfig {
+            mirror_axis_deg: Some(f64::NAN),
+            ..IasmConfig::default()
+        };
+        assert!(matches!(
+            bad.validate(),
+            Err(ConfigError::NotFinite {
+                name: "mirror_axis_deg",
+                ..
+            })
+        ));
+    }
+
     /// A mapper of the ghost surveys' open 11 x 8 m room, N = 3, otherwise `config`.
     fn ghost_mapper(config: IasmConfig) -> Mapper {
         let map = OccupancyMap::new(220, 160, 0.05, [-1.0, -4.0], vec![Cell::Free; 220 * 160]);
@@ -1643,6 +1881,7 @@ mod tests {
                 stop: k,
                 from: poses[k].position(),
                 bearing: poses[k].bearing_to(q),
+                twin: None,
             })
             .collect();
         Source {
@@ -1655,6 +1894,7 @@ mod tests {
             cluster: Vec::new(),
             rays,
             refined: true,
+            mirror: None,
         }
     }
 
@@ -2384,6 +2624,7 @@ mod tests {
             cluster: vec![[x, y]],
             rays: vec![],
             refined: false,
+            mirror: None,
         };
         let mut v = vec![s(0.0, 0.0), s(0.3, 0.0), s(3.0, 0.0)];
         merge_close(&mut v, 0.5);
@@ -2399,6 +2640,7 @@ mod tests {
             stop,
             from,
             bearing,
+            twin: None,
         };
         let rays: Vec<Ray> = [[0.0, 0.0], [1.0, -1.0], [3.5, -0.5], [4.0, 0.0]]
             .iter()

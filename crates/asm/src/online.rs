@@ -155,13 +155,10 @@ impl OnlineMapper {
                 n: self.mapper.config().num_doas,
             });
         }
-        let row: Vec<f64> = doas_rad
-            .iter()
-            .filter(|a| a.is_finite())
-            .map(|&a| pose.world_bearing(a))
-            .collect();
+        let heard = doas_rad.iter().filter(|a| a.is_finite()).count();
+        let row = self.mapper.stop_bearings(&pose, doas_rad);
         self.poses.push(pose);
-        self.complete.push(self.mapper.complete(row.len(), cut));
+        self.complete.push(self.mapper.complete(heard, cut));
         self.said_cut.push(cut == Some(true));
         self.bearings.push(row.clone());
         self.pool.push(row);
@@ -240,19 +237,21 @@ impl OnlineMapper {
         let c = self.mapper.config();
         let (refine, needed, variant, sigma_p) =
             (c.refine, c.min_observations, c.variant, c.sigma_p_m);
-        let (gamma, sigma) = (self.mapper.gamma(), self.mapper.sigma());
+        let sigma = self.mapper.sigma();
         let mut order: Vec<usize> = (0..self.sources.len()).collect();
         order.sort_by_key(|&i| std::cmp::Reverse(self.sources[i].rays.len()));
         for s in &mut self.sources {
             for r in s.rays.drain(..) {
-                self.pool[r.stop].push(r.bearing);
+                r.give_back(&mut self.pool);
             }
         }
         let mut taken = 0;
         let mut dissolved = vec![false; self.sources.len()];
         for i in order {
             let s = &mut self.sources[i];
-            let mut rays = crate::assoc::associate([s.x, s.y], &self.poses, &mut self.pool, gamma);
+            let mut rays = self
+                .mapper
+                .associate([s.x, s.y], &self.poses, &mut self.pool);
             if let Some(new) = rays.iter().find(|r| r.stop == last) {
                 taken += 1;
                 // One filter step on the source's own cloud with the ray it took.
@@ -278,7 +277,7 @@ impl OnlineMapper {
             }
             if rays.len() < needed {
                 for r in rays {
-                    self.pool[r.stop].push(r.bearing);
+                    r.give_back(&mut self.pool);
                 }
                 dissolved[i] = true;
                 continue;
@@ -322,7 +321,7 @@ impl OnlineMapper {
                 }
                 Round::Found(s) => {
                     for r in s.rays {
-                        self.pool[r.stop].push(r.bearing);
+                        r.give_back(&mut self.pool);
                     }
                     break;
                 }
@@ -352,11 +351,13 @@ impl OnlineMapper {
 
     /// The map after the stops so far.
     pub fn map(&self) -> MapResult {
+        let mut sources = self.sources.clone();
+        self.mapper.mark_mirrors(&mut sources);
         MapResult {
-            sources: self.sources.clone(),
+            sources,
             rounds: self.rounds,
             particles: self.mapper.num_particles(),
-            unexplained: self.pool.iter().map(Vec::len).sum(),
+            unexplained: self.mapper.unexplained(&self.poses, &self.pool),
             unexplained_bearings: self.pool.clone(),
             removed: self.removed,
         }

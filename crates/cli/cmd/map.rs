@@ -71,11 +71,14 @@ pub fn run(a: &MapArgs) -> Result<Outcome> {
         settings.iasm.variant = v;
     }
     let survey = Survey::load(&a.input.survey_inputs(), &settings)?;
+    let localised = a.input.doas.is_none();
     if let Some(note) = survey.map_note() {
         eprintln!("{note}");
     }
-    let config = &settings.iasm;
-    let localised = a.input.doas.is_none();
+    if localised && let Some(note) = crate::pipeline::linear_array_note(&settings.mic_array()?) {
+        eprintln!("{note}");
+    }
+    let config = &survey.mapper_config(&settings.iasm);
     let t0 = std::time::Instant::now();
     let result = survey.map(config, a.seed)?;
     let dt = t0.elapsed().as_secs_f64();
@@ -215,6 +218,11 @@ pub fn run(a: &MapArgs) -> Result<Outcome> {
             two_sigma,
             s.round
         );
+        if let Some([x, y]) = s.mirror {
+            println!(
+                "    or at ({x:.3}, {y:.3}): its DoAs' mirror images in the linear array's line meet there as well (the robot did not turn enough to tell)"
+            );
+        }
     }
     if let Some(o) = o {
         println!(

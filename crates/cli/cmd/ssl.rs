@@ -48,6 +48,10 @@ pub fn run(args: &SslArgs) -> Result<Outcome> {
     let settings = args.settings.settings()?;
     let array = settings.mic_array()?;
     let config = settings.ssl;
+    let mirror = array.mirror_axis_deg();
+    if let Some(note) = crate::pipeline::linear_array_note(&array) {
+        eprintln!("{note}");
+    }
     let Some(dir) = &args.dataset else {
         let rows = localise_files(&args.files, &array, &config)?;
         print_rows(&rows, &config, &array, args.json)?;
@@ -95,11 +99,11 @@ pub fn run(args: &SslArgs) -> Result<Outcome> {
     let poses = read_poses(poses_path, false)?;
     let sources = read_sources(sources_path)?;
     let n = config.num_peaks;
-    let ours = score_doas(&table, &poses, &sources, n, args.tol_deg)
+    let ours = score_doas(&table, &poses, &sources, n, args.tol_deg, mirror)
         .with_context(|| format!("scoring against {}", poses_path.display()))?;
     let diag = |t: &Table| -> Result<Option<Diagnostics>> {
         args.by_distance
-            .then(|| diagnose(t, &poses, &sources, n, MATCH_DEG, args.tol_deg))
+            .then(|| diagnose(t, &poses, &sources, n, MATCH_DEG, args.tol_deg, mirror))
             .transpose()
     };
     let mut diagnostics = vec![(format!("iasm {}", config.method), diag(&table)?)];
@@ -112,7 +116,7 @@ pub fn run(args: &SslArgs) -> Result<Outcome> {
             .into_owned();
         let scored = read_table(t).and_then(|tab| {
             Ok((
-                score_doas(&tab, &poses, &sources, n, args.tol_deg)?,
+                score_doas(&tab, &poses, &sources, n, args.tol_deg, mirror)?,
                 diag(&tab)?,
             ))
         });

@@ -22,6 +22,18 @@ pub const PRESETS: [&str; 4] = ["iasm6", "respeaker4", "respeaker6", "uma8"];
 /// an array file, which would make a pair with no delay information.
 const DUPLICATE_TOL_M: f64 = 1e-4;
 
+/// An array whose microphones all lie within this fraction of its aperture of one line is
+/// linear ([`MicArray::linear_axis`]). Why 1 %: the two mirror directions of a line differ
+/// in delay by at most `2 d / c` for microphones `d` off it; at 1 % of a 0.1-0.2 m line,
+/// 1-2 mm, that is 6-12 us, under a tenth of a period at 1 kHz and a quarter at 8 kHz:
+/// the peaks of a source and of its mirror image stand within a few percent of each
+/// other, and which is higher is the noise's choice.
+const LINEAR_TOL: f64 = 0.01;
+
+/// An array whose microphones, seen from above, span less than this fraction of its
+/// aperture hears no azimuth (a vertical line, or a stack): refused.
+const MIN_HORIZONTAL_SPAN: f64 = 0.1;
+
 /// A microphone array: its name and the microphone positions (m) in the array frame.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct MicArray {
@@ -40,8 +52,9 @@ impl MicArray {
     /// Builds an array from positions (m).
     ///
     /// # Errors
-    /// [`ArrayError`] if there are fewer than two microphones, a coordinate is not finite, or
-    /// two microphones are within 0.1 mm of each other.
+    /// [`ArrayError`] if there are fewer than two microphones, a coordinate is not finite,
+    /// two microphones are within 0.1 mm of each other, or the microphones, seen from
+    /// above, span less than a tenth of the aperture (a vertical line hears no azimuth).
     pub fn new(name: impl Into<String>, positions: Vec<[f64; 3]>) -> Result<Self, ArrayError> {
         if positions.len() < 2 {
             return Err(ArrayError::TooFewMics(positions.len()));
@@ -59,10 +72,20 @@ impl MicArray {
                 }
             }
         }
-        Ok(Self {
+        let array = Self {
             name: name.into(),
             positions,
-        })
+        };
+        let flat: Vec<[f64; 3]> = array.positions.iter().map(|p| [p[0], p[1], 0.0]).collect();
+        let horizontal = span(&flat);
+        let aperture = array.aperture();
+        if horizontal < MIN_HORIZONTAL_SPAN * aperture {
+            return Err(ArrayError::NoAzimuth {
+                horizontal_m: horizontal,
+                aperture_m: aperture,
+            });
+        }
+        Ok(array)
     }
 
     /// A built-in array by name:
@@ -190,11 +213,67 @@ impl MicArray {
 
     /// The largest distance between two microphones (m), the array's aperture.
     pub fn aperture(&self) -> f64 {
-        self.pairs()
-            .into_iter()
-            .map(|(i, j)| dist(self.positions[i], self.positions[j]))
-            .fold(0.0, f64::max)
+        span(&self.positions)
     }
+
+    /// The unit vector of the line the microphones lie on, when they do (within 1 % of
+    /// the aperture), pointing from the first microphone to the one furthest from it;
+    /// `None` for an array that spans a plane or a volume.
+    ///
+    /// A linear array (a Kinect's four microphones, a two-microphone head) hears only the
+    /// angle between a source and its line: every direction on a cone around the line
+    /// gives the same delays. In the horizontal plane that leaves two azimuths, mirror
+    /// images in the line ([`MicArray::mirror_axis_deg`]), and no recording can tell them
+    /// apart; only a robot that turns can (see `asm::IasmConfig::mirror_axis_deg`).
+    pub fn linear_axis(&self) -> Option<[f64; 3]> {
+        let p = &self.positions;
+        let far = (1..p.len())
+            .max_by(|&a, &b| dist(p[0], p[a]).total_cmp(&dist(p[0], p[b])))
+            .expect("an array has two microphones");
+        let len = dist(p[0], p[far]);
+        let u = [0, 1, 2].map(|i| (p[far][i] - p[0][i]) / len);
+        let off_line = p
+            .iter()
+            .map(|q| {
+                let v = [0, 1, 2].map(|i| q[i] - p[0][i]);
+                let along = v[0] * u[0] + v[1] * u[1] + v[2] * u[2];
+                dist(v, u.map(|c| c * along))
+            })
+            .fold(0.0, f64::max);
+        (off_line <= LINEAR_TOL * self.aperture()).then_some(u)
+    }
+
+    /// For a linear array ([`MicArray::linear_axis`]), the azimuth of its line in the
+    /// array frame, in `[0, 180)` degrees: a source at azimuth `a` (in the horizontal
+    /// plane) and one at `2 * axis - a` give every pair the same delay. `None` for an
+    /// array that is not linear.
+    pub fn mirror_axis_deg(&self) -> Option<f64> {
+        self.linear_axis()
+            .map(|u| u[1].atan2(u[0]).to_degrees().rem_euclid(180.0))
+    }
+}
+
+/// `azimuth_deg` on the counter-clockwise side of a linear array's line at `axis_deg`
+/// ([`MicArray::mirror_axis_deg`]): of a direction and its mirror image in the line, the
+/// one in `[axis, axis + 180]`; `azimuth_deg` itself when `axis_deg` is `None`. The
+/// localizer reports a linear array's DoAs so ([`crate::Localizer::mirror_axis_deg`]); fold a true
+/// bearing the same way to compare it with them.
+pub fn fold_azimuth(azimuth_deg: f64, axis_deg: Option<f64>) -> f64 {
+    match axis_deg {
+        Some(axis) => crate::wrap_deg(axis + crate::wrap_deg(azimuth_deg - axis).abs()),
+        None => azimuth_deg,
+    }
+}
+
+/// The largest distance between two of `points`.
+fn span(points: &[[f64; 3]]) -> f64 {
+    let mut widest = 0.0f64;
+    for (i, &a) in points.iter().enumerate() {
+        for &b in &points[i + 1..] {
+            widest = widest.max(dist(a, b));
+        }
+    }
+    widest
 }
 
 impl Default for MicArray {
@@ -238,6 +317,53 @@ mod tests {
         assert_eq!(a.len(), 6);
         assert_eq!(a.pairs().len(), 15);
         assert!((a.aperture() - 0.2113).abs() < 1e-3, "{}", a.aperture());
+    }
+
+    #[test]
+    fn a_line_of_microphones_is_linear_and_mirrors_about_its_azimuth() {
+        // Four microphones on a line at 30 degrees to the heading, 4 cm apart, 0.5 mm off
+        // it (under 1 % of the 12 cm aperture).
+        let (c, s) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
+        let line: Vec<[f64; 3]> = [-0.06, -0.02, 0.02, 0.06]
+            .iter()
+            .enumerate()
+            .map(|(i, &t)| [t * c, t * s + if i == 1 { 0.0005 } else { 0.0 }, 0.0])
+            .collect();
+        let a = MicArray::new("line", line).unwrap();
+        let u = a.linear_axis().unwrap();
+        assert!((u[0] - c).abs() < 1e-2 && (u[1] - s).abs() < 1e-2, "{u:?}");
+        assert!((a.mirror_axis_deg().unwrap() - 30.0).abs() < 0.5);
+        // Pointing the other way, the line is the same line.
+        let back = MicArray::new("back", a.positions().iter().rev().copied().collect()).unwrap();
+        assert!((back.mirror_axis_deg().unwrap() - 30.0).abs() < 0.5);
+        // Two microphones are always a line; the presets span a plane or a volume.
+        let pair = MicArray::new("pair", vec![[0.0, 0.1, 0.0], [0.0, -0.1, 0.0]]).unwrap();
+        assert!((pair.mirror_axis_deg().unwrap() - 90.0).abs() < 1e-9);
+        for name in PRESETS {
+            assert_eq!(
+                MicArray::preset(name).unwrap().linear_axis(),
+                None,
+                "{name}"
+            );
+        }
+        // 2 mm off a 12 cm line is beyond 1 %: a (thin) plane.
+        let bent = MicArray::new(
+            "bent",
+            vec![[-0.06, 0.0, 0.0], [0.0, 0.002, 0.0], [0.06, 0.0, 0.0]],
+        )
+        .unwrap();
+        assert_eq!(bent.linear_axis(), None);
+    }
+
+    #[test]
+    fn a_vertical_line_hears_no_azimuth_and_is_refused() {
+        let e = MicArray::new(
+            "mast",
+            vec![[0.0, 0.0, 0.0], [0.005, 0.0, 0.1], [0.0, 0.0, 0.2]],
+        )
+        .unwrap_err();
+        assert!(matches!(e, ArrayError::NoAzimuth { .. }), "{e}");
+        assert!(e.to_string().contains("azimuth"), "{e}");
     }
 
     #[test]

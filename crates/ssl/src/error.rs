@@ -124,6 +124,17 @@ pub enum ArrayError {
         /// Zero-based index of the second.
         b: usize,
     },
+    /// Seen from above, the microphones span too little of the aperture to hear azimuth
+    /// (a vertical line or stack).
+    #[error(
+        "the microphones span {horizontal_m:.3} m seen from above, under a tenth of the array's {aperture_m:.3} m aperture: a vertical array hears no azimuth (positions are x, y, z with z up)"
+    )]
+    NoAzimuth {
+        /// The microphones' largest horizontal distance (m).
+        horizontal_m: f64,
+        /// The aperture (m).
+        aperture_m: f64,
+    },
     /// A preset name that is not built in.
     #[error("unknown array {name:?}: not a preset ({list}) nor an existing file", list = presets.join(", "))]
     UnknownPreset {

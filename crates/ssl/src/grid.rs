@@ -53,10 +53,14 @@ impl ElevationRange {
     /// not all at one height (a 3-D array resolves elevation, and a horizontal-only search
     /// turns a source's elevation into an azimuth error), else [`ElevationRange::PLANE`] (a
     /// planar array's delays all scale by `cos(elevation)` alike: azimuth stays unbiased).
+    /// A linear array ([`MicArray::linear_axis`]) searches the horizontal plane whatever its
+    /// tilt: it hears a cone around its line, which over elevations is a ridge whose
+    /// highest point is the noise's choice; in the plane it is two azimuths, mirror images
+    /// ([`crate::Localizer::mirror_axis_deg`]).
     pub fn auto(array: &MicArray) -> Self {
         let z = array.positions().iter().map(|p| p[2]);
         let span = z.clone().fold(f64::NEG_INFINITY, f64::max) - z.fold(f64::INFINITY, f64::min);
-        if span > 1e-3 {
+        if span > 1e-3 && array.linear_axis().is_none() {
             Self::ROBOT
         } else {
             Self::PLANE

@@ -47,7 +47,7 @@ pub mod method;
 pub mod spectrum;
 pub mod stft;
 
-pub use array::MicArray;
+pub use array::{MicArray, fold_azimuth};
 pub use audio::{Audio, read_wav};
 pub use config::{Method, Pooling, SslConfig};
 pub use error::{ArrayError, ConfigError, Error, Result};

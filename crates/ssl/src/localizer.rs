@@ -265,6 +265,8 @@ pub struct Localizer {
     /// The band's grid direction nearest each of the octaves' (all the octaves' grids are
     /// one).
     octave_dirs: Vec<usize>,
+    /// For a linear array, the azimuth of its line ([`Localizer::mirror_axis_deg`]).
+    mirror_axis_deg: Option<f64>,
 }
 
 impl std::fmt::Debug for Localizer {
@@ -383,7 +385,20 @@ impl Localizer {
             wave_phases,
             octave_dirs,
             subbands,
+            mirror_axis_deg: array.mirror_axis_deg(),
         })
+    }
+
+    /// For a linear array ([`MicArray::linear_axis`]), the azimuth of its line (degrees,
+    /// array frame, in `[0, 180)`); `None` for any other array.
+    ///
+    /// A linear array cannot tell a source at azimuth `a` from its mirror image at
+    /// `2 axis - a`: this localizer reports each source once, on the line's
+    /// counter-clockwise side (`axis` to `axis + 180`, as [`crate::fold_azimuth`] folds
+    /// a bearing; see [`AngularSpectrum::with_mirror_axis`]), and leaves the choice between
+    /// the two to a robot that turns (`asm::IasmConfig::mirror_axis_deg`).
+    pub fn mirror_axis_deg(&self) -> Option<f64> {
+        self.mirror_axis_deg
     }
 
     /// Whether the octaves' block spectra come from the band's own pass
@@ -585,7 +600,9 @@ impl Localizer {
             }
         }
         scratch.block = block;
-        AngularSpectrum::new(self.grid.clone(), pooled).with_votes(votes)
+        AngularSpectrum::new(self.grid.clone(), pooled)
+            .with_votes(votes)
+            .with_mirror_axis(self.mirror_axis_deg)
     }
 
     /// [`Localizer::gate`] on the blocks of `spec` (the tests' entry).

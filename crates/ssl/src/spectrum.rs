@@ -46,6 +46,9 @@ pub struct AngularSpectrum {
     /// Per azimuth cell, the blocks whose strongest direction lay there (empty: not
     /// counted).
     votes: Vec<u32>,
+    /// For a linear array, the azimuth of its line (degrees): peaks are searched on its
+    /// counter-clockwise side only ([`AngularSpectrum::with_mirror_axis`]).
+    mirror_axis_deg: Option<f64>,
 }
 
 /// The median of `values` (the upper one of an even count): the background that
@@ -74,7 +77,47 @@ impl AngularSpectrum {
             grid,
             values,
             votes: Vec::new(),
+            mirror_axis_deg: None,
         }
+    }
+
+    /// The same spectrum heard by a linear array whose line lies at `axis_deg` (array
+    /// frame; see `MicArray::mirror_axis_deg`), or by any array when `None`.
+    ///
+    /// Why: a linear array hears only the angle to its line, so its spectrum is symmetric
+    /// about the line and every source stands there twice, at `a` and `2 axis - a`, equally
+    /// high. Its peaks are searched on the line's counter-clockwise side only (azimuths
+    /// from `axis` to `axis + 180`, as [`crate::fold_azimuth`] folds them), so that a source
+    /// is one DoA, not two that take two of the `N` places; a block that voted for the
+    /// other side's cell voted for this one (which of the two a block's maximum falls on is
+    /// the noise's choice).
+    #[must_use]
+    pub fn with_mirror_axis(mut self, axis_deg: Option<f64>) -> Self {
+        if let Some(axis) = axis_deg
+            && !self.votes.is_empty()
+        {
+            let n = self.grid.num_azimuths();
+            let mut folded = vec![0u32; n];
+            for (i, &v) in self.votes.iter().enumerate() {
+                let az = crate::fold_azimuth(self.grid.azimuths()[i], Some(axis));
+                folded[self.grid.azimuth_cell(az)] += v;
+            }
+            self.votes = folded;
+        }
+        Self {
+            mirror_axis_deg: axis_deg,
+            ..self
+        }
+    }
+
+    /// Whether the azimuth cell at `azimuth_deg` lies on the searched side of a linear
+    /// array's line (always, for other arrays), within half a cell.
+    fn searched(&self, azimuth_deg: f64) -> bool {
+        self.mirror_axis_deg.is_none_or(|axis| {
+            let half = 0.5 * self.grid.az_step_deg();
+            let from = wrap_deg(azimuth_deg - axis);
+            (from >= -half && from <= 180.0 + half) || from <= -180.0 + half
+        })
     }
 
     /// The same spectrum with, per azimuth cell of the grid, the number of pooled blocks
@@ -143,7 +186,7 @@ impl AngularSpectrum {
         for i in 0..n {
             let (l, c, r) = (v[(i + n - 1) % n], v[i], v[(i + 1) % n]);
             // >= on one side only: a two-cell plateau yields one peak, not two.
-            if c >= l && c > r {
+            if c >= l && c > r && self.searched(self.grid.azimuths()[i]) {
                 let (l, c, r) = (f64::from(l), f64::from(c), f64::from(r));
                 let den = l - 2.0 * c + r;
                 let delta = if den < 0.0 {
@@ -152,6 +195,9 @@ impl AngularSpectrum {
                     0.0
                 };
                 let az = wrap_deg(self.grid.azimuths()[i] + delta * step);
+                // On a linear array's line a peak is its own mirror image: refined a
+                // fraction of a cell across, it is folded back (see `with_mirror_axis`).
+                let az = crate::fold_azimuth(az, self.mirror_axis_deg);
                 cands.push((i, az, c - 0.25 * (l - r) * delta));
             }
         }

@@ -904,3 +904,57 @@ fn a_source_an_octave_hears_is_reported_beyond_n_in_a_cut_row() {
         assert!(one.extra.is_empty(), "{method}: {one:?}");
     }
 }
+
+#[test]
+fn a_linear_array_reports_each_source_once_on_its_own_side_of_the_line() {
+    // A Kinect's four microphones on a line along the heading (x = -11.3, 3.6, 7.6 and
+    // 11.3 cm). It hears the angle to its line only: a source at -60 degrees sounds as one
+    // at +60, and is reported there, once, never as two DoAs.
+    let kinect = MicArray::new(
+        "kinect",
+        vec![
+            [-0.113, 0.0, 0.0],
+            [0.036, 0.0, 0.0],
+            [0.076, 0.0, 0.0],
+            [0.113, 0.0, 0.0],
+        ],
+    )
+    .unwrap();
+    assert_eq!(kinect.mirror_axis_deg(), Some(0.0));
+    let mut failures = Vec::new();
+    let cases: [(&[f64], &[f64]); 3] = [
+        (&[-60.0], &[60.0]),
+        (&[-60.0, 120.0], &[60.0, 120.0]),
+        (&[30.0, -110.0], &[30.0, 110.0]),
+    ];
+    for (k, &(azs, folded)) in cases.iter().enumerate() {
+        let sources: Vec<(f64, f64, Signal)> =
+            azs.iter().map(|&a| (a, 0.0, Signal::Noise)).collect();
+        let audio = render(&kinect, &sources, 0.6, 30.0, SEED + 300 + k as u64);
+        for method in Method::ALL {
+            let config = SslConfig {
+                method,
+                num_peaks: 3,
+                ..SslConfig::default()
+            };
+            let loc = Localizer::new(&kinect, FS, &config).unwrap();
+            assert_eq!(loc.mirror_axis_deg(), Some(0.0));
+            let got: Vec<f64> = loc
+                .locate(&audio)
+                .unwrap()
+                .iter()
+                .map(|d| d.azimuth_deg)
+                .collect();
+            let found = folded
+                .iter()
+                .all(|&f| got.iter().any(|&g| wrap_deg(g - f).abs() <= 3.0));
+            if !found
+                || got.len() != folded.len()
+                || got.iter().any(|&g| !(0.0..=180.0).contains(&g))
+            {
+                failures.push(format!("{method}/{azs:?}: want {folded:?}, got {got:.1?}"));
+            }
+        }
+    }
+    assert_none(failures);
+}
