@@ -31,6 +31,10 @@ pub struct Ray {
     /// For a linear array's DoA, its mirror image's world bearing (rad), taken out of the
     /// row with it ([`associate_mirrored`]).
     pub twin: Option<f64>,
+    /// Whether the DoA is another source's too: the vote lets a DoA that a source already
+    /// explains support a second one that lies as nearly on it (see
+    /// `IasmConfig::share_rate`). It stays with the first: never given back.
+    pub shared: bool,
 }
 
 impl Ray {
@@ -44,6 +48,9 @@ impl Ray {
     /// Puts the DoA (and its mirror image, if any) back into its stop's row of `bearings`:
     /// a source that no longer holds it gives it back for the others.
     pub fn give_back(&self, bearings: &mut [Vec<f64>]) {
+        if self.shared {
+            return;
+        }
         bearings[self.stop].push(self.bearing);
         bearings[self.stop].extend(self.twin);
     }
@@ -110,6 +117,7 @@ pub fn associate_mirrored(
                 from: p.position(),
                 bearing,
                 twin,
+                shared: false,
             });
         }
     }
