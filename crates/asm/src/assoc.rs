@@ -64,6 +64,15 @@ pub fn mirror_bearing(pose: &Pose, bearing: f64, axis: f64) -> Option<f64> {
     (wrap_rad(twin - bearing).abs() > TWIN_TOL).then_some(twin)
 }
 
+/// The DoA of `row` (world bearings, rad) nearest `bearing`: its index and the wrapped
+/// angle between them (rad, `>= 0`), the first of equals; `None` for an empty row.
+pub(crate) fn nearest(row: &[f64], bearing: f64) -> Option<(usize, f64)> {
+    row.iter()
+        .enumerate()
+        .map(|(n, &b)| (n, wrap_rad(bearing - b).abs()))
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+}
+
 /// A bearing within this (rad) of a DoA's computed mirror image is that image.
 const TWIN_TOL: f64 = 1e-9;
 
@@ -98,13 +107,7 @@ pub fn associate_mirrored(
     assert_eq!(poses.len(), bearings.len(), "one row of bearings per pose");
     let mut rays = Vec::new();
     for (stop, (p, row)) in poses.iter().zip(bearings.iter_mut()).enumerate() {
-        let theta = p.bearing_to(source);
-        let best = row
-            .iter()
-            .enumerate()
-            .map(|(n, &b)| (n, wrap_rad(theta - b).abs()))
-            .min_by(|a, b| a.1.total_cmp(&b.1));
-        if let Some((n, d)) = best
+        if let Some((n, d)) = nearest(row, p.bearing_to(source))
             && d < gamma
         {
             let bearing = row.remove(n);

@@ -1449,11 +1449,8 @@ impl Mapper {
                 .filter(|x| *x.1.1 > 0.0)
             {
                 let to = p.bearing_to(q);
-                let nearest = |row: &[f64]| {
-                    row.iter()
-                        .map(|&b| crate::wrap_rad(to - b).abs())
-                        .fold(f64::INFINITY, f64::min)
-                };
+                let nearest =
+                    |row: &[f64]| crate::assoc::nearest(row, to).map_or(f64::INFINITY, |n| n.1);
                 let best = nearest(row);
                 if best < gate {
                     n += 1;
@@ -1540,17 +1537,12 @@ impl Mapper {
             if rays.iter().any(|r| r.stop == k) {
                 continue;
             }
-            let to = p.bearing_to(q);
-            let miss = |b: f64| crate::wrap_rad(to - b).abs();
-            let best = row
-                .iter()
-                .copied()
-                .min_by(|&a, &b| miss(a).total_cmp(&miss(b)));
-            if let Some(b) = best.filter(|&b| self.shares(miss(b), k, check)) {
+            let best = crate::assoc::nearest(row, p.bearing_to(q));
+            if let Some((n, _)) = best.filter(|&(_, miss)| self.shares(miss, k, check)) {
                 rays.push(Ray {
                     stop: k,
                     from: p.position(),
-                    bearing: b,
+                    bearing: row[n],
                     twin: None,
                     shared: true,
                 });
