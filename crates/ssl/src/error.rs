@@ -74,6 +74,9 @@ pub enum ConfigError {
     /// A prominence threshold outside `[0, 1]`.
     #[error("min_prominence must be in [0, 1], got {0}")]
     MinProminence(f64),
+    /// A setting that is a fraction, outside `[0, 1]`.
+    #[error("{0} must be in [0, 1], got {1}")]
+    Fraction(&'static str, f64),
     /// A sidelobe ratio negative or not finite.
     #[error("sidelobe_ratio must be finite and >= 0, got {0}")]
     SidelobeRatio(f64),

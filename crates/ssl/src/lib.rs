@@ -40,6 +40,7 @@
 pub mod array;
 pub mod audio;
 pub mod config;
+pub mod covariance;
 pub mod error;
 pub mod grid;
 mod localizer;
@@ -50,6 +51,7 @@ pub mod stft;
 pub use array::{MicArray, fold_azimuth};
 pub use audio::{Audio, read_wav};
 pub use config::{Method, Pooling, SslConfig};
+pub use covariance::SpatialCovariance;
 pub use error::{ArrayError, ConfigError, Error, Result};
 pub use grid::{DirectionGrid, ElevationRange};
 pub use localizer::{Localizer, Located, Scratch, SpectrumEstimator};

@@ -7,6 +7,7 @@ use realfft::num_complex::Complex32;
 use crate::array::MicArray;
 use crate::audio::Audio;
 use crate::config::{Pooling, SslConfig};
+use crate::covariance::SpatialCovariance;
 use crate::error::{ConfigError, Error, Result};
 use crate::grid::{DirectionGrid, ElevationRange, PairScratch};
 use crate::method::music::SubspaceScratch;
@@ -494,9 +495,7 @@ impl Localizer {
         source: Blocks<'_>,
     ) -> AngularSpectrum {
         let nf = spec.num_frames();
-        let n_blocks = (nf / self.config.block_frames).max(1);
-        // Blocks split the frames as evenly as possible and cover all of them.
-        let frames = |b: usize| b * nf / n_blocks..(b + 1) * nf / n_blocks;
+        let (n_blocks, frames) = self.blocks(nf);
         let dominance = self.config.dominance_blocks > 0;
         let energy = if dominance || self.config.decay_gate_db > 0.0 {
             block_energies(spec, n_blocks, &frames)
@@ -605,6 +604,28 @@ impl Localizer {
             .with_mirror_axis(self.mirror_axis_deg)
     }
 
+    /// How `nf` frames split into blocks: their number, and each block's frames. Blocks
+    /// split the frames as evenly as possible and cover all of them.
+    fn blocks(&self, nf: usize) -> (usize, impl Fn(usize) -> Range<usize> + Copy) {
+        let n_blocks = (nf / self.config.block_frames).max(1);
+        (n_blocks, move |b: usize| {
+            b * nf / n_blocks..(b + 1) * nf / n_blocks
+        })
+    }
+
+    /// The frames of the blocks of `spec` that the pooling keeps ([`Localizer::gate`]).
+    fn kept_frames(&self, spec: &Spectrogram) -> Vec<Range<usize>> {
+        let nf = spec.num_frames();
+        let (n_blocks, frames) = self.blocks(nf);
+        let energy = if self.config.decay_gate_db > 0.0 {
+            block_energies(spec, n_blocks, &frames)
+        } else {
+            Vec::new()
+        };
+        let keep = self.gate(&energy, n_blocks, nf);
+        (0..n_blocks).filter(|&b| keep[b]).map(frames).collect()
+    }
+
     /// [`Localizer::gate`] on the blocks of `spec` (the tests' entry).
     #[cfg(test)]
     fn decay_gate(
@@ -682,8 +703,14 @@ impl Localizer {
             d.relative >= self.config.min_relative
                 || (dominant > 0 && d.dominant_blocks as usize >= dominant)
         };
-        let mut doas: Vec<Doa> = peaks.into_iter().filter(stands_out).collect();
-        let mut next = next.filter(stands_out);
+        let (mut doas, mut next) = if self.config.incoherent_relative > 0.0 {
+            self.by_coherence(peaks, next, &scratch.spec, stands_out)
+        } else {
+            (
+                peaks.into_iter().filter(stands_out).collect(),
+                next.filter(stands_out),
+            )
+        };
         if self.config.sidelobe_ratio > 0.0 && doas.len() + usize::from(next.is_some()) > 1 {
             (doas, next) = self.drop_sidelobes(doas, next.take())?;
         }
@@ -826,6 +853,66 @@ impl Localizer {
             }
         }
         extra
+    }
+
+    /// The peaks (strongest first, and the next one beyond `N`) that [`SslConfig`]'s
+    /// height rules (`stands_out`) keep, and those they do not that stand at least
+    /// [`SslConfig::incoherent_relative`] high and are incoherent with every stronger peak
+    /// ([`SslConfig::max_incoherence`]). Stronger peaks are all of them, reported or not:
+    /// a peak that copies a reflection the height rules left out copies its source too.
+    /// The recording's covariance (`spec`, the blocks the pooling kept) is computed once,
+    /// when a peak first needs it.
+    fn by_coherence(
+        &self,
+        peaks: Vec<Doa>,
+        next: Option<Doa>,
+        spec: &Spectrogram,
+        stands_out: impl Fn(&Doa) -> bool,
+    ) -> (Vec<Doa>, Option<Doa>) {
+        let c = &self.config;
+        let has_next = next.is_some();
+        let all: Vec<Doa> = peaks.into_iter().chain(next).collect();
+        let n = all.len() - usize::from(has_next);
+        let mut cov = None;
+        let mut kept: Vec<Doa> = Vec::new();
+        let mut last = None;
+        for (i, p) in all.iter().enumerate() {
+            let keep = stands_out(p)
+                || (i > 0 && p.relative >= c.incoherent_relative && {
+                    let cov = cov.get_or_insert_with(|| {
+                        SpatialCovariance::of(spec, self.kept_frames(spec).into_iter().flatten())
+                    });
+                    all[..i].iter().all(|s| {
+                        self.source_coherence(cov, s, p)
+                            .is_some_and(|g| g < c.max_incoherence)
+                    })
+                });
+            if keep {
+                if i == n {
+                    last = Some(*p);
+                } else {
+                    kept.push(*p);
+                }
+            }
+        }
+        (kept, last)
+    }
+
+    /// The source coherence of two DoAs in the recording whose covariance is `cov`
+    /// ([`SpatialCovariance::source_coherence`]).
+    fn source_coherence(&self, cov: &SpatialCovariance, a: &Doa, b: &Doa) -> Option<f64> {
+        let unit = |d: &Doa| {
+            let (az, el) = (d.azimuth_deg.to_radians(), d.elevation_deg.to_radians());
+            [el.cos() * az.cos(), el.cos() * az.sin(), el.sin()]
+        };
+        cov.source_coherence(
+            self.array.positions(),
+            f64::from(self.sample_rate),
+            self.stft.frame_len(),
+            self.config.speed_of_sound,
+            unit(a),
+            unit(b),
+        )
     }
 
     /// `doas` and `next` (strongest first) without the peaks that do not stand more than

@@ -469,10 +469,14 @@ fn a_source_that_dominates_blocks_is_reported_below_min_relative() {
     let inside = (0.2 / block_s).floor() as u32 - 1;
     for method in Method::PAPER {
         let run_gated = |audio: &Audio, dominance_blocks: usize, decay_gate_db: f64| {
+            // Height alone (`min_relative`) and the block count decide: the rule for low
+            // peaks with a signal of their own (`incoherent_relative`) is off, as the
+            // second source's signal is its own.
             let config = SslConfig {
                 method,
                 num_peaks: 4,
                 min_relative: 1.0,
+                incoherent_relative: 0.0,
                 dominance_blocks,
                 decay_gate_db,
                 ..SslConfig::default()
@@ -543,10 +547,13 @@ fn blocks_of_a_decay_give_no_dominance() {
         }
     });
     for method in Method::PAPER {
+        // The "reflection" is an independent noise, not a copy of the source: the rule for
+        // low peaks with a signal of their own (`incoherent_relative`) would report it.
         let config = SslConfig {
             method,
             num_peaks: 4,
             min_relative: 1.0,
+            incoherent_relative: 0.0,
             ..SslConfig::default()
         };
         let doas = locate(&audio, &config);
