@@ -57,7 +57,7 @@ const MAX_STEERING_OVERLAP: f64 = 0.8;
 const FRAME_FLOOR_DB: f64 = 20.0;
 
 /// A recording's spatial covariance per frequency bin: `R(k) = Σ_t x(t, k) x(t, k)ᴴ` over
-/// the frames within [`FRAME_FLOOR_DB`] of the loudest, all microphones.
+/// the frames within 20 dB of the loudest, all microphones.
 #[derive(Clone, Debug)]
 pub struct SpatialCovariance {
     /// Microphones.
