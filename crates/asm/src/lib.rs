@@ -45,5 +45,5 @@ pub mod pf;
 
 pub use error::{ConfigError, Error, MapError, Result};
 pub use geom::{Pose, wrap_rad};
-pub use mapper::{IasmConfig, MapResult, Mapper, Profile, Round, Source, Variant};
+pub use mapper::{IasmConfig, MapResult, Mapper, Profile, Round, Source, Trim, Variant};
 pub use online::{OnlineMapper, StopUpdate};

@@ -37,7 +37,9 @@
 //! - **Refine** ([`IasmConfig::refine`]): the source moves to the least-squares
 //!   intersection of the bearings it explains; rays further than `2 sigma` from the fit are
 //!   dropped one at a time and their DoAs given back to the next rounds (a 15-degree gate
-//!   lets one source take a neighbour's DoAs).
+//!   lets one source take a neighbour's DoAs); a ray that the source's own rays, more
+//!   tightly grouped than `sigma`, put beyond three robust deviations stays the source's
+//!   but no longer moves it ([`IasmConfig::trim_mads`]).
 //! - **Three stops at least** ([`IasmConfig::min_observations`]): a cluster that explains
 //!   DoAs of fewer stops is clutter; its DoAs are used up, and no source is reported.
 //!
@@ -185,6 +187,44 @@ pub struct IasmConfig {
     /// `lambda_thresh` is coarser than the bearings it came from. Default: true (the paper
     /// profile: false).
     pub refine: bool,
+    /// The refinement's position leaves out the rays that miss it by more than this many
+    /// of the source's own robust standard deviations (1.4826 times the median of its
+    /// rays' misses, the Gaussian-consistent median absolute deviation), or by more than
+    /// [`IasmConfig::trim_floor_deg`] where that is wider: the three-sigma rule, with the
+    /// spread measured on the source's rays instead of assumed. Such a ray stays the
+    /// source's (association is the `2 sigma` gate's: its DoA is still explained, not
+    /// given back to make a ghost) but does not move it. Needs four rays or more (with
+    /// three, the median is one ray's miss); and the trimmed fit is taken only if every
+    /// ray the source keeps still lies within `2 sigma` of it (otherwise the rays left out
+    /// were the ones that fixed the source's range, across a line of nearly collinear
+    /// rays). 0 turns it off. Not in the paper. Default: 3 (the paper profile: 0, and it
+    /// needs `refine`).
+    ///
+    /// Why: `sigma` (5 degrees) is the DoA error the particles and the association must
+    /// allow for over every source and stop; a source whose rays agree to a degree tells
+    /// more. Its `2 sigma` gate keeps a ray that misses by 7-9 degrees, typically a weak
+    /// peak on the flank of a stronger one or the far end of a reverberant talker's DoAs,
+    /// and least squares lets that one ray pull the source by 5-10 cm:
+    /// `speech_two_rt08`'s far talker (MVDR) took a DoA 8 degrees off its bearing from
+    /// 4.1 m, beside eight rays within 2 degrees, and moved 6 cm away from the truth.
+    /// Measured (`BENCHMARKS.md`, session 20; the suite and `fixtures/heldout`, 3
+    /// renderings x 3 maps, both methods): summed mean OSPA 2.046 -> 2.004 m (suite; 5
+    /// rows better by more than 2 mm, 1 worse) and 2.535 -> 2.467 m (held-out; 10 better,
+    /// 4 worse), no source count changed; `speech_one_rt08` 0.034 / 0.024 -> 0.015 /
+    /// 0.010, `speech_two_snr15` MVDR 0.073 -> 0.043; the worst row `speech_two_rt05`
+    /// GCC-PHAT 0.048 -> 0.061. Five-talker surveys rendered by pyroomacoustics (another
+    /// simulator; 20 runs each): MVDR 0.115 -> 0.103 and 0.159 -> 0.140 m, the rest within
+    /// 0.003. Arrangement II (50 runs) unchanged: its rays' spread is per-source bias, not
+    /// single outliers. Without the `2 sigma` check, one survey's source across an L of
+    /// stops slid 0.5 m (MVDR 0.151 -> 0.246 m). Dropping the trimmed rays instead (given
+    /// back) made ghosts of them (`speech_one_silence_snr12` GCC-PHAT 0.039 -> 0.094 m).
+    /// Trims of 2.5 and 4, and floors of 1 and 3 degrees, gain alike.
+    pub trim_mads: f64,
+    /// The narrowest trim of [`IasmConfig::trim_mads`] (degrees): rays that agree more
+    /// closely than the DoAs can be told apart (a 1-degree azimuth grid, the far-field
+    /// steering model's error at a robot's ranges) give a median miss too small to judge
+    /// by. Default: 2.
+    pub trim_floor_deg: f64,
     /// A source must explain DoAs from at least this many stops (after refinement); a
     /// cluster that explains fewer is clutter: its DoAs are used up and no source is
     /// reported. Two bearings always intersect, so two stops prove nothing; three are the
@@ -428,6 +468,8 @@ impl Default for IasmConfig {
             retries: 2,
             variant: Variant::Ca,
             refine: true,
+            trim_mads: 3.0,
+            trim_floor_deg: 2.0,
             min_observations: 3,
             densest_fallback: false,
             vote_min_stops: 5,
@@ -448,6 +490,7 @@ impl IasmConfig {
             Profile::Robust => Self::default(),
             Profile::Paper => Self {
                 refine: false,
+                trim_mads: 0.0,
                 min_observations: 1,
                 vote_min_stops: 0,
                 vote_min_thresholded_stops: 0,
@@ -484,6 +527,8 @@ impl IasmConfig {
             ("min_range_m", self.min_range_m),
             ("beyond_map_m", self.beyond_map_m),
             ("share_gate_sigmas", self.share_gate_sigmas),
+            ("trim_mads", self.trim_mads),
+            ("trim_floor_deg", self.trim_floor_deg),
         ] {
             if !(value.is_finite() && value >= 0.0) {
                 return Err(ConfigError::NotPositive { name, value });
@@ -595,6 +640,8 @@ pub struct Mapper {
     gamma: f64,
     /// DoA standard deviation (rad).
     sigma: f64,
+    /// What of a bearing fit's spread is left out ([`IasmConfig::trim_mads`]).
+    trim: Trim,
     /// A linear array's line (rad, array frame; [`IasmConfig::mirror_axis_deg`]).
     mirror: Option<f64>,
 }
@@ -653,6 +700,10 @@ impl Mapper {
             resample_below: (config.resample_frac * m as f64).ceil(),
             gamma: config.gamma_sigmas * sigma,
             sigma,
+            trim: Trim {
+                mads: config.trim_mads,
+                floor: config.trim_floor_deg.to_radians(),
+            },
             mirror: config.mirror_axis_deg.map(f64::to_radians),
         })
     }
@@ -722,7 +773,7 @@ impl Mapper {
                 rays.iter().map(|r| (r.miss(q) / self.sigma).powi(2)).sum()
             };
             s.mirror = least_squares_crossing(&images)
-                .and_then(|start| fit_bearings(start, &images, self.sigma))
+                .and_then(|start| fit_bearings(start, &images, self.sigma, self.trim))
                 .filter(|(q, kept)| {
                     kept.len() == images.len()
                         && (q[0] - s.x).hypot(q[1] - s.y) > self.config.merge_dist_m
@@ -762,6 +813,11 @@ impl Mapper {
     /// The DoA standard deviation (rad).
     pub(crate) fn sigma(&self) -> f64 {
         self.sigma
+    }
+
+    /// The bearing fits' [`Trim`].
+    pub(crate) fn trim(&self) -> Trim {
+        self.trim
     }
 
     /// The particle likelihood.
@@ -1028,7 +1084,7 @@ impl Mapper {
             .fold(f64::INFINITY, f64::min);
         nearest < c.min_range_m
             || (c.beyond_map_m > 0.0
-                && fit_within(q, rays, 0.5 * self.sigma, f64::INFINITY)
+                && fit_within(q, rays, 0.5 * self.sigma, f64::INFINITY, self.trim)
                     .is_some_and(|(p, _)| !self.within_bounds(p, c.beyond_map_m)))
     }
 
@@ -1125,7 +1181,7 @@ impl Mapper {
         for i in merge_close(sources, self.config.merge_dist_m) {
             let s = &mut sources[i];
             if self.config.refine
-                && let Some((p, _)) = fit_bearings([s.x, s.y], &s.rays, self.sigma)
+                && let Some((p, _)) = fit_bearings([s.x, s.y], &s.rays, self.sigma, self.trim)
             {
                 (s.x, s.y, s.refined) = (p[0], p[1], true);
             }
@@ -1236,7 +1292,7 @@ impl Mapper {
         let mut est = est;
         let mut refined = false;
         if self.config.refine
-            && let Some(p) = refit(est, &mut rays, self.sigma, bearings)
+            && let Some(p) = refit(est, &mut rays, self.sigma, self.trim, bearings)
         {
             (est, refined) = (p, true);
         }
@@ -1494,7 +1550,7 @@ impl Mapper {
         proposals.sort_by(|a, b| b.1.total_cmp(&a.1));
         for &(q, _) in &proposals {
             let mut rays = self.associate(q, poses, bearings);
-            let est = refit(q, &mut rays, self.sigma, bearings).unwrap_or(q);
+            let est = refit(q, &mut rays, self.sigma, self.trim, bearings).unwrap_or(q);
             if share > 0.0 {
                 self.share_rays(est, poses, check, &mut rays);
             }
@@ -1664,9 +1720,10 @@ pub(crate) fn refit(
     start: [f64; 2],
     rays: &mut Vec<Ray>,
     sigma: f64,
+    trim: Trim,
     bearings: &mut [Vec<f64>],
 ) -> Option<[f64; 2]> {
-    let (p, kept) = fit_bearings(start, rays, sigma)?;
+    let (p, kept) = fit_bearings(start, rays, sigma, trim)?;
     let mut keep = vec![false; rays.len()];
     kept.iter().for_each(|&i| keep[i] = true);
     let mut k = keep.iter();
@@ -1712,15 +1769,41 @@ fn least_squares_crossing(rays: &[Ray]) -> Option<[f64; 2]> {
 /// from their stops to it, from `start`: Gauss-Newton, dropping the worst ray and refitting
 /// while a residual exceeds `2 sigma`. `None` when fewer than three rays remain, the
 /// geometry is degenerate (parallel rays), or the solution leaves the neighbourhood of
-/// `start` (2 m), where the particle estimate is the safer one.
+/// `start` (2 m), where the particle estimate is the safer one. No [`Trim`]: every kept
+/// ray moves the position ([`fit_bearings`] takes one).
 pub fn refine_by_bearings(start: [f64; 2], rays: &[Ray], sigma: f64) -> Option<[f64; 2]> {
-    fit_bearings(start, rays, sigma).map(|(p, _)| p)
+    fit_bearings(start, rays, sigma, Trim::OFF).map(|(p, _)| p)
 }
 
-/// [`refine_by_bearings`], with the indices (into `rays`, ascending) of the rays the fit
-/// kept.
-pub fn fit_bearings(start: [f64; 2], rays: &[Ray], sigma: f64) -> Option<([f64; 2], Vec<usize>)> {
-    fit_within(start, rays, sigma, 2.0)
+/// How much of a bearing fit's spread is the source's own: kept rays that miss the fit by
+/// more than `mads` robust standard deviations of the rays' misses (1.4826 times their
+/// median), and by more than `floor` (rad), do not move the position (see
+/// [`IasmConfig::trim_mads`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Trim {
+    /// The trim in robust standard deviations; 0 turns it off.
+    pub mads: f64,
+    /// The narrowest trim (rad).
+    pub floor: f64,
+}
+
+impl Trim {
+    /// No trim: every kept ray moves the position.
+    pub const OFF: Trim = Trim {
+        mads: 0.0,
+        floor: 0.0,
+    };
+}
+
+/// [`refine_by_bearings`] with a [`Trim`], and the indices (into `rays`, ascending) of the
+/// rays the fit kept (the trimmed ones among them).
+pub fn fit_bearings(
+    start: [f64; 2],
+    rays: &[Ray],
+    sigma: f64,
+    trim: Trim,
+) -> Option<([f64; 2], Vec<usize>)> {
+    fit_within(start, rays, sigma, 2.0, trim)
 }
 
 /// [`fit_bearings`] with the solution allowed within `limit` (m) of `start`.
@@ -1729,6 +1812,7 @@ fn fit_within(
     rays: &[Ray],
     sigma: f64,
     limit: f64,
+    trim: Trim,
 ) -> Option<([f64; 2], Vec<usize>)> {
     let solve = |kept: &[usize], from: [f64; 2]| -> Option<[f64; 2]> {
         if kept.len() < 3 {
@@ -1772,10 +1856,55 @@ fn fit_within(
             .map(|(k, &i)| (k, rays[i].miss(s)))
             .max_by(|a, b| a.1.total_cmp(&b.1))?;
         if e <= 2.0 * sigma {
-            return Some((s, kept));
+            return Some((trimmed(s, &kept, rays, (trim, 2.0 * sigma), solve), kept));
         }
         kept.remove(worst);
         s = solve(&kept, s)?;
+    }
+}
+
+/// The fit `s` of the `kept` rays again without those [`Trim`] leaves out, from `s`, until
+/// it keeps the same rays (at most three refits). `s` itself when nothing is trimmed, when
+/// fewer than four rays are kept, when the trimmed fit fails, or when a kept ray misses
+/// the trimmed fit by more than `gate` (the `2 sigma` that kept it): the rays left out
+/// then carried the geometry (the only ones across a line of nearly collinear rays, which
+/// fix the range), not an error to be rid of. Hard rejection rather than a smooth
+/// M-estimator weight: a ray beyond the trim is another sound's, not a worse measurement
+/// of this one.
+fn trimmed(
+    s: [f64; 2],
+    kept: &[usize],
+    rays: &[Ray],
+    (trim, gate): (Trim, f64),
+    solve: impl Fn(&[usize], [f64; 2]) -> Option<[f64; 2]>,
+) -> [f64; 2] {
+    if trim.mads <= 0.0 || kept.len() < 4 {
+        return s;
+    }
+    let mut p = s;
+    let mut misses: Vec<f64> = Vec::with_capacity(kept.len());
+    for _ in 0..3 {
+        misses.clear();
+        misses.extend(kept.iter().map(|&i| rays[i].miss(p)));
+        misses.sort_by(f64::total_cmp);
+        let cut = (trim.mads * 1.4826 * misses[misses.len() / 2]).max(trim.floor);
+        let inliers: Vec<usize> = kept
+            .iter()
+            .copied()
+            .filter(|&i| rays[i].miss(p) <= cut)
+            .collect();
+        if inliers.len() == kept.len() {
+            break;
+        }
+        match solve(&inliers, p) {
+            Some(q) => p = q,
+            None => return s,
+        }
+    }
+    if kept.iter().all(|&i| rays[i].miss(p) <= gate) {
+        p
+    } else {
+        s
     }
 }
 
@@ -2810,12 +2939,108 @@ mod tests {
         let mut bad = rays.clone();
         bad.push(ray(4, [0.0, 2.0], 0.5));
         bad.push(ray(5, [4.0, 2.0], (1.0f64 - 2.0).atan2(2.0 - 4.0)));
-        let (p, kept) = fit_bearings([2.4, 1.3], &bad, 5f64.to_radians()).unwrap();
+        let (p, kept) = fit_bearings([2.4, 1.3], &bad, 5f64.to_radians(), Trim::OFF).unwrap();
         assert!((p[0] - 2.0).hypot(p[1] - 1.0) < 0.02, "{p:?}");
         // ... and said to be dropped: the others are kept.
         assert_eq!(kept, vec![0, 1, 2, 3, 5]);
         // Two rays are not enough to trust.
         assert_eq!(refine_by_bearings([2.0, 1.0], &rays[..2], 0.1), None);
+    }
+
+    /// A source whose rays agree to half a degree is not pulled by one ray 7 degrees off
+    /// (inside the `2 sigma` gate of 10): trimmed at three robust deviations, the fit
+    /// lands on the point the other rays meet at, and the stray ray stays the source's.
+    #[test]
+    fn a_trimmed_fit_is_not_pulled_by_one_stray_ray() {
+        let truth = [2.0f64, 2.0];
+        let sigma = 5f64.to_radians();
+        // Eight stops along y = 0, each ray off by +-0.4 degrees in turn; a ninth, from
+        // the far end, 7 degrees off.
+        let mut rays: Vec<Ray> = (0..8)
+            .map(|i| {
+                let from = [0.5 * i as f64, 0.0];
+                let off = if i % 2 == 0 { 0.4 } else { -0.4 };
+                Ray {
+                    stop: i,
+                    from,
+                    bearing: (truth[1] - from[1]).atan2(truth[0] - from[0]) + f64::to_radians(off),
+                    twin: None,
+                    shared: false,
+                }
+            })
+            .collect();
+        let far = [6.0, 0.0];
+        rays.push(Ray {
+            stop: 8,
+            from: far,
+            bearing: (truth[1] - far[1]).atan2(truth[0] - far[0]) + 7f64.to_radians(),
+            twin: None,
+            shared: false,
+        });
+        let err = |p: [f64; 2]| (p[0] - truth[0]).hypot(p[1] - truth[1]);
+        let (plain, kept) = fit_bearings([2.3, 2.2], &rays, sigma, Trim::OFF).unwrap();
+        assert_eq!(kept.len(), 9, "the stray ray is inside the gate");
+        assert!(err(plain) > 0.04, "least squares is pulled: {plain:?}");
+        let trim = Trim {
+            mads: 3.0,
+            floor: 2f64.to_radians(),
+        };
+        let (p, kept) = fit_bearings([2.3, 2.2], &rays, sigma, trim).unwrap();
+        assert_eq!(kept.len(), 9, "a trimmed ray is still the source's");
+        assert!(err(p) < 0.01, "{p:?}");
+        // With three rays there is no spread to judge by: no trim.
+        let three = [rays[0], rays[4], rays[8]];
+        assert_eq!(
+            fit_bearings([2.3, 2.2], &three, sigma, trim),
+            fit_bearings([2.3, 2.2], &three, sigma, Trim::OFF)
+        );
+    }
+
+    /// Rays that alone fix a source's range are not trimmed away: five stops on a line
+    /// towards the source meet, to a hair, 1 m beyond it (their bearings barely change
+    /// with range, so they say little about it), and the two rays from beside it that fix
+    /// where it is, each a few degrees off, would be trimmed as the rays that miss most;
+    /// without them the fit moves 1 m, where they miss by more than the `2 sigma` that
+    /// kept them, so the untrimmed fit stands.
+    #[test]
+    fn a_trim_that_loses_the_geometry_is_not_taken() {
+        let (truth, beyond) = ([4.0f64, 0.0], [5.0f64, 0.05]);
+        let sigma = 5f64.to_radians();
+        let ray = |stop, from: [f64; 2], to: [f64; 2]| Ray {
+            stop,
+            from,
+            bearing: (to[1] - from[1]).atan2(to[0] - from[0]),
+            twin: None,
+            shared: false,
+        };
+        let mut rays: Vec<Ray> = (0..5)
+            .map(|i| ray(i, [0.4 * i as f64, 0.0], beyond))
+            .collect();
+        // Each misses the truth by 0.2-0.3 m (6-8 degrees), on either side.
+        rays.push(ray(5, [4.5, -2.0], [truth[0] - 0.2, 0.0]));
+        rays.push(ray(6, [3.5, -2.0], [truth[0] + 0.3, 0.0]));
+        let trim = Trim {
+            mads: 3.0,
+            floor: 2f64.to_radians(),
+        };
+        let (plain, kept) = fit_bearings([4.2, 0.2], &rays, sigma, Trim::OFF).unwrap();
+        assert_eq!(kept.len(), 7);
+        // The side rays are the ones a trim would leave out ...
+        let misses: Vec<f64> = rays.iter().map(|r| r.miss(plain).to_degrees()).collect();
+        let mut sorted = misses.clone();
+        sorted.sort_by(f64::total_cmp);
+        let cut = (3.0 * 1.4826 * sorted[3]).max(2.0);
+        assert!(misses[5] > cut && misses[6] > cut, "{misses:?}");
+        assert!(misses[..5].iter().all(|&m| m < cut), "{misses:?}");
+        // ... the line's rays alone would put it 1 m out ...
+        let (alone, _) = fit_bearings(plain, &rays[..5], sigma, Trim::OFF).unwrap();
+        assert!(
+            (alone[0] - beyond[0]).hypot(alone[1] - beyond[1]) < 0.01,
+            "{alone:?}"
+        );
+        // ... and the fit without the side rays is not taken.
+        let (p, _) = fit_bearings([4.2, 0.2], &rays, sigma, trim).unwrap();
+        assert_eq!(p, plain);
     }
 
     #[test]

@@ -237,7 +237,7 @@ impl OnlineMapper {
         let c = self.mapper.config();
         let (refine, needed, variant, sigma_p) =
             (c.refine, c.min_observations, c.variant, c.sigma_p_m);
-        let sigma = self.mapper.sigma();
+        let (sigma, trim) = (self.mapper.sigma(), self.mapper.trim());
         let mut order: Vec<usize> = (0..self.sources.len()).collect();
         order.sort_by_key(|&i| std::cmp::Reverse(self.sources[i].rays.len()));
         for s in &mut self.sources {
@@ -272,7 +272,7 @@ impl OnlineMapper {
                     }
                 }
             }
-            if refine && let Some(p) = refit([s.x, s.y], &mut rays, sigma, &mut self.pool) {
+            if refine && let Some(p) = refit([s.x, s.y], &mut rays, sigma, trim, &mut self.pool) {
                 (s.x, s.y, s.refined) = (p[0], p[1], true);
             }
             if rays.len() < needed {
