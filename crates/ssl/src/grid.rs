@@ -167,12 +167,15 @@ impl DirectionGrid {
     /// Unit vector of direction `d` in the array frame.
     pub fn unit(&self, d: usize) -> [f64; 3] {
         let n = self.num_azimuths();
-        let (az, el) = (
-            self.az_deg[d % n].to_radians(),
-            self.el_deg[d / n].to_radians(),
-        );
-        [el.cos() * az.cos(), el.cos() * az.sin(), el.sin()]
+        unit_vector(self.az_deg[d % n], self.el_deg[d / n])
     }
+}
+
+/// The unit vector of azimuth `azimuth_deg` and elevation `elevation_deg` (degrees) in the
+/// array frame: `(cos el cos az, cos el sin az, sin el)`.
+pub fn unit_vector(azimuth_deg: f64, elevation_deg: f64) -> [f64; 3] {
+    let (az, el) = (azimuth_deg.to_radians(), elevation_deg.to_radians());
+    [el.cos() * az.cos(), el.cos() * az.sin(), el.sin()]
 }
 
 /// Checks a grid's settings: `0 < az_step_deg <= 90`, and, when given, an elevation range

@@ -9,7 +9,7 @@ use crate::audio::Audio;
 use crate::config::{Pooling, SslConfig};
 use crate::covariance::SpatialCovariance;
 use crate::error::{ConfigError, Error, Result};
-use crate::grid::{DirectionGrid, ElevationRange, PairScratch};
+use crate::grid::{DirectionGrid, ElevationRange, PairScratch, unit_vector};
 use crate::method::music::SubspaceScratch;
 use crate::spectrum::{AngularSpectrum, Doa, wrap_deg};
 use crate::stft::{Spectrogram, Stft};
@@ -901,10 +901,7 @@ impl Localizer {
     /// The source coherence of two DoAs in the recording whose covariance is `cov`
     /// ([`SpatialCovariance::source_coherence`]).
     fn source_coherence(&self, cov: &SpatialCovariance, a: &Doa, b: &Doa) -> Option<f64> {
-        let unit = |d: &Doa| {
-            let (az, el) = (d.azimuth_deg.to_radians(), d.elevation_deg.to_radians());
-            [el.cos() * az.cos(), el.cos() * az.sin(), el.sin()]
-        };
+        let unit = |d: &Doa| unit_vector(d.azimuth_deg, d.elevation_deg);
         cov.source_coherence(
             self.array.positions(),
             f64::from(self.sample_rate),
@@ -979,8 +976,7 @@ impl Localizer {
         let len = self.wave_fft.len();
         let nbins = len / 2 + 1;
         let phases = &self.wave_phases;
-        let (az, el) = (azimuth_deg.to_radians(), elevation_deg.to_radians());
-        let u = [el.cos() * az.cos(), el.cos() * az.sin(), el.sin()];
+        let u = unit_vector(azimuth_deg, elevation_deg);
         let fs = f64::from(self.sample_rate);
         let c = self.config.speed_of_sound;
         let channels = self
@@ -1088,8 +1084,7 @@ impl Localizer {
         let sigma0 = (1.0 / (2.0 * nf as f64 * nb as f64 * np as f64)).sqrt();
         doas.iter()
             .map(|d| {
-                let (az, el) = (d.azimuth_deg.to_radians(), d.elevation_deg.to_radians());
-                let u = [el.cos() * az.cos(), el.cos() * az.sin(), el.sin()];
+                let u = unit_vector(d.azimuth_deg, d.elevation_deg);
                 let lead: Vec<f64> = pos
                     .iter()
                     .map(|q| (q[0] * u[0] + q[1] * u[1] + q[2] * u[2]) / c * fs)
