@@ -700,10 +700,7 @@ impl Mapper {
             resample_below: (config.resample_frac * m as f64).ceil(),
             gamma: config.gamma_sigmas * sigma,
             sigma,
-            trim: Trim {
-                mads: config.trim_mads,
-                floor: config.trim_floor_deg.to_radians(),
-            },
+            trim: Trim::of(config),
             mirror: config.mirror_axis_deg.map(f64::to_radians),
         })
     }
@@ -1793,6 +1790,14 @@ impl Trim {
         mads: 0.0,
         floor: 0.0,
     };
+
+    /// The trim `config` sets ([`IasmConfig::trim_mads`], [`IasmConfig::trim_floor_deg`]).
+    pub fn of(config: &IasmConfig) -> Self {
+        Trim {
+            mads: config.trim_mads,
+            floor: config.trim_floor_deg.to_radians(),
+        }
+    }
 }
 
 /// [`refine_by_bearings`] with a [`Trim`], and the indices (into `rays`, ascending) of the
@@ -2914,6 +2919,17 @@ mod tests {
         assert_eq!((v[0].x, v[0].observations), (0.15, 2));
     }
 
+    /// The ray from `from` (stop `stop`) towards `to`, turned by `off_deg`.
+    fn ray_towards(stop: usize, from: [f64; 2], to: [f64; 2], off_deg: f64) -> Ray {
+        Ray {
+            stop,
+            from,
+            bearing: (to[1] - from[1]).atan2(to[0] - from[0]) + off_deg.to_radians(),
+            twin: None,
+            shared: false,
+        }
+    }
+
     #[test]
     fn bearing_least_squares_finds_the_intersection() {
         // Rays from three robot positions through (2, 1), one of them 0.5 degrees off.
@@ -2958,33 +2974,17 @@ mod tests {
         // the far end, 7 degrees off.
         let mut rays: Vec<Ray> = (0..8)
             .map(|i| {
-                let from = [0.5 * i as f64, 0.0];
                 let off = if i % 2 == 0 { 0.4 } else { -0.4 };
-                Ray {
-                    stop: i,
-                    from,
-                    bearing: (truth[1] - from[1]).atan2(truth[0] - from[0]) + f64::to_radians(off),
-                    twin: None,
-                    shared: false,
-                }
+                ray_towards(i, [0.5 * i as f64, 0.0], truth, off)
             })
             .collect();
-        let far = [6.0, 0.0];
-        rays.push(Ray {
-            stop: 8,
-            from: far,
-            bearing: (truth[1] - far[1]).atan2(truth[0] - far[0]) + 7f64.to_radians(),
-            twin: None,
-            shared: false,
-        });
+        rays.push(ray_towards(8, [6.0, 0.0], truth, 7.0));
         let err = |p: [f64; 2]| (p[0] - truth[0]).hypot(p[1] - truth[1]);
         let (plain, kept) = fit_bearings([2.3, 2.2], &rays, sigma, Trim::OFF).unwrap();
         assert_eq!(kept.len(), 9, "the stray ray is inside the gate");
         assert!(err(plain) > 0.04, "least squares is pulled: {plain:?}");
-        let trim = Trim {
-            mads: 3.0,
-            floor: 2f64.to_radians(),
-        };
+        // The default trim: 3 robust deviations, 2 degrees at least.
+        let trim = Trim::of(&IasmConfig::default());
         let (p, kept) = fit_bearings([2.3, 2.2], &rays, sigma, trim).unwrap();
         assert_eq!(kept.len(), 9, "a trimmed ray is still the source's");
         assert!(err(p) < 0.01, "{p:?}");
@@ -3006,30 +3006,21 @@ mod tests {
     fn a_trim_that_loses_the_geometry_is_not_taken() {
         let (truth, beyond) = ([4.0f64, 0.0], [5.0f64, 0.05]);
         let sigma = 5f64.to_radians();
-        let ray = |stop, from: [f64; 2], to: [f64; 2]| Ray {
-            stop,
-            from,
-            bearing: (to[1] - from[1]).atan2(to[0] - from[0]),
-            twin: None,
-            shared: false,
-        };
         let mut rays: Vec<Ray> = (0..5)
-            .map(|i| ray(i, [0.4 * i as f64, 0.0], beyond))
+            .map(|i| ray_towards(i, [0.4 * i as f64, 0.0], beyond, 0.0))
             .collect();
         // Each misses the truth by 0.2-0.3 m (6-8 degrees), on either side.
-        rays.push(ray(5, [4.5, -2.0], [truth[0] - 0.2, 0.0]));
-        rays.push(ray(6, [3.5, -2.0], [truth[0] + 0.3, 0.0]));
-        let trim = Trim {
-            mads: 3.0,
-            floor: 2f64.to_radians(),
-        };
+        rays.push(ray_towards(5, [4.5, -2.0], [truth[0] - 0.2, 0.0], 0.0));
+        rays.push(ray_towards(6, [3.5, -2.0], [truth[0] + 0.3, 0.0], 0.0));
+        // The default trim: 3 robust deviations, 2 degrees at least.
+        let trim = Trim::of(&IasmConfig::default());
         let (plain, kept) = fit_bearings([4.2, 0.2], &rays, sigma, Trim::OFF).unwrap();
         assert_eq!(kept.len(), 7);
         // The side rays are the ones a trim would leave out ...
         let misses: Vec<f64> = rays.iter().map(|r| r.miss(plain).to_degrees()).collect();
         let mut sorted = misses.clone();
         sorted.sort_by(f64::total_cmp);
-        let cut = (3.0 * 1.4826 * sorted[3]).max(2.0);
+        let cut = (trim.mads * 1.4826 * sorted[3]).max(trim.floor.to_degrees());
         assert!(misses[5] > cut && misses[6] > cut, "{misses:?}");
         assert!(misses[..5].iter().all(|&m| m < cut), "{misses:?}");
         // ... the line's rays alone would put it 1 m out ...
