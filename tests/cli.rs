@@ -242,3 +242,131 @@ fn the_shipped_array_file_is_the_iasm6_preset() {
     assert_eq!((s.ssl.az_step_deg, s.ssl.block_frames), (1.0, 1_000_000));
     assert_eq!(s.ssl.elevation, Some(ssl::ElevationRange::PLANE));
 }
+
+/// A data set of four stops, each hearing a loud noise source and one `quiet_db` below it,
+/// both as plane waves, both within 3 m of every stop (the truth places them there).
+fn loud_and_quiet_dataset(dir: &tempfile::TempDir, quiet_db: f64) -> std::path::PathBuf {
+    use sim::farfield::{PlaneWave, render};
+    use sim::signal::Signal;
+    let root = path(dir, "lq");
+    std::fs::create_dir_all(root.join("audio")).unwrap();
+    std::fs::create_dir_all(root.join("pose")).unwrap();
+    let (loud, quiet) = ([1.5, 1.0], [0.5, -1.5]);
+    let mut csv = String::from("x,y,theta\n");
+    for k in 0..4 {
+        let (x, y, th) = (0.2 * k as f64, 0.0, 30.0 * k as f64);
+        let az = |s: [f64; 2]| ssl::wrap_deg((s[1] - y).atan2(s[0] - x).to_degrees() - th);
+        let wave = |azimuth_deg| PlaneWave {
+            azimuth_deg,
+            elevation_deg: 0.0,
+            signal: Signal::Noise,
+        };
+        let n = FS as usize / 2;
+        let a = render(
+            &iasm6(),
+            &[wave(az(loud))],
+            FS,
+            n,
+            343.0,
+            Some(30.0),
+            SEED + k,
+        );
+        let b = render(
+            &iasm6(),
+            &[wave(az(quiet))],
+            FS,
+            n,
+            343.0,
+            None,
+            SEED + 100 + k,
+        );
+        let g = 10f64.powf(quiet_db / 20.0);
+        let mixed: Vec<Vec<f64>> = a
+            .iter()
+            .zip(&b)
+            .map(|(a, b)| a.iter().zip(b).map(|(u, v)| 0.1 * (u + g * v)).collect())
+            .collect();
+        write_wav(&root.join(format!("audio/sub{}.wav", k + 1)), &mixed, FS);
+        csv.push_str(&format!("{x},{y},{th}\n"));
+    }
+    std::fs::write(root.join("pose/poses.csv"), csv).unwrap();
+    std::fs::write(
+        root.join("src_gt.txt"),
+        format!(
+            "s1 [{}, {}, 0]\ns2 [{}, {}, 0]\n",
+            loud[0], loud[1], quiet[0], quiet[1]
+        ),
+    )
+    .unwrap();
+    root
+}
+
+#[test]
+fn rules_names_the_threshold_that_left_a_quiet_source_out() {
+    // Four stops, each hearing two noise sources 3 dB apart, both within 3 m. With N = 1
+    // only one of the two can be reported: the quiet one is cut at N at every stop. With
+    // N = 4 but a height threshold of 0.95 (its exceptions off), the quiet one's peak,
+    // lower than the loud one's, is too low at every stop. The census must say so, and
+    // account for every miss once.
+    let dir = tempdir();
+    let root = loud_and_quiet_dataset(&dir, -3.0);
+    let strict = path(&dir, "strict.toml");
+    std::fs::write(
+        &strict,
+        "[ssl]\nmin_relative = 0.95\nincoherent_relative = 0.0\ndominance_blocks = 0\n",
+    )
+    .unwrap();
+    let census = |extra: &[&str]| {
+        let mut a = vec![
+            "ssl",
+            "--dataset",
+            arg(&root),
+            "--method",
+            "gcc-phat",
+            "--score",
+            "--rules",
+            "--json",
+        ];
+        a.extend_from_slice(extra);
+        let v = json(&iasm(&a));
+        let r = v["rules"].clone();
+        let get = |k: &str| r[k].as_u64().unwrap_or_else(|| panic!("{k} in {r}"));
+        let missed: u64 = [
+            "no_peak",
+            "cut_at_n",
+            "low",
+            "coherent",
+            "prominence",
+            "sidelobe",
+            "insignificant",
+            "jointly",
+        ]
+        .iter()
+        .map(|k| get(k))
+        .sum();
+        assert_eq!(missed, get("pairs") - get("found"), "{r}");
+        assert_eq!((get("pairs"), get("found")), (8, 4), "{r}");
+        (get("cut_at_n"), get("low"))
+    };
+    assert_eq!(census(&["--num", "1"]), (4, 0));
+    assert_eq!(census(&["--num", "4", "--config", arg(&strict)]), (0, 4));
+    // The table on the terminal names the rules.
+    let o = iasm(&[
+        "ssl",
+        "--dataset",
+        arg(&root),
+        "--method",
+        "gcc-phat",
+        "--num",
+        "1",
+        "--score",
+        "--rules",
+    ]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", show(&o));
+    assert!(
+        text.contains("why sources within 3 m were missed (4 of 8 pairs")
+            && text.contains("cut at N by stronger DoAs"),
+        "{text}"
+    );
+}

@@ -494,6 +494,13 @@ pub struct SslArgs {
     /// the recall of sources within 3 m.
     #[arg(long)]
     pub by_distance: bool,
+    /// With --score: also print which of the SSL's rules left out each source within 3 m
+    /// that no DoA found (no peak there at all, N, height, coherence, prominence,
+    /// sidelobe, significance), and which let in each DoA that found no source (height,
+    /// block votes, incoherence). Localises every recording six times, each time with one
+    /// rule off (see `iasm::rules`).
+    #[arg(long)]
+    pub rules: bool,
     /// With --score: ground-truth source positions to score against instead of the data
     /// set's src_gt* (e.g. the truth moved into the poses' frame by `iasm map
     /// --write-aligned-truth`).

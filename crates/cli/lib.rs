@@ -10,6 +10,7 @@
 //! - [`scenes`]: scene files (with the suite's `[expect]`), and writing a rendered scene.
 //! - [`suite`]: the synthetic-room regression suite.
 //! - [`score`]: the DoA score against known sources.
+//! - [`rules`]: which SSL rule left each missed near source out, and let each false DoA in.
 //! - [`explain`]: which DoAs each source of a map explains, which none does, and where a
 //!   missed true source's DoAs went.
 //! - [`compare`]: every SSL method side by side on one data set, DoAs to maps.
@@ -30,6 +31,7 @@ pub mod figure;
 pub mod online;
 pub mod output;
 pub mod pipeline;
+pub mod rules;
 pub mod scenes;
 pub mod score;
 pub mod settings;

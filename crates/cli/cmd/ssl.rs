@@ -12,6 +12,7 @@ use crate::Outcome;
 use crate::args::SslArgs;
 use crate::dataset::{Dataset, Table, read_poses, read_sources, read_table};
 use crate::pipeline::{FileDoas, doa_table, localise_files};
+use crate::rules::{RuleCensus, run_census};
 use crate::score::{Diagnostics, DoaScore, diagnose, score_doas};
 
 /// Version of the JSON this command prints.
@@ -128,6 +129,20 @@ pub fn run(args: &SslArgs) -> Result<Outcome> {
             Err(e) => eprintln!("warning: cannot score {}: {e:#}", t.display()),
         }
     }
+    let rules = if args.rules {
+        Some(run_census(
+            &ds.audio,
+            &array,
+            &config,
+            &rows,
+            &poses,
+            &sources,
+            args.tol_deg,
+            mirror,
+        )?)
+    } else {
+        None
+    };
     let report = ScoreReport {
         schema_version: SCHEMA_VERSION,
         method: config.method.name(),
@@ -152,6 +167,7 @@ pub fn run(args: &SslArgs) -> Result<Outcome> {
                 score: s.clone(),
             })
             .collect(),
+        rules: rules.clone(),
     };
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
@@ -206,6 +222,9 @@ pub fn run(args: &SslArgs) -> Result<Outcome> {
                     deg(b.axis_bias_deg)
                 );
             }
+        }
+        if let Some(c) = &rules {
+            print_census(&format!("iasm {}", config.method), c, args.tol_deg);
         }
     }
     let mut failed = false;
@@ -272,6 +291,50 @@ struct ScoreReport {
     #[serde(skip_serializing_if = "Vec::is_empty")]
     diagnostics: Vec<NamedDiagnostics>,
     published: Vec<PublishedScore>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    rules: Option<RuleCensus>,
+}
+
+/// The census of `--rules` in words: where the missed near sources went, and what let the
+/// false DoAs in.
+fn print_census(name: &str, c: &RuleCensus, tol_deg: f64) {
+    let missed = c.pairs - c.found;
+    println!(
+        "\n{name}: why sources within 3 m were missed ({} of {} pairs found within {tol_deg} deg; {missed} missed)",
+        c.found, c.pairs
+    );
+    let rows = [
+        ("no peak there in the spectrum", c.no_peak),
+        ("cut at N by stronger DoAs", c.cut_at_n),
+        ("too low (min_relative)", c.low),
+        ("low and coherent (max_incoherence)", c.coherent),
+        ("not prominent (min_prominence)", c.prominence),
+        ("a sidelobe (sidelobe_ratio)", c.sidelobe),
+        ("insignificant (min_significance)", c.insignificant),
+        ("two rules at once", c.jointly),
+    ];
+    for (what, k) in rows {
+        let extra = if what.starts_with("cut") && c.cut_but_extra > 0 {
+            format!(
+                " ({} reported beyond N by the octave votes)",
+                c.cut_but_extra
+            )
+        } else if what.starts_with("no peak") && c.no_peak > 0 {
+            format!(
+                " ({} with a peak within {} deg, {} with another source within min_sep_deg)",
+                c.no_peak_displaced,
+                2.0 * tol_deg,
+                c.no_peak_beside
+            )
+        } else {
+            String::new()
+        };
+        println!("  {what:<36} {k:>5}{extra}");
+    }
+    println!(
+        "{name}: DoAs with no source within {tol_deg} deg: {} of {}, let in by height {}, by block votes {}, as incoherent {}",
+        c.false_doas, c.doas, c.by_height, c.by_dominance, c.by_incoherence
+    );
 }
 
 #[derive(Serialize)]

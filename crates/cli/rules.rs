@@ -1,0 +1,438 @@
+//! Which of the SSL's rules left a near source out of a stop's DoAs, and which let in the
+//! DoAs that found no source: `iasm ssl --dataset DIR --score --rules`.
+//!
+//! A stop's DoAs are the peaks of its pooled spectrum that pass every rule of
+//! [`ssl::SslConfig`] (prominence, height or block dominance or incoherence, sidelobes,
+//! significance), strongest first, at most `N`. When a source within 3 m is not among them
+//! (the pairs that [`crate::score::Diagnostics::recall_3m`] counts as missed), the census
+//! asks the localizer again with one rule off at a time, and with `N` raised so that the
+//! rules, not `N`, decide: the rule whose absence alone lets a DoA within the tolerance
+//! through is the one that left the source out. A source that no run reports, though the
+//! spectrum has a peak there, was left out by two rules at once; one with no peak there
+//! at all is beyond what thresholds can do (the spectrum does not show it).
+//!
+//! The rules are taken off one at a time rather than read from the localizer's decisions
+//! so that the census runs the localizer as it is, with nothing added to its hot path; it
+//! costs six localisations per recording instead of one.
+//!
+//! A missed source with no peak within the tolerance is told apart further: with a peak
+//! within twice the tolerance (heard, but displaced: a reflection's pull, the near field,
+//! a pose error), or with another true source within `min_sep_deg` (one peak for two).
+//!
+//! Why: every rule trades the sources it lets in against the clutter it keeps out, and a
+//! recall figure alone does not say which trade to revisit on a data set. Measured
+//! (`BENCHMARKS.md`, session 21): on the regression suite, the held-out scenes, surveys
+//! rendered by pyroomacoustics and the authors' recordings, the height and coherence rules
+//! left out 4-23 % of the missed near sources; about half to two thirds of the misses had
+//! no peak within 5 degrees (48-70 %), and where more sources sound at once than `N`, `N`
+//! cut a fifth to a third of them (19-37 %).
+
+use std::path::PathBuf;
+
+use anyhow::{Result, ensure};
+use asm::Pose;
+use serde::Serialize;
+use ssl::{Doa, MicArray, SslConfig, fold_azimuth, wrap_deg};
+
+use crate::pipeline::{FileDoas, localise_files};
+
+/// A rule of [`SslConfig`] that the census takes off.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Rule {
+    /// `min_relative` (with the block dominance and incoherence exceptions): height.
+    Height,
+    /// `min_prominence`.
+    Prominence,
+    /// `sidelobe_ratio`.
+    Sidelobe,
+    /// `min_significance`.
+    Significance,
+}
+
+impl Rule {
+    /// Every rule, in the order a miss is attributed when more than one releases it.
+    pub const ALL: [Rule; 4] = [
+        Rule::Height,
+        Rule::Prominence,
+        Rule::Sidelobe,
+        Rule::Significance,
+    ];
+}
+
+/// `N` for the runs that let the rules, not `N`, decide: four times `N`, at least 12.
+pub fn wide_n(config: &SslConfig) -> usize {
+    (4 * config.num_peaks).max(12)
+}
+
+/// Sources nearer than this to a stop (m) are the ones it should hear: the pairs of
+/// [`crate::score::Diagnostics::recall_3m`].
+pub const NEAR_M: f64 = 3.0;
+
+/// `config` with `N` raised to [`wide_n`], every rule on.
+pub fn without_n(config: &SslConfig) -> SslConfig {
+    SslConfig {
+        num_peaks: wide_n(config),
+        ..config.clone()
+    }
+}
+
+/// `config` with `N` raised to [`wide_n`] and `off` taken off (every rule when `None`:
+/// every resolved peak of the spectrum).
+pub fn without(config: &SslConfig, off: Option<Rule>) -> SslConfig {
+    let mut c = config.clone();
+    c.num_peaks = wide_n(config);
+    let every = off.is_none();
+    if every || off == Some(Rule::Height) {
+        c.min_relative = 0.0;
+        c.incoherent_relative = 0.0;
+    }
+    if every || off == Some(Rule::Prominence) {
+        c.min_prominence = 0.0;
+    }
+    if every || off == Some(Rule::Sidelobe) {
+        c.sidelobe_ratio = 0.0;
+    }
+    if every || off == Some(Rule::Significance) {
+        c.min_significance = 0.0;
+    }
+    c
+}
+
+/// One stop as the census sees it (azimuths in degrees, array frame, folded for a linear
+/// array as the score folds them).
+#[derive(Clone, Debug, Default)]
+pub struct Stop {
+    /// The bearings of the true sources within 3 m.
+    pub near: Vec<f64>,
+    /// The bearings of every true source.
+    pub all: Vec<f64>,
+    /// The DoAs (the first `N`), each with its height and block votes.
+    pub doas: Vec<Doa>,
+    /// The octave votes' DoAs beyond `N` ([`ssl::Located::extra`]).
+    pub extra: Vec<f64>,
+    /// The DoAs with `N` raised ([`wide_n`]), every rule on.
+    pub wide: Vec<f64>,
+    /// The DoAs with `N` raised and each rule of [`Rule::ALL`] off in turn.
+    pub released: Vec<Vec<f64>>,
+    /// Every resolved peak of the spectrum (every rule off), with its height.
+    pub peaks: Vec<Doa>,
+}
+
+/// The counts of [`census`]. Each missed pair is counted under exactly one of `no_peak`,
+/// `cut_at_n`, `low`, `coherent`, `prominence`, `sidelobe`, `insignificant`, `jointly`.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct RuleCensus {
+    /// (stop, source within 3 m) pairs.
+    pub pairs: usize,
+    /// Pairs with a DoA within the tolerance.
+    pub found: usize,
+    /// Missed: the spectrum has no peak within the tolerance.
+    pub no_peak: usize,
+    /// Of `no_peak`, those with another true source within `min_sep_deg` of their bearing:
+    /// two sources the localizer cannot tell apart there, one peak for both.
+    pub no_peak_beside: usize,
+    /// Of `no_peak`, those with a peak within twice the tolerance (a source heard, but
+    /// displaced: a reflection's pull, or the near field).
+    pub no_peak_displaced: usize,
+    /// Missed: `N` stronger DoAs passed the rules.
+    pub cut_at_n: usize,
+    /// Of `cut_at_n`, those the octave votes report beyond `N` (the mapper takes them).
+    pub cut_but_extra: usize,
+    /// Missed by height: below `incoherent_relative` (or that exception off).
+    pub low: usize,
+    /// Missed by height: between `incoherent_relative` and `min_relative`, and coherent
+    /// with a stronger peak.
+    pub coherent: usize,
+    /// Missed by `min_prominence`.
+    pub prominence: usize,
+    /// Missed by `sidelobe_ratio`.
+    pub sidelobe: usize,
+    /// Missed by `min_significance`.
+    pub insignificant: usize,
+    /// Missed though the spectrum has a peak there that no single rule taken off lets
+    /// through.
+    pub jointly: usize,
+    /// DoAs (the first `N`).
+    pub doas: usize,
+    /// DoAs with no true source (at any distance) within the tolerance.
+    pub false_doas: usize,
+    /// Of `false_doas`, let in by their height (`min_relative`).
+    pub by_height: usize,
+    /// Of `false_doas`, let in by their block votes (`dominance_blocks`) though lower.
+    pub by_dominance: usize,
+    /// Of `false_doas`, let in as incoherent with every stronger peak though lower.
+    pub by_incoherence: usize,
+}
+
+/// Counts why the near sources of `stops` were missed and what let in the DoAs that found
+/// no source (see the module docs); a DoA within `tol_deg` of a bearing finds it.
+/// `config` holds the thresholds the DoAs were found with.
+pub fn census(stops: &[Stop], config: &SslConfig, tol_deg: f64) -> RuleCensus {
+    let near = |azs: &[f64], t: f64| azs.iter().any(|a| wrap_deg(a - t).abs() <= tol_deg);
+    let mut c = RuleCensus::default();
+    for s in stops {
+        let doas: Vec<f64> = s.doas.iter().map(|d| d.azimuth_deg).collect();
+        for &t in &s.near {
+            c.pairs += 1;
+            if near(&doas, t) {
+                c.found += 1;
+                continue;
+            }
+            let Some(peak) = s
+                .peaks
+                .iter()
+                .filter(|p| wrap_deg(p.azimuth_deg - t).abs() <= tol_deg)
+                .max_by(|a, b| a.relative.total_cmp(&b.relative))
+            else {
+                c.no_peak += 1;
+                let others = s.all.iter().filter(|&&a| wrap_deg(a - t).abs() > 1e-9);
+                let beside = others
+                    .filter(|&&a| wrap_deg(a - t).abs() < config.min_sep_deg)
+                    .count();
+                c.no_peak_beside += usize::from(beside > 0);
+                let displaced = s
+                    .peaks
+                    .iter()
+                    .any(|p| wrap_deg(p.azimuth_deg - t).abs() <= 2.0 * tol_deg);
+                c.no_peak_displaced += usize::from(displaced);
+                continue;
+            };
+            if near(&s.wide, t) {
+                c.cut_at_n += 1;
+                c.cut_but_extra += usize::from(near(&s.extra, t));
+                continue;
+            }
+            let rule = Rule::ALL
+                .iter()
+                .zip(&s.released)
+                .find(|(_, r)| near(r, t))
+                .map(|(rule, _)| *rule);
+            match rule {
+                Some(Rule::Height) => {
+                    let exception = config.incoherent_relative > 0.0
+                        && peak.relative >= config.incoherent_relative;
+                    if exception {
+                        c.coherent += 1;
+                    } else {
+                        c.low += 1;
+                    }
+                }
+                Some(Rule::Prominence) => c.prominence += 1,
+                Some(Rule::Sidelobe) => c.sidelobe += 1,
+                Some(Rule::Significance) => c.insignificant += 1,
+                None => c.jointly += 1,
+            }
+        }
+        for d in &s.doas {
+            c.doas += 1;
+            if near(&s.all, d.azimuth_deg) {
+                continue;
+            }
+            c.false_doas += 1;
+            if d.relative >= config.min_relative {
+                c.by_height += 1;
+            } else if config.dominance_blocks > 0
+                && d.dominant_blocks as usize >= config.dominance_blocks
+            {
+                c.by_dominance += 1;
+            } else {
+                c.by_incoherence += 1;
+            }
+        }
+    }
+    c
+}
+
+/// The census of a data set: `rows` are its recordings' DoAs found with `config` (in the
+/// order of `files`), heard at `poses`, scored against `sources` (m); each recording is
+/// localised again with [`without`] every rule and each rule in turn. For a linear array
+/// at `mirror_axis_deg`, DoAs and bearings are folded as the score folds them.
+///
+/// # Errors
+/// As [`localise_files`]; or if the rows, files and poses differ in length.
+#[allow(clippy::too_many_arguments)]
+pub fn run_census(
+    files: &[PathBuf],
+    array: &MicArray,
+    config: &SslConfig,
+    rows: &[FileDoas],
+    poses: &[Pose],
+    sources: &[[f64; 2]],
+    tol_deg: f64,
+    mirror_axis_deg: Option<f64>,
+) -> Result<RuleCensus> {
+    ensure!(
+        rows.len() == files.len() && rows.len() == poses.len(),
+        "{} recordings, {} rows of DoAs and {} poses",
+        files.len(),
+        rows.len(),
+        poses.len()
+    );
+    let fold = |a: f64| fold_azimuth(a, mirror_axis_deg);
+    let folded = |d: &Doa| Doa {
+        azimuth_deg: fold(d.azimuth_deg),
+        ..*d
+    };
+    let azimuths =
+        |r: &FileDoas| -> Vec<f64> { r.doas.iter().map(|d| fold(d.azimuth_deg)).collect() };
+    // N raised with every rule on, then each rule off in turn, then all of them off.
+    let wide = localise_files(files, array, &without_n(config))?;
+    let released = Rule::ALL
+        .iter()
+        .map(|&rule| localise_files(files, array, &without(config, Some(rule))))
+        .collect::<Result<Vec<_>>>()?;
+    let peaks = localise_files(files, array, &without(config, None))?;
+    let stops: Vec<Stop> = (0..rows.len())
+        .map(|k| {
+            let pose = &poses[k];
+            let bearing = |s: &[f64; 2]| {
+                fold(wrap_deg(
+                    pose.bearing_to(*s).to_degrees() - pose.theta_deg(),
+                ))
+            };
+            Stop {
+                near: sources
+                    .iter()
+                    .filter(|s| (s[0] - pose.x).hypot(s[1] - pose.y) < NEAR_M)
+                    .map(bearing)
+                    .collect(),
+                all: sources.iter().map(bearing).collect(),
+                doas: rows[k].doas.iter().map(folded).collect(),
+                extra: rows[k].extra.iter().map(|d| fold(d.azimuth_deg)).collect(),
+                wide: azimuths(&wide[k]),
+                released: released.iter().map(|r| azimuths(&r[k])).collect(),
+                peaks: peaks[k].doas.iter().map(folded).collect(),
+            }
+        })
+        .collect();
+    Ok(census(&stops, config, tol_deg))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn doa(azimuth_deg: f64, relative: f64, dominant_blocks: u32) -> Doa {
+        Doa {
+            azimuth_deg,
+            elevation_deg: 0.0,
+            strength: relative,
+            relative,
+            dominant_blocks,
+            prominence: 1.0,
+            significance: 50.0,
+        }
+    }
+
+    /// A stop hearing a source at 0 (found), with near sources at 60, 120, -60, -120, 170,
+    /// 90 and -90 missed for each reason in turn, and DoAs at 1 (the source at 0), 30 (let
+    /// in by height), -30 (by its block votes) and 150 (by incoherence).
+    fn stop() -> Stop {
+        let all = vec![0.0, 60.0, 120.0, -60.0, -120.0, 170.0, 90.0, -90.0];
+        Stop {
+            near: all.clone(),
+            all,
+            doas: vec![
+                doa(1.0, 1.0, 9),
+                doa(30.0, 0.5, 0),
+                doa(-30.0, 0.1, 3),
+                doa(150.0, 0.2, 0),
+            ],
+            extra: vec![],
+            // 60: cut at N.
+            wide: vec![1.0, 30.0, -30.0, 150.0, 62.0],
+            released: vec![
+                vec![118.0],  // height: 120 (0.2 high)
+                vec![-58.0],  // prominence
+                vec![-123.0], // sidelobe
+                vec![168.0],  // significance
+            ],
+            peaks: [
+                0.0, 60.0, 120.0, -60.0, -120.0, 170.0, 90.0, 30.0, -30.0, 150.0,
+            ]
+            .iter()
+            .map(|&a| doa(a + 1.0, if a == 120.0 { 0.2 } else { 0.1 }, 0))
+            .collect(),
+        }
+    }
+
+    #[test]
+    fn each_miss_goes_to_the_rule_whose_absence_releases_it() {
+        let config = SslConfig::default();
+        let c = census(&[stop()], &config, 5.0);
+        assert_eq!((c.pairs, c.found), (8, 1));
+        // -90 has no peak within 5 degrees; 90 has one that no single rule releases.
+        assert_eq!((c.no_peak, c.no_peak_beside, c.jointly), (1, 0, 1));
+        assert_eq!(c.no_peak_displaced, 0);
+        // A peak 8 degrees from -90: displaced, not absent.
+        let mut s = stop();
+        s.peaks.push(doa(-82.0, 0.1, 0));
+        assert_eq!(census(&[s], &config, 5.0).no_peak_displaced, 1);
+        assert_eq!((c.cut_at_n, c.cut_but_extra), (1, 0));
+        // 120's peak stands 0.2 high: above `incoherent_relative` (0.15), so it was the
+        // coherence that kept it out.
+        assert_eq!((c.low, c.coherent), (0, 1));
+        assert_eq!((c.prominence, c.sidelobe, c.insignificant), (1, 1, 1));
+        let missed = c.no_peak
+            + c.cut_at_n
+            + c.low
+            + c.coherent
+            + c.prominence
+            + c.sidelobe
+            + c.insignificant
+            + c.jointly;
+        assert_eq!(missed, c.pairs - c.found);
+        assert_eq!((c.doas, c.false_doas), (4, 3));
+        assert_eq!((c.by_height, c.by_dominance, c.by_incoherence), (1, 1, 1));
+    }
+
+    #[test]
+    fn a_source_without_a_peak_beside_another_is_told_apart() {
+        // A far source 8 degrees from the unresolved one at -90: within `min_sep_deg`
+        // (10), the two make one peak at most.
+        let mut s = stop();
+        s.all.push(-98.0);
+        let c = census(&[s], &SslConfig::default(), 5.0);
+        assert_eq!((c.no_peak, c.no_peak_beside), (1, 1));
+    }
+
+    #[test]
+    fn a_low_peak_is_low_when_the_incoherence_exception_is_off() {
+        let config = SslConfig {
+            incoherent_relative: 0.0,
+            ..SslConfig::default()
+        };
+        let c = census(&[stop()], &config, 5.0);
+        assert_eq!((c.low, c.coherent), (1, 0));
+    }
+
+    #[test]
+    fn the_octave_votes_beyond_n_are_counted_with_the_cut() {
+        let mut s = stop();
+        s.extra = vec![61.0];
+        let c = census(&[s], &SslConfig::default(), 5.0);
+        assert_eq!((c.cut_at_n, c.cut_but_extra), (1, 1));
+    }
+
+    #[test]
+    fn without_takes_off_one_rule_and_raises_n() {
+        let base = SslConfig::default();
+        let c = without(&base, Some(Rule::Sidelobe));
+        assert_eq!(c.num_peaks, 16);
+        assert_eq!(c.sidelobe_ratio, 0.0);
+        assert_eq!(c.min_relative, base.min_relative);
+        assert_eq!(c.min_significance, base.min_significance);
+        let h = without(&base, Some(Rule::Height));
+        assert_eq!((h.min_relative, h.incoherent_relative), (0.0, 0.0));
+        let all = without(&base, None);
+        assert_eq!(
+            (
+                all.min_relative,
+                all.min_prominence,
+                all.sidelobe_ratio,
+                all.min_significance
+            ),
+            (0.0, 0.0, 0.0, 0.0)
+        );
+    }
+}
