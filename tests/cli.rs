@@ -115,6 +115,27 @@ fn a_missed_threshold_exits_with_status_1() {
 }
 
 #[test]
+fn a_scoring_option_without_score_is_refused_not_ignored() {
+    // A gate that could never fail: --min-score without --score would score nothing and
+    // exit 0. So would --score on single files, which have no poses or truth.
+    let dir = tempdir();
+    let root = synthetic_dataset(&dir);
+    for flag in [
+        &["--min-score", "0.9"][..],
+        &["--by-distance"],
+        &["--rules"],
+    ] {
+        let mut a = vec!["ssl", "--dataset", arg(&root)];
+        a.extend_from_slice(flag);
+        let o = iasm(&a);
+        assert_eq!(o.status.code(), Some(2), "{flag:?}: {}", show(&o));
+        assert_clear_error(&o, &[flag[0], "--score"]);
+    }
+    let wav = root.join("audio/sub9.wav");
+    assert_clear_error(&iasm(&["ssl", arg(&wav), "--score"]), &["--score"]);
+}
+
+#[test]
 fn wrong_channel_count_is_a_clear_error() {
     let dir = tempdir();
     let wav = path(&dir, "four.wav");

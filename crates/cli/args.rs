@@ -477,14 +477,19 @@ pub struct SslArgs {
     pub json: bool,
     /// With --dataset: write the DoA table (one row per recording, N azimuths in degrees,
     /// array frame, empty cells where fewer peaks were found) to this CSV file.
-    #[arg(long, value_name = "FILE")]
+    #[arg(
+        long,
+        value_name = "FILE",
+        requires = "dataset",
+        conflicts_with = "files"
+    )]
     pub out: Option<PathBuf>,
     /// With --out: write a header line first.
-    #[arg(long)]
+    #[arg(long, requires = "out", conflicts_with = "files")]
     pub header: bool,
     /// With --dataset: score the DoAs against the data set's poses and ground truth (and
     /// score the published tables in `azimuth/` beside them).
-    #[arg(long)]
+    #[arg(long, requires = "dataset", conflicts_with = "files")]
     pub score: bool,
     /// With --score: a DoA within this many degrees of a true source's bearing is a hit.
     #[arg(long, default_value_t = 5.0, value_name = "DEG")]
@@ -492,26 +497,26 @@ pub struct SslArgs {
     /// With --score: also print where the DoAs fail, for ours and the published tables:
     /// errors by the source's distance from the robot, bias towards the heading axis, and
     /// the recall of sources within 3 m.
-    #[arg(long)]
+    #[arg(long, requires = "score")]
     pub by_distance: bool,
     /// With --score: also print which of the SSL's rules left out each source within 3 m
     /// that no DoA found (no peak there at all, N, height, coherence, prominence,
     /// sidelobe, significance), and which let in each DoA that found no source (height,
     /// block votes, incoherence). Localises every recording six times, each time with one
     /// rule off (see `iasm::rules`).
-    #[arg(long)]
+    #[arg(long, requires = "score")]
     pub rules: bool,
     /// With --score: ground-truth source positions to score against instead of the data
     /// set's src_gt* (e.g. the truth moved into the poses' frame by `iasm map
     /// --write-aligned-truth`).
-    #[arg(long, value_name = "FILE")]
+    #[arg(long, value_name = "FILE", requires = "score")]
     pub truth: Option<PathBuf>,
     /// With --score: exit with status 1 if the score is below this.
-    #[arg(long, value_name = "SCORE")]
+    #[arg(long, value_name = "SCORE", requires = "score")]
     pub min_score: Option<f64>,
     /// With --score: exit with status 1 if the score is below that of the published table
     /// of the same method (`azimuth/*<METHOD>*`).
-    #[arg(long)]
+    #[arg(long, requires = "score")]
     pub beat_published: bool,
     /// Worker threads for --dataset (default: all cores).
     #[arg(long, value_name = "N")]
