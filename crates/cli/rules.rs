@@ -162,6 +162,11 @@ pub struct RuleCensus {
     pub by_dominance: usize,
     /// Of `false_doas`, let in as incoherent with every stronger peak though lower.
     pub by_incoherence: usize,
+    /// DoAs that `N` raised to [`wide_n`] would add (every rule on): those of the wide run
+    /// with no DoA of the row within the tolerance. What a larger `N` would give the mapper.
+    pub beyond_n: usize,
+    /// Of `beyond_n`, those within the tolerance of a true source (at any distance).
+    pub beyond_n_on_source: usize,
 }
 
 /// Counts why the near sources of `stops` were missed and what let in the DoAs that found
@@ -221,6 +226,12 @@ pub fn census(stops: &[Stop], config: &SslConfig, tol_deg: f64) -> RuleCensus {
                 Some(Rule::Sidelobe) => c.sidelobe += 1,
                 Some(Rule::Significance) => c.insignificant += 1,
                 None => c.jointly += 1,
+            }
+        }
+        for &w in &s.wide {
+            if !near(&doas, w) {
+                c.beyond_n += 1;
+                c.beyond_n_on_source += usize::from(near(&s.all, w));
             }
         }
         for d in &s.doas {
@@ -339,8 +350,8 @@ mod tests {
                 doa(150.0, 0.2, 0),
             ],
             extra: vec![],
-            // 60: cut at N.
-            wide: vec![1.0, 30.0, -30.0, 150.0, 62.0],
+            // 60: cut at N; 100 lies 10 degrees from the nearest source.
+            wide: vec![1.0, 30.0, -30.0, 150.0, 62.0, 100.0],
             released: vec![
                 vec![118.0],  // height: 120 (0.2 high)
                 vec![-58.0],  // prominence
@@ -384,6 +395,8 @@ mod tests {
         assert_eq!(missed, c.pairs - c.found);
         assert_eq!((c.doas, c.false_doas), (4, 3));
         assert_eq!((c.by_height, c.by_dominance, c.by_incoherence), (1, 1, 1));
+        // A larger N would add 62 (on the source at 60) and 100 (on none).
+        assert_eq!((c.beyond_n, c.beyond_n_on_source), (2, 1));
     }
 
     #[test]

@@ -224,7 +224,12 @@ pub fn run(args: &SslArgs) -> Result<Outcome> {
             }
         }
         if let Some(c) = &rules {
-            print_census(&format!("iasm {}", config.method), c, args.tol_deg);
+            print_census(
+                &format!("iasm {}", config.method),
+                c,
+                args.tol_deg,
+                crate::rules::wide_n(&config),
+            );
         }
     }
     let mut failed = false;
@@ -297,7 +302,7 @@ struct ScoreReport {
 
 /// The census of `--rules` in words: where the missed near sources went, and what let the
 /// false DoAs in.
-fn print_census(name: &str, c: &RuleCensus, tol_deg: f64) {
+fn print_census(name: &str, c: &RuleCensus, tol_deg: f64, wide_n: usize) {
     let missed = c.pairs - c.found;
     println!(
         "\n{name}: why sources within 3 m were missed ({} of {} pairs found within {tol_deg} deg; {missed} missed)",
@@ -334,6 +339,10 @@ fn print_census(name: &str, c: &RuleCensus, tol_deg: f64) {
     println!(
         "{name}: DoAs with no source within {tol_deg} deg: {} of {}, let in by height {}, by block votes {}, as incoherent {}",
         c.false_doas, c.doas, c.by_height, c.by_dominance, c.by_incoherence
+    );
+    println!(
+        "{name}: N raised to {wide_n} would add {} DoAs, {} of them within {tol_deg} deg of a source",
+        c.beyond_n, c.beyond_n_on_source
     );
 }
 
