@@ -172,6 +172,11 @@ pub struct CompareArgs {
     /// sources (m; default 3), as for `map`.
     #[arg(long, value_name = "M")]
     pub open_margin: Option<f64>,
+    /// Also say, per method, why the sources within 3 m that no DoA found were missed (no
+    /// peak there, N, the thresholds) and what N raised to 4N would add, as `iasm ssl
+    /// --score --rules` does: six more localisations per recording and method.
+    #[arg(long)]
+    pub rules: bool,
     /// The settings (the method is each row's own).
     #[command(flatten)]
     pub settings: SettingsArgs,

@@ -19,6 +19,7 @@ use crate::dataset::{Dataset, Table, read_table};
 use crate::pipeline::{
     Survey, SurveyInputs, VariantStats, evaluate, first_columns, localise_files, mapped_table,
 };
+use crate::rules::{RuleCensus, run_census};
 use crate::score::{Diagnostics, DoaScore, diagnose, score_doas};
 use crate::settings::Settings;
 
@@ -46,6 +47,8 @@ pub struct CompareOptions {
     /// Without an occupancy map: the search margin around the stops (m; default
     /// [`crate::pipeline::OPEN_MARGIN_M`]).
     pub open_margin_m: Option<f64>,
+    /// Also take each method's census of missed near sources ([`crate::rules`]).
+    pub rules: bool,
 }
 
 /// One row of the comparison: a method of ours, or a published table.
@@ -65,6 +68,10 @@ pub struct Row {
     pub ms_per_recording: Option<f64>,
     /// The sources of the first seed's map (m), for the figure.
     pub map_seed0: Vec<[f64; 2]>,
+    /// Why the near sources no DoA found were missed (methods only, with
+    /// [`CompareOptions::rules`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rules: Option<RuleCensus>,
 }
 
 /// The whole comparison.
@@ -140,7 +147,7 @@ pub fn compare(
     };
     let n = settings.ssl.num_peaks;
     let array = settings.mic_array()?;
-    let stages = 2 * opts.methods.len() + ds.doa_tables.len();
+    let stages = (2 + usize::from(opts.rules)) * opts.methods.len() + ds.doa_tables.len();
     let mut stage = 0;
     let mut tell = |what: String| {
         stage += 1;
@@ -179,14 +186,21 @@ pub fn compare(
         let cut = Some(files.iter().map(|f| f.cut).collect());
         let survey = survey(table, format!("ssl:{method}"), cut, &s)?;
         tell(format!("{method}: {} maps", opts.runs));
-        rows.push(row(
-            &survey,
-            method.name().to_owned(),
-            "ssl",
-            Some(ms),
-            &s,
-            opts,
-        )?);
+        let mut r = row(&survey, method.name().to_owned(), "ssl", Some(ms), &s, opts)?;
+        if opts.rules {
+            tell(format!("{method}: why near sources were missed"));
+            r.rules = Some(run_census(
+                &ds.audio,
+                &array,
+                &s.ssl,
+                &files,
+                &survey.poses,
+                survey.truth.as_deref().unwrap_or_default(),
+                HIT_DEG,
+                survey.mirror_axis_deg,
+            )?);
+        }
+        rows.push(r);
     }
     for t in &ds.doa_tables {
         let name = t.file_name().map_or_else(
@@ -256,6 +270,7 @@ fn row(
         ospa,
         ms_per_recording,
         map_seed0,
+        rules: None,
     })
 }
 
@@ -279,6 +294,7 @@ pub fn to_csv(r: &Report) -> String {
     for b in &bands {
         out.push_str(&format!(",err_deg_{}", b.replace(' ', "")));
     }
+    out.push_str(",near_missed,missed_no_peak,missed_cut_at_n,missed_by_thresholds,beyond_n,beyond_n_on_source");
     out.push('\n');
     let num = |v: f64| {
         if v.is_finite() {
@@ -311,6 +327,21 @@ pub fn to_csv(r: &Report) -> String {
         for b in &row.diagnostics.bands {
             out.push(',');
             out.push_str(&num(b.mean_abs_err_deg));
+        }
+        let census: [Option<usize>; 6] = match &row.rules {
+            Some(c) => [
+                Some(c.pairs - c.found),
+                Some(c.no_peak),
+                Some(c.cut_at_n),
+                Some(c.by_thresholds()),
+                Some(c.beyond_n),
+                Some(c.beyond_n_on_source),
+            ],
+            None => [None; 6],
+        };
+        for v in census {
+            out.push(',');
+            out.push_str(&v.map(|v| v.to_string()).unwrap_or_default());
         }
         out.push('\n');
     }

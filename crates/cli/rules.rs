@@ -169,6 +169,20 @@ pub struct RuleCensus {
     pub beyond_n_on_source: usize,
 }
 
+impl RuleCensus {
+    /// The missed pairs that some threshold left out: too low, coherent, not prominent,
+    /// a sidelobe, insignificant, or two rules at once (every miss but `no_peak` and
+    /// `cut_at_n`).
+    pub fn by_thresholds(&self) -> usize {
+        self.low
+            + self.coherent
+            + self.prominence
+            + self.sidelobe
+            + self.insignificant
+            + self.jointly
+    }
+}
+
 /// Counts why the near sources of `stops` were missed and what let in the DoAs that found
 /// no source (see the module docs); a DoA within `tol_deg` of a bearing finds it.
 /// `config` holds the thresholds the DoAs were found with.
@@ -384,14 +398,7 @@ mod tests {
         // coherence that kept it out.
         assert_eq!((c.low, c.coherent), (0, 1));
         assert_eq!((c.prominence, c.sidelobe, c.insignificant), (1, 1, 1));
-        let missed = c.no_peak
-            + c.cut_at_n
-            + c.low
-            + c.coherent
-            + c.prominence
-            + c.sidelobe
-            + c.insignificant
-            + c.jointly;
+        let missed = c.no_peak + c.cut_at_n + c.by_thresholds();
         assert_eq!(missed, c.pairs - c.found);
         assert_eq!((c.doas, c.false_doas), (4, 3));
         assert_eq!((c.by_height, c.by_dominance, c.by_incoherence), (1, 1, 1));

@@ -19,6 +19,7 @@ pub fn run(a: &CompareArgs) -> Result<Outcome> {
         ospa_c: a.report.ospa_c,
         ospa_p: a.report.ospa_p,
         open_margin_m: a.open_margin,
+        rules: a.rules,
     };
     let t0 = std::time::Instant::now();
     // One line per stage; the stages' own progress bars (localising, mapping) show the rest.
@@ -112,4 +113,25 @@ fn print_table(r: &Report, secs: f64) {
     println!(
         "aligned: the matched sources' mean distance from the truth after each map's best similarity transform onto it (asm::align), free of any disagreement between the poses' and the truth's frames"
     );
+    if r.rows.iter().any(|row| row.rules.is_some()) {
+        println!(
+            "\nwhy sources within 3 m were missed (iasm ssl --score --rules); N raised to 4N would add"
+        );
+        println!(
+            "{:<24} {:>7} {:>8} {:>9} {:>11} {:>18}",
+            "method", "missed", "no peak", "cut at N", "thresholds", "added (on source)"
+        );
+        for row in &r.rows {
+            let Some(c) = &row.rules else { continue };
+            println!(
+                "{:<24} {:>7} {:>8} {:>9} {:>11} {:>18}",
+                row.name,
+                format!("{}/{}", c.pairs - c.found, c.pairs),
+                c.no_peak,
+                c.cut_at_n,
+                c.by_thresholds(),
+                format!("{} ({})", c.beyond_n, c.beyond_n_on_source)
+            );
+        }
+    }
 }
