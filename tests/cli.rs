@@ -350,22 +350,9 @@ fn rules_names_the_threshold_that_left_a_quiet_source_out() {
         ];
         a.extend_from_slice(extra);
         let v = json(&iasm(&a));
-        let r = v["rules"].clone();
-        let get = |k: &str| r[k].as_u64().unwrap_or_else(|| panic!("{k} in {r}"));
-        let missed: u64 = [
-            "no_peak",
-            "cut_at_n",
-            "low",
-            "coherent",
-            "prominence",
-            "sidelobe",
-            "insignificant",
-            "jointly",
-        ]
-        .iter()
-        .map(|k| get(k))
-        .sum();
-        assert_eq!(missed, get("pairs") - get("found"), "{r}");
+        let r = &v["rules"];
+        assert_every_miss_filed_once(r);
+        let get = |k: &str| census_count(r, k);
         assert_eq!((get("pairs"), get("found")), (8, 4), "{r}");
         (get("cut_at_n"), get("low"))
     };

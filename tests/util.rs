@@ -183,3 +183,33 @@ pub fn svg_texts(path: &Path) -> Vec<String> {
         })
         .collect()
 }
+
+/// A count of the `rules` census in `iasm ssl --rules` or `iasm compare --rules` JSON.
+pub fn census_count(c: &serde_json::Value, key: &str) -> u64 {
+    c[key]
+        .as_u64()
+        .unwrap_or_else(|| panic!("no count {key} in the census {c}"))
+}
+
+/// Asserts that the census `c` files every missed (stop, near source) pair under exactly one
+/// heading: the headings sum to the pairs less those found.
+pub fn assert_every_miss_filed_once(c: &serde_json::Value) {
+    let filed: u64 = [
+        "no_peak",
+        "cut_at_n",
+        "low",
+        "coherent",
+        "prominence",
+        "sidelobe",
+        "insignificant",
+        "jointly",
+    ]
+    .iter()
+    .map(|k| census_count(c, k))
+    .sum();
+    assert_eq!(
+        filed,
+        census_count(c, "pairs") - census_count(c, "found"),
+        "{c}"
+    );
+}
