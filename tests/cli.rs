@@ -337,6 +337,7 @@ fn rules_names_the_threshold_that_left_a_quiet_source_out() {
         "[ssl]\nmin_relative = 0.95\nincoherent_relative = 0.0\ndominance_blocks = 0\n",
     )
     .unwrap();
+    // (cut at N, too low) and every missed (stop, source, reason), for `extra` flags.
     let census = |extra: &[&str]| {
         let mut a = vec![
             "ssl",
@@ -354,10 +355,31 @@ fn rules_names_the_threshold_that_left_a_quiet_source_out() {
         assert_every_miss_filed_once(r);
         let get = |k: &str| census_count(r, k);
         assert_eq!((get("pairs"), get("found")), (8, 4), "{r}");
-        (get("cut_at_n"), get("low"))
+        let missed: Vec<(u64, u64, String)> = r["missed"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|m| {
+                (
+                    m["stop"].as_u64().unwrap(),
+                    m["source"].as_u64().unwrap(),
+                    m["reason"].as_str().unwrap().to_owned(),
+                )
+            })
+            .collect();
+        ((get("cut_at_n"), get("low")), missed)
     };
-    assert_eq!(census(&["--num", "1"]), (4, 0));
-    assert_eq!(census(&["--num", "4", "--config", arg(&strict)]), (0, 4));
+    // Each miss is listed: the quiet source (the truth's second, index 1) at every stop.
+    let every_stop = |reason: &str| {
+        (0..4)
+            .map(|k| (k, 1, reason.to_owned()))
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(census(&["--num", "1"]), ((4, 0), every_stop("cut_at_n")));
+    assert_eq!(
+        census(&["--num", "4", "--config", arg(&strict)]),
+        ((0, 4), every_stop("low"))
+    );
     // The table on the terminal names the rules.
     let o = iasm(&[
         "ssl",

@@ -507,8 +507,9 @@ pub struct SslArgs {
     /// With --score: also print which of the SSL's rules left out each source within 3 m
     /// that no DoA found (no peak there at all, N, height, coherence, prominence,
     /// sidelobe, significance), and which let in each DoA that found no source (height,
-    /// block votes, incoherence). Localises every recording six times, each time with one
-    /// rule off (see `iasm::rules`).
+    /// block votes, incoherence), and what N raised to 4N would add. With --json, every
+    /// missed pair is listed with its stop, source, distance and reason. Localises every
+    /// recording six times, each time with one rule off (see `iasm::rules`).
     #[arg(long, requires = "score")]
     pub rules: bool,
     /// With --score: ground-truth source positions to score against instead of the data

@@ -102,8 +102,8 @@ pub fn without(config: &SslConfig, off: Option<Rule>) -> SslConfig {
 /// array as the score folds them).
 #[derive(Clone, Debug, Default)]
 pub struct Stop {
-    /// The bearings of the true sources within 3 m.
-    pub near: Vec<f64>,
+    /// The true sources within 3 m.
+    pub near: Vec<Near>,
     /// The bearings of every true source.
     pub all: Vec<f64>,
     /// The DoAs (the first `N`), each with its height and block votes.
@@ -118,9 +118,60 @@ pub struct Stop {
     pub peaks: Vec<Doa>,
 }
 
+/// A true source within 3 m of a stop.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Near {
+    /// Its index in the truth (0-based, the truth file's order).
+    pub source: usize,
+    /// Its bearing (degrees, array frame).
+    pub bearing_deg: f64,
+    /// Its distance from the stop (m).
+    pub distance_m: f64,
+}
+
+/// Why a near source is not among a stop's DoAs (see the module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Reason {
+    /// The spectrum has no peak within the tolerance.
+    NoPeak,
+    /// `N` stronger DoAs passed the rules.
+    CutAtN,
+    /// Below `min_relative`, and below `incoherent_relative` (or that exception off).
+    Low,
+    /// Between `incoherent_relative` and `min_relative`, coherent with a stronger peak.
+    Coherent,
+    /// Below `min_prominence`.
+    Prominence,
+    /// Below `sidelobe_ratio` times a stronger peak's sidelobe.
+    Sidelobe,
+    /// Below `min_significance`.
+    Insignificant,
+    /// No single rule taken off lets it through.
+    Jointly,
+}
+
+/// One missed (stop, near source) pair of [`RuleCensus::missed`].
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Missed {
+    /// The stop (0-based, the recordings' order).
+    pub stop: usize,
+    /// The source (0-based, the truth's order).
+    pub source: usize,
+    /// Its distance from the stop (m).
+    pub distance_m: f64,
+    /// Its bearing (degrees, array frame).
+    pub bearing_deg: f64,
+    /// Why no DoA found it.
+    pub reason: Reason,
+    /// The height of the strongest peak within the tolerance of its bearing (every rule
+    /// off; [`ssl::Doa::relative`]), if any.
+    pub peak_relative: Option<f64>,
+}
+
 /// The counts of [`census`]. Each missed pair is counted under exactly one of `no_peak`,
 /// `cut_at_n`, `low`, `coherent`, `prominence`, `sidelobe`, `insignificant`, `jointly`.
-#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct RuleCensus {
     /// (stop, source within 3 m) pairs.
     pub pairs: usize,
@@ -167,6 +218,8 @@ pub struct RuleCensus {
     pub beyond_n: usize,
     /// Of `beyond_n`, those within the tolerance of a true source (at any distance).
     pub beyond_n_on_source: usize,
+    /// Every missed pair, stop by stop, with its reason.
+    pub missed: Vec<Missed>,
 }
 
 impl RuleCensus {
@@ -189,58 +242,80 @@ impl RuleCensus {
 pub fn census(stops: &[Stop], config: &SslConfig, tol_deg: f64) -> RuleCensus {
     let near = |azs: &[f64], t: f64| azs.iter().any(|a| wrap_deg(a - t).abs() <= tol_deg);
     let mut c = RuleCensus::default();
-    for s in stops {
+    for (k, s) in stops.iter().enumerate() {
         let doas: Vec<f64> = s.doas.iter().map(|d| d.azimuth_deg).collect();
-        for &t in &s.near {
+        for n in &s.near {
+            let t = n.bearing_deg;
             c.pairs += 1;
             if near(&doas, t) {
                 c.found += 1;
                 continue;
             }
-            let Some(peak) = s
+            let peak = s
                 .peaks
                 .iter()
                 .filter(|p| wrap_deg(p.azimuth_deg - t).abs() <= tol_deg)
-                .max_by(|a, b| a.relative.total_cmp(&b.relative))
-            else {
-                c.no_peak += 1;
-                let others = s.all.iter().filter(|&&a| wrap_deg(a - t).abs() > 1e-9);
-                let beside = others
-                    .filter(|&&a| wrap_deg(a - t).abs() < config.min_sep_deg)
-                    .count();
-                c.no_peak_beside += usize::from(beside > 0);
-                let displaced = s
-                    .peaks
-                    .iter()
-                    .any(|p| wrap_deg(p.azimuth_deg - t).abs() <= 2.0 * tol_deg);
-                c.no_peak_displaced += usize::from(displaced);
-                continue;
-            };
-            if near(&s.wide, t) {
-                c.cut_at_n += 1;
-                c.cut_but_extra += usize::from(near(&s.extra, t));
-                continue;
-            }
-            let rule = Rule::ALL
-                .iter()
-                .zip(&s.released)
-                .find(|(_, r)| near(r, t))
-                .map(|(rule, _)| *rule);
-            match rule {
-                Some(Rule::Height) => {
-                    let exception = config.incoherent_relative > 0.0
-                        && peak.relative >= config.incoherent_relative;
-                    if exception {
-                        c.coherent += 1;
-                    } else {
-                        c.low += 1;
+                .map(|p| p.relative)
+                .max_by(f64::total_cmp);
+            let reason = match peak {
+                None => {
+                    let others = s.all.iter().enumerate().filter(|&(i, _)| i != n.source);
+                    let beside = others
+                        .filter(|&(_, &a)| wrap_deg(a - t).abs() < config.min_sep_deg)
+                        .count();
+                    c.no_peak_beside += usize::from(beside > 0);
+                    let displaced = s
+                        .peaks
+                        .iter()
+                        .any(|p| wrap_deg(p.azimuth_deg - t).abs() <= 2.0 * tol_deg);
+                    c.no_peak_displaced += usize::from(displaced);
+                    Reason::NoPeak
+                }
+                Some(_) if near(&s.wide, t) => {
+                    c.cut_but_extra += usize::from(near(&s.extra, t));
+                    Reason::CutAtN
+                }
+                Some(relative) => {
+                    let rule = Rule::ALL
+                        .iter()
+                        .zip(&s.released)
+                        .find(|(_, r)| near(r, t))
+                        .map(|(rule, _)| *rule);
+                    match rule {
+                        Some(Rule::Height) => {
+                            if config.incoherent_relative > 0.0
+                                && relative >= config.incoherent_relative
+                            {
+                                Reason::Coherent
+                            } else {
+                                Reason::Low
+                            }
+                        }
+                        Some(Rule::Prominence) => Reason::Prominence,
+                        Some(Rule::Sidelobe) => Reason::Sidelobe,
+                        Some(Rule::Significance) => Reason::Insignificant,
+                        None => Reason::Jointly,
                     }
                 }
-                Some(Rule::Prominence) => c.prominence += 1,
-                Some(Rule::Sidelobe) => c.sidelobe += 1,
-                Some(Rule::Significance) => c.insignificant += 1,
-                None => c.jointly += 1,
-            }
+            };
+            *match reason {
+                Reason::NoPeak => &mut c.no_peak,
+                Reason::CutAtN => &mut c.cut_at_n,
+                Reason::Low => &mut c.low,
+                Reason::Coherent => &mut c.coherent,
+                Reason::Prominence => &mut c.prominence,
+                Reason::Sidelobe => &mut c.sidelobe,
+                Reason::Insignificant => &mut c.insignificant,
+                Reason::Jointly => &mut c.jointly,
+            } += 1;
+            c.missed.push(Missed {
+                stop: k,
+                source: n.source,
+                distance_m: n.distance_m,
+                bearing_deg: t,
+                reason,
+                peak_relative: peak,
+            });
         }
         for &w in &s.wide {
             if !near(&doas, w) {
@@ -318,8 +393,13 @@ pub fn run_census(
             Stop {
                 near: sources
                     .iter()
-                    .filter(|s| (s[0] - pose.x).hypot(s[1] - pose.y) < NEAR_M)
-                    .map(bearing)
+                    .enumerate()
+                    .map(|(i, s)| Near {
+                        source: i,
+                        bearing_deg: bearing(s),
+                        distance_m: (s[0] - pose.x).hypot(s[1] - pose.y),
+                    })
+                    .filter(|n| n.distance_m < NEAR_M)
                     .collect(),
                 all: sources.iter().map(bearing).collect(),
                 doas: rows[k].doas.iter().map(folded).collect(),
@@ -355,7 +435,15 @@ mod tests {
     fn stop() -> Stop {
         let all = vec![0.0, 60.0, 120.0, -60.0, -120.0, 170.0, 90.0, -90.0];
         Stop {
-            near: all.clone(),
+            near: all
+                .iter()
+                .enumerate()
+                .map(|(source, &bearing_deg)| Near {
+                    source,
+                    bearing_deg,
+                    distance_m: 2.0,
+                })
+                .collect(),
             all,
             doas: vec![
                 doa(1.0, 1.0, 9),
@@ -404,6 +492,22 @@ mod tests {
         assert_eq!((c.by_height, c.by_dominance, c.by_incoherence), (1, 1, 1));
         // A larger N would add 62 (on the source at 60) and 100 (on none).
         assert_eq!((c.beyond_n, c.beyond_n_on_source), (2, 1));
+        // Each miss is listed with its source and reason, in the truth's order.
+        let listed: Vec<(usize, Reason)> = c.missed.iter().map(|m| (m.source, m.reason)).collect();
+        assert_eq!(
+            listed,
+            [
+                (1, Reason::CutAtN),
+                (2, Reason::Coherent),
+                (3, Reason::Prominence),
+                (4, Reason::Sidelobe),
+                (5, Reason::Insignificant),
+                (6, Reason::Jointly),
+                (7, Reason::NoPeak),
+            ]
+        );
+        assert_eq!(c.missed[1].peak_relative, Some(0.2));
+        assert_eq!(c.missed[6].peak_relative, None);
     }
 
     #[test]
