@@ -148,6 +148,9 @@ fn an_unknown_method_or_a_data_set_without_truth_is_a_clear_error() {
         "mvdr,beamformit",
     ]);
     assert_clear_error(&o, &["beamformit", "normmusic"]);
+    // Said once, not once more by the parser underneath.
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(err.matches("beamformit").count(), 1, "{err}");
     std::fs::remove_file(root.join("src_gt.txt")).unwrap();
     let o = iasm(&[
         "compare",
@@ -158,7 +161,13 @@ fn an_unknown_method_or_a_data_set_without_truth_is_a_clear_error() {
         "--runs",
         "1",
     ]);
-    assert_clear_error(&o, &["ground truth"]);
+    // Before any method runs (its progress lines would name it), naming the folder.
+    assert_clear_error(&o, &["ground truth", &root.display().to_string()]);
+    assert!(
+        !String::from_utf8_lossy(&o.stderr).contains("localising"),
+        "{}",
+        show(&o)
+    );
 }
 
 #[test]

@@ -107,8 +107,8 @@ pub fn parse_methods(s: &str) -> Result<Vec<Method>> {
     }
     let mut out = Vec::new();
     for name in s.split(',').map(str::trim).filter(|n| !n.is_empty()) {
-        let m: Method = name.parse().with_context(|| {
-            format!(
+        let m: Method = name.parse().map_err(|_| {
+            anyhow::anyhow!(
                 "--methods: unknown method {name:?} (known: all, {})",
                 Method::ALL.map(Method::name).join(", ")
             )
@@ -138,6 +138,13 @@ pub fn compare(
     ensure!(
         !ds.audio.is_empty(),
         "{}: no recordings in audio/",
+        root.display()
+    );
+    // Checked before any method runs: without it every method would localise and map
+    // before the first score failed.
+    ensure!(
+        ds.sources.is_some(),
+        "{}: the comparison needs ground truth (src_gt* in the data set)",
         root.display()
     );
     let inputs = SurveyInputs {
