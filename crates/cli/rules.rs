@@ -68,32 +68,21 @@ pub fn wide_n(config: &SslConfig) -> usize {
 /// [`crate::score::Diagnostics::recall_3m`].
 pub const NEAR_M: f64 = 3.0;
 
-/// `config` with `N` raised to [`wide_n`], every rule on.
-pub fn without_n(config: &SslConfig) -> SslConfig {
-    SslConfig {
-        num_peaks: wide_n(config),
-        ..config.clone()
-    }
-}
-
-/// `config` with `N` raised to [`wide_n`] and `off` taken off (every rule when `None`:
-/// every resolved peak of the spectrum).
-pub fn without(config: &SslConfig, off: Option<Rule>) -> SslConfig {
+/// `config` with `N` raised to [`wide_n`] and the rules `off` taken off (none: `N` alone
+/// raised; [`Rule::ALL`]: every resolved peak of the spectrum).
+pub fn without(config: &SslConfig, off: &[Rule]) -> SslConfig {
     let mut c = config.clone();
     c.num_peaks = wide_n(config);
-    let every = off.is_none();
-    if every || off == Some(Rule::Height) {
-        c.min_relative = 0.0;
-        c.incoherent_relative = 0.0;
-    }
-    if every || off == Some(Rule::Prominence) {
-        c.min_prominence = 0.0;
-    }
-    if every || off == Some(Rule::Sidelobe) {
-        c.sidelobe_ratio = 0.0;
-    }
-    if every || off == Some(Rule::Significance) {
-        c.min_significance = 0.0;
+    for rule in off {
+        match rule {
+            Rule::Height => {
+                c.min_relative = 0.0;
+                c.incoherent_relative = 0.0;
+            }
+            Rule::Prominence => c.min_prominence = 0.0,
+            Rule::Sidelobe => c.sidelobe_ratio = 0.0,
+            Rule::Significance => c.min_significance = 0.0,
+        }
     }
     c
 }
@@ -213,6 +202,8 @@ pub struct RuleCensus {
     pub by_dominance: usize,
     /// Of `false_doas`, let in as incoherent with every stronger peak though lower.
     pub by_incoherence: usize,
+    /// The `N` of the census's wide runs ([`wide_n`]).
+    pub wide_n: usize,
     /// DoAs that `N` raised to [`wide_n`] would add (every rule on): those of the wide run
     /// with no DoA of the row within the tolerance. What a larger `N` would give the mapper.
     pub beyond_n: usize,
@@ -241,7 +232,10 @@ impl RuleCensus {
 /// `config` holds the thresholds the DoAs were found with.
 pub fn census(stops: &[Stop], config: &SslConfig, tol_deg: f64) -> RuleCensus {
     let near = |azs: &[f64], t: f64| azs.iter().any(|a| wrap_deg(a - t).abs() <= tol_deg);
-    let mut c = RuleCensus::default();
+    let mut c = RuleCensus {
+        wide_n: wide_n(config),
+        ..RuleCensus::default()
+    };
     for (k, s) in stops.iter().enumerate() {
         let doas: Vec<f64> = s.doas.iter().map(|d| d.azimuth_deg).collect();
         for n in &s.near {
@@ -345,7 +339,7 @@ pub fn census(stops: &[Stop], config: &SslConfig, tol_deg: f64) -> RuleCensus {
 
 /// The census of a data set: `rows` are its recordings' DoAs found with `config` (in the
 /// order of `files`), heard at `poses`, scored against `sources` (m); each recording is
-/// localised again with [`without`] every rule and each rule in turn. For a linear array
+/// localised again with [`without`] no rule, each rule in turn and every rule. For a linear array
 /// at `mirror_axis_deg`, DoAs and bearings are folded as the score folds them.
 ///
 /// # Errors
@@ -376,12 +370,12 @@ pub fn run_census(
     let azimuths =
         |r: &FileDoas| -> Vec<f64> { r.doas.iter().map(|d| fold(d.azimuth_deg)).collect() };
     // N raised with every rule on, then each rule off in turn, then all of them off.
-    let wide = localise_files(files, array, &without_n(config))?;
+    let wide = localise_files(files, array, &without(config, &[]))?;
     let released = Rule::ALL
         .iter()
-        .map(|&rule| localise_files(files, array, &without(config, Some(rule))))
+        .map(|&rule| localise_files(files, array, &without(config, &[rule])))
         .collect::<Result<Vec<_>>>()?;
-    let peaks = localise_files(files, array, &without(config, None))?;
+    let peaks = localise_files(files, array, &without(config, &Rule::ALL))?;
     let stops: Vec<Stop> = (0..rows.len())
         .map(|k| {
             let pose = &poses[k];
@@ -541,14 +535,20 @@ mod tests {
     #[test]
     fn without_takes_off_one_rule_and_raises_n() {
         let base = SslConfig::default();
-        let c = without(&base, Some(Rule::Sidelobe));
+        let n = without(&base, &[]);
+        assert_eq!(n.num_peaks, 16);
+        assert_eq!(
+            (n.min_relative, n.sidelobe_ratio),
+            (base.min_relative, base.sidelobe_ratio)
+        );
+        let c = without(&base, &[Rule::Sidelobe]);
         assert_eq!(c.num_peaks, 16);
         assert_eq!(c.sidelobe_ratio, 0.0);
         assert_eq!(c.min_relative, base.min_relative);
         assert_eq!(c.min_significance, base.min_significance);
-        let h = without(&base, Some(Rule::Height));
+        let h = without(&base, &[Rule::Height]);
         assert_eq!((h.min_relative, h.incoherent_relative), (0.0, 0.0));
-        let all = without(&base, None);
+        let all = without(&base, &Rule::ALL);
         assert_eq!(
             (
                 all.min_relative,

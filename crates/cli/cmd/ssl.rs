@@ -167,7 +167,7 @@ pub fn run(args: &SslArgs) -> Result<Outcome> {
                 score: s.clone(),
             })
             .collect(),
-        rules: rules.clone(),
+        rules,
     };
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
@@ -223,13 +223,8 @@ pub fn run(args: &SslArgs) -> Result<Outcome> {
                 );
             }
         }
-        if let Some(c) = &rules {
-            print_census(
-                &format!("iasm {}", config.method),
-                c,
-                args.tol_deg,
-                crate::rules::wide_n(&config),
-            );
+        if let Some(c) = &report.rules {
+            print_census(&format!("iasm {}", config.method), c, args.tol_deg);
         }
     }
     let mut failed = false;
@@ -302,47 +297,59 @@ struct ScoreReport {
 
 /// The census of `--rules` in words: where the missed near sources went, and what let the
 /// false DoAs in.
-fn print_census(name: &str, c: &RuleCensus, tol_deg: f64, wide_n: usize) {
+fn print_census(name: &str, c: &RuleCensus, tol_deg: f64) {
     let missed = c.pairs - c.found;
     println!(
         "\n{name}: why sources within 3 m were missed ({} of {} pairs found within {tol_deg} deg; {missed} missed)",
         c.found, c.pairs
     );
+    let no_peak = format!(
+        " ({} with a peak within {} deg, {} with another source within min_sep_deg)",
+        c.no_peak_displaced,
+        2.0 * tol_deg,
+        c.no_peak_beside
+    );
+    let cut = if c.cut_but_extra > 0 {
+        format!(
+            " ({} reported beyond N by the octave votes)",
+            c.cut_but_extra
+        )
+    } else {
+        String::new()
+    };
     let rows = [
-        ("no peak there in the spectrum", c.no_peak),
-        ("cut at N by stronger DoAs", c.cut_at_n),
-        ("too low (min_relative)", c.low),
-        ("low and coherent (max_incoherence)", c.coherent),
-        ("not prominent (min_prominence)", c.prominence),
-        ("a sidelobe (sidelobe_ratio)", c.sidelobe),
-        ("insignificant (min_significance)", c.insignificant),
-        ("two rules at once", c.jointly),
+        ("no peak there in the spectrum", c.no_peak, no_peak),
+        ("cut at N by stronger DoAs", c.cut_at_n, cut),
+        ("too low (min_relative)", c.low, String::new()),
+        (
+            "low and coherent (max_incoherence)",
+            c.coherent,
+            String::new(),
+        ),
+        (
+            "not prominent (min_prominence)",
+            c.prominence,
+            String::new(),
+        ),
+        ("a sidelobe (sidelobe_ratio)", c.sidelobe, String::new()),
+        (
+            "insignificant (min_significance)",
+            c.insignificant,
+            String::new(),
+        ),
+        ("two rules at once", c.jointly, String::new()),
     ];
-    for (what, k) in rows {
-        let extra = if what.starts_with("cut") && c.cut_but_extra > 0 {
-            format!(
-                " ({} reported beyond N by the octave votes)",
-                c.cut_but_extra
-            )
-        } else if what.starts_with("no peak") && c.no_peak > 0 {
-            format!(
-                " ({} with a peak within {} deg, {} with another source within min_sep_deg)",
-                c.no_peak_displaced,
-                2.0 * tol_deg,
-                c.no_peak_beside
-            )
-        } else {
-            String::new()
-        };
-        println!("  {what:<36} {k:>5}{extra}");
+    for (what, k, note) in rows {
+        let note = if k > 0 { note.as_str() } else { "" };
+        println!("  {what:<36} {k:>5}{note}");
     }
     println!(
         "{name}: DoAs with no source within {tol_deg} deg: {} of {}, let in by height {}, by block votes {}, as incoherent {}",
         c.false_doas, c.doas, c.by_height, c.by_dominance, c.by_incoherence
     );
     println!(
-        "{name}: N raised to {wide_n} would add {} DoAs, {} of them within {tol_deg} deg of a source",
-        c.beyond_n, c.beyond_n_on_source
+        "{name}: N raised to {} would add {} DoAs, {} of them within {tol_deg} deg of a source",
+        c.wide_n, c.beyond_n, c.beyond_n_on_source
     );
 }
 
