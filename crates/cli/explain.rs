@@ -6,8 +6,11 @@
 //! where its DoAs went: never heard (the SSL's recall), heard but taken by another source
 //! (the association), or heard and left unexplained, too few or too scattered to make a
 //! source (the mapper's evidence rules, e.g. [`asm::IasmConfig::min_observations`] and
-//! the vote's quorums). [`explain`] answers it from one map, without a debugger: it is
-//! what every hand-built tracer of this project's sessions printed.
+//! the vote's quorums), or made into a source that a rule then refused (on the robot's
+//! path, beyond the map, too thinly heard, or contradicted by nearer stops that heard
+//! nothing there: [`asm::MapResult::refused`]). [`explain`] answers it from one map,
+//! without a debugger: it is what every hand-built tracer of this project's sessions
+//! printed.
 
 use asm::ospa::assignment;
 use asm::{MapResult, Pose};
@@ -77,6 +80,9 @@ pub struct Missed {
     /// The DoAs within `tol_deg` of its bearing, in stop order (at most one per stop,
     /// the nearest).
     pub heard: Vec<Heard>,
+    /// The nearest of the sources the mapper found and refused within `c` of it, if any:
+    /// its DoAs were there, and this rule kept them out.
+    pub refused: Option<asm::Refused>,
 }
 
 /// Why a map holds what it holds (see the module docs).
@@ -86,6 +92,8 @@ pub struct Explanation {
     pub sources: Vec<SourceRays>,
     /// The stops with DoAs that no source explains.
     pub unexplained: Vec<StopLeft>,
+    /// What the mapper found and refused, and why ([`asm::MapResult::refused`]).
+    pub refused: Vec<asm::Refused>,
     /// With the truth: the true sources that the optimal assignment of the OSPA metric
     /// leaves without a mapped source within its cutoff `c`.
     pub missed: Vec<Missed>,
@@ -158,12 +166,20 @@ pub fn explain(
                 x: q[0],
                 y: q[1],
                 heard: heard_of(q, result, poses, doas, tol_deg),
+                refused: result
+                    .refused
+                    .iter()
+                    .map(|r| (r, (r.x - q[0]).hypot(r.y - q[1])))
+                    .filter(|&(_, d)| d < c)
+                    .min_by(|a, b| a.1.total_cmp(&b.1))
+                    .map(|(r, _)| r.clone()),
             })
             .collect()
     });
     Explanation {
         sources,
         unexplained,
+        refused: result.refused.clone(),
         missed,
         tol_deg,
     }
@@ -347,5 +363,49 @@ mod tests {
         assert_eq!(stop2.len(), 1);
         assert_eq!(stop2[0].taken_by, Some(1));
         assert!(e.unexplained.is_empty());
+    }
+
+    #[test]
+    fn a_source_that_nearer_stops_did_not_hear_is_refused_and_the_stops_are_named() {
+        // Talker A heard from all nine stops along y = 2; source B (2.5, 0.5) only from
+        // stops 0, 5 and 6 (2.5-3.7 m away), while stops 1-4, 1.5-2.2 m from it, report A
+        // alone. The mapper makes B of its three stops and refuses it: four stops no
+        // further than B's furthest hearer heard nothing there (the first forgiven, B
+        // keeps too few). The explanation names the rule and those stops, on the missed
+        // true source too.
+        let poses: Vec<Pose> = (0..9)
+            .map(|k| Pose::new(0.5 + 0.9 * k as f64, 2.0, 0.0))
+            .collect();
+        let sources = [[4.5, 5.0], [2.5, 0.5]];
+        let heard_by: Vec<Vec<usize>> = (0..9)
+            .map(|k| {
+                if [0, 5, 6].contains(&k) {
+                    vec![0, 1]
+                } else {
+                    vec![0]
+                }
+            })
+            .collect();
+        let doas = table(&poses, &sources, &heard_by);
+        let result = map_of(&poses, &doas, 3);
+        assert_eq!(result.positions().len(), 1, "{:?}", result.positions());
+        let e = explain(&result, &poses, &doas, None, Some(&sources), 1.0, 5.0);
+        assert_eq!(e.refused.len(), 1, "{:?}", e.refused);
+        let r = &e.refused[0];
+        assert!((r.x - 2.5).hypot(r.y - 0.5) < 0.05, "{r:?}");
+        assert_eq!(r.stops, vec![0, 5, 6]);
+        assert_eq!(
+            r.rule,
+            asm::Refusal::SpokenAgainst {
+                against: vec![1, 2, 3, 4]
+            }
+        );
+        assert_eq!(e.missed.len(), 1);
+        assert_eq!(e.missed[0].refused.as_ref(), Some(r));
+        // In JSON the rule is named and its stops listed beside the refused source's.
+        let v = serde_json::to_value(r).unwrap();
+        assert_eq!(v["rule"], "spoken_against");
+        assert_eq!(v["against"], serde_json::json!([1, 2, 3, 4]));
+        assert_eq!(v["stops"], serde_json::json!([0, 5, 6]));
     }
 }

@@ -45,5 +45,7 @@ pub mod pf;
 
 pub use error::{ConfigError, Error, MapError, Result};
 pub use geom::{Pose, wrap_rad};
-pub use mapper::{IasmConfig, MapResult, Mapper, Profile, Round, Source, Trim, Variant};
+pub use mapper::{
+    IasmConfig, MapResult, Mapper, Profile, Refusal, Refused, Round, Source, Trim, Variant,
+};
 pub use online::{OnlineMapper, StopUpdate};

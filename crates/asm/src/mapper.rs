@@ -73,7 +73,10 @@
 //!   evidence once each cut row counts 3/5, as in the vote
 //!   ([`Mapper::drop_implausible_cut`]): the rounds' three-stop clusters of reflections in
 //!   a reverberant, noisy room (`reverberant_low_snr` 0.342 / 0.291 -> 0.312 / 0.193 m,
-//!   9 maps per method).
+//!   9 maps per method). What these rules remove, and the vote's proposals they refuse,
+//!   are reported with the rule and the stops ([`MapResult::refused`]): a user whose map
+//!   misses a source its DoAs pointed at can see which rule, and which setting, kept it
+//!   out.
 //!
 //! Measured (50 runs, CA; `iasm eval --profile paper|robust`): on arrangement II from our
 //! raw-audio DoAs, MVDR 0.159 -> 0.156 m (100 % of runs with the right count),
@@ -594,6 +597,40 @@ pub struct Source {
     pub mirror: Option<[f64; 2]>,
 }
 
+/// A source the mapper found and did not keep ([`MapResult::refused`]): where it was, the
+/// stops whose DoAs it explained, and the rule that refused it.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Refused {
+    /// x (m, world frame).
+    pub x: f64,
+    /// y (m, world frame).
+    pub y: f64,
+    /// The stops (from 0) whose DoAs it explained; those DoAs count as unexplained.
+    pub stops: Vec<usize>,
+    /// Why it was refused.
+    #[serde(flatten)]
+    pub rule: Refusal,
+}
+
+/// The rule that refused a source ([`Refused`]); see [`Mapper::drop_implausible_cut`].
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+#[serde(tag = "rule", rename_all = "snake_case")]
+pub enum Refusal {
+    /// Nearer a stop than [`IasmConfig::min_range_m`], or its rays meet further than
+    /// [`IasmConfig::beyond_map_m`] beyond the map.
+    Misplaced,
+    /// Too few stops once the rows the SSL cut at `N` count at the vote's exchange rate
+    /// ([`IasmConfig::vote_min_thresholded_stops`]).
+    ThinlyHeard,
+    /// Stops that heard other sources and nothing near its bearing, no further from it
+    /// than the stops that heard it and not masked by a nearer source
+    /// ([`IasmConfig::absence_ratio`]; the first of them is forgiven).
+    SpokenAgainst {
+        /// Those stops (from 0).
+        against: Vec<usize>,
+    },
+}
+
 /// The result of one I-ASM run.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct MapResult {
@@ -614,6 +651,13 @@ pub struct MapResult {
     /// (on the robot's path, or contradicted by stops that heard nothing); their DoAs
     /// count as unexplained.
     pub removed: usize,
+    /// What the mapper found and did not keep, and why: the sources
+    /// [`Mapper::drop_implausible`] removed and the vote's proposals it refused for the
+    /// same rules, one per place (within [`IasmConfig::merge_dist_m`]; the last reason
+    /// given there), none within that distance of a mapped source. Where a source was
+    /// missed although its DoAs were there, this says which rule, and which stops, kept it
+    /// out.
+    pub refused: Vec<Refused>,
 }
 
 impl MapResult {
@@ -943,11 +987,19 @@ impl Mapper {
                 }
             }
         }
+        let mut refused = Vec::new();
         if c.vote_min_stops > 0 {
             while rounds < c.max_rounds {
                 let mapped: Vec<[f64; 2]> = sources.iter().map(|s| [s.x, s.y]).collect();
-                let Some(s) = self.vote(poses, bearings, &heard, complete, &mapped, rounds + 1)
-                else {
+                let Some(s) = self.vote_noting(
+                    poses,
+                    bearings,
+                    &heard,
+                    complete,
+                    &mapped,
+                    rounds + 1,
+                    &mut refused,
+                ) else {
                     break;
                 };
                 rounds += 1;
@@ -956,16 +1008,38 @@ impl Mapper {
         }
         let removed =
             self.drop_implausible_cut(&mut sources, poses, &heard, complete, said_cut, bearings);
+        let count = removed.len();
+        refused.extend(removed);
         self.merge(&mut sources);
         self.mark_mirrors(&mut sources);
+        let refused = self.one_per_place(refused, &sources);
         MapResult {
             sources,
             rounds,
             particles: self.m,
             unexplained: self.unexplained(poses, bearings),
             unexplained_bearings: bearings.to_vec(),
-            removed,
+            removed: count,
+            refused,
         }
+    }
+
+    /// `refused` (in the order refused) with one entry per place: a later one within
+    /// [`IasmConfig::merge_dist_m`] of an earlier replaces it (the reason last given
+    /// there), and none within that distance of a mapped source (a proposal refused while
+    /// fewer sources masked may have been taken later).
+    pub(crate) fn one_per_place(&self, refused: Vec<Refused>, mapped: &[Source]) -> Vec<Refused> {
+        let d = self.config.merge_dist_m;
+        let near = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]) < d;
+        let mut out: Vec<Refused> = Vec::new();
+        for r in refused {
+            match out.iter_mut().find(|o| near([o.x, o.y], [r.x, r.y])) {
+                Some(o) => *o = r,
+                None => out.push(r),
+            }
+        }
+        out.retain(|r| !mapped.iter().any(|s| near([s.x, s.y], [r.x, r.y])));
+        out
     }
 
     /// Removes the sources that cannot be: nearer a stop than [`IasmConfig::min_range_m`],
@@ -973,7 +1047,8 @@ impl Mapper {
     /// [`IasmConfig::min_observations`] (see
     /// [`IasmConfig::absence_ratio`]), repeated until none falls, since a source removed
     /// masks no stop's silence towards the others; their DoAs go back to `bearings`. `heard` holds
-    /// every stop's DoAs (world bearings). Returns how many were removed.
+    /// every stop's DoAs (world bearings). Returns the removed sources, each with the rule
+    /// that removed it.
     ///
     /// # Panics
     /// If `poses`, `heard` and `bearings` differ in length.
@@ -984,7 +1059,7 @@ impl Mapper {
         heard: &[Vec<f64>],
         complete: &[bool],
         bearings: &mut [Vec<f64>],
-    ) -> usize {
+    ) -> Vec<Refused> {
         let said_cut = vec![false; poses.len()];
         self.drop_implausible_cut(sources, poses, heard, complete, &said_cut, bearings)
     }
@@ -1017,51 +1092,62 @@ impl Mapper {
         complete: &[bool],
         said_cut: &[bool],
         bearings: &mut [Vec<f64>],
-    ) -> usize {
+    ) -> Vec<Refused> {
         assert_eq!(poses.len(), heard.len(), "one row of DoAs per pose");
         assert_eq!(poses.len(), complete.len(), "one flag per pose");
         assert_eq!(poses.len(), said_cut.len(), "one flag per pose");
         let at: Vec<[f64; 2]> = sources.iter().map(|s| [s.x, s.y]).collect();
         // What does not depend on the other sources, once: where the robot stood, and
         // where the source's own rays meet.
-        let mut keep: Vec<bool> = (0..at.len())
+        let mut why: Vec<Option<Refusal>> = (0..at.len())
             .map(|i| {
-                !self.misplaced(at[i], &sources[i].rays, poses)
-                    && !self.thinly_heard(&sources[i].rays, said_cut)
+                if self.misplaced(at[i], &sources[i].rays, poses) {
+                    Some(Refusal::Misplaced)
+                } else if self.thinly_heard(&sources[i].rays, said_cut) {
+                    Some(Refusal::ThinlyHeard)
+                } else {
+                    None
+                }
             })
             .collect();
         // The absences, until no more falls: a source removed masks no stop of the others
         // (a ghost beside a stop does not excuse that stop's silence towards another).
         loop {
-            let next: Vec<bool> = (0..at.len())
+            let next: Vec<Option<Refusal>> = (0..at.len())
                 .map(|i| {
-                    if !keep[i] {
-                        return false;
+                    if why[i].is_some() {
+                        return why[i].clone();
                     }
                     let others: Vec<[f64; 2]> = (0..at.len())
-                        .filter(|&j| j != i && keep[j])
+                        .filter(|&j| j != i && why[j].is_none())
                         .map(|j| at[j])
                         .collect();
-                    !self.spoken_against(at[i], &sources[i].rays, poses, heard, complete, &others)
+                    self.spoken_against(at[i], &sources[i].rays, poses, heard, complete, &others)
                 })
                 .collect();
-            if next == keep {
+            if next == why {
                 break;
             }
-            keep = next;
+            why = next;
         }
-        let mut k = keep.iter();
-        let before = sources.len();
+        let mut refused = Vec::new();
+        let mut why = why.into_iter();
         sources.retain_mut(|s| {
-            let kept = *k.next().expect("one flag per source");
-            if !kept {
-                for r in s.rays.drain(..) {
-                    r.give_back(bearings);
-                }
+            let Some(rule) = why.next().expect("one reason or none per source") else {
+                return true;
+            };
+            refused.push(Refused {
+                x: s.x,
+                y: s.y,
+                stops: stops_of(&s.rays),
+                rule,
+            });
+            for r in s.rays.drain(..) {
+                r.give_back(bearings);
             }
-            kept
+            false
         });
-        before - sources.len()
+        refused
     }
 
     /// Whether `q` lies within `margin` (m) of the bounding box of the map's known cells.
@@ -1117,9 +1203,10 @@ impl Mapper {
             .then(|| c.vote_min_thresholded_stops as f64 / c.vote_min_stops as f64)
     }
 
-    /// Whether the stops that heard nothing near a source at `q` explaining `rays` leave
-    /// it fewer than [`IasmConfig::min_observations`] (the first of them forgiven), with
-    /// the sources at `others` masking (see [`IasmConfig::absence_ratio`]).
+    /// [`Refusal::SpokenAgainst`] when the stops that heard nothing near a source at `q`
+    /// explaining `rays` leave it fewer than [`IasmConfig::min_observations`] (the first of
+    /// them forgiven), with the sources at `others` masking (see
+    /// [`IasmConfig::absence_ratio`]).
     fn spoken_against(
         &self,
         q: [f64; 2],
@@ -1128,21 +1215,22 @@ impl Mapper {
         heard: &[Vec<f64>],
         complete: &[bool],
         others: &[[f64; 2]],
-    ) -> bool {
+    ) -> Option<Refusal> {
         let reach = rays
             .iter()
             .map(|r| (r.from[0] - q[0]).hypot(r.from[1] - q[1]))
             .fold(0.0, f64::max);
         let against = self.absences(q, reach, poses, heard, complete, others);
-        rays.len() < self.config.min_observations + against.saturating_sub(1)
+        (rays.len() < self.config.min_observations + against.len().saturating_sub(1))
+            .then_some(Refusal::SpokenAgainst { against })
     }
 
     /// The stops that speak against a source at `q` (see [`IasmConfig::absence_ratio`]):
     /// their row of `heard` is complete (`complete`: every peak the SSL let through; see
     /// [`Mapper::run_rows`]) and not empty, none within `gamma` of the bearing to
     /// `q`, it lies no further than `reach` from `q` (the furthest stop that heard it),
-    /// and none of `others` (the other sources) is nearer than `|q - stop| / ratio`. 0 when
-    /// the ratio is 0.
+    /// and none of `others` (the other sources) is nearer than `|q - stop| / ratio`, in order. None
+    /// when the ratio is 0.
     pub fn absences(
         &self,
         q: [f64; 2],
@@ -1151,16 +1239,17 @@ impl Mapper {
         heard: &[Vec<f64>],
         complete: &[bool],
         others: &[[f64; 2]],
-    ) -> usize {
+    ) -> Vec<usize> {
         let ratio = self.config.absence_ratio;
         if ratio <= 0.0 {
-            return 0;
+            return Vec::new();
         }
         let dist = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]);
         poses
             .iter()
             .zip(heard.iter().zip(complete))
-            .filter(|(p, (row, complete))| {
+            .enumerate()
+            .filter(|(_, (p, (row, complete)))| {
                 let (at, to) = (p.position(), p.bearing_to(q));
                 let d = dist(q, at);
                 !row.is_empty()
@@ -1169,7 +1258,8 @@ impl Mapper {
                     && row.iter().all(|&b| wrap_rad(to - b).abs() >= self.gamma)
                     && others.iter().all(|&o| dist(o, at) * ratio > d)
             })
-            .count()
+            .map(|(k, _)| k)
+            .collect()
     }
 
     /// Merges estimates closer than [`IasmConfig::merge_dist_m`] into their mean and, with
@@ -1368,6 +1458,31 @@ impl Mapper {
         mapped: &[[f64; 2]],
         round: usize,
     ) -> Option<Source> {
+        let mut refused = Vec::new();
+        self.vote_noting(
+            poses,
+            bearings,
+            heard,
+            complete,
+            mapped,
+            round,
+            &mut refused,
+        )
+    }
+
+    /// [`Mapper::vote`], adding to `refused` the proposals it refused for a rule of
+    /// [`Mapper::drop_implausible_cut`] (see [`MapResult::refused`]).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn vote_noting(
+        &self,
+        poses: &[Pose],
+        bearings: &mut [Vec<f64>],
+        heard: &[Vec<f64>],
+        complete: &[bool],
+        mapped: &[[f64; 2]],
+        round: usize,
+        refused: &mut Vec<Refused>,
+    ) -> Option<Source> {
         assert_eq!(poses.len(), bearings.len(), "one row of bearings per pose");
         assert_eq!(poses.len(), complete.len(), "one flag per pose");
         assert_eq!(poses.len(), heard.len(), "one row of heard DoAs per pose");
@@ -1405,7 +1520,7 @@ impl Mapper {
                         .map(|&k| if k { 1.0 } else { rate })
                         .collect();
                     let need = need.max(c.min_observations);
-                    self.vote_among(poses, bearings, &rays, &weights, need, &check)
+                    self.vote_among(poses, bearings, &rays, &weights, need, &check, refused)
                 })?;
         // The crossings of its rays near it stand for its cloud (the picture's particles
         // and the covariance ellipse).
@@ -1455,6 +1570,7 @@ impl Mapper {
     /// of 10 found); every other scene of the suite and of `fixtures/heldout`, and
     /// arrangement II (50 runs, ours and the authors' tables), unchanged; the suite's run
     /// time unchanged (37.9 against 38.0 s).
+    #[allow(clippy::too_many_arguments)]
     fn vote_among(
         &self,
         poses: &[Pose],
@@ -1463,6 +1579,7 @@ impl Mapper {
         counts: &[f64],
         need: usize,
         check: &Plausible,
+        refused: &mut Vec<Refused>,
     ) -> Option<([f64; 2], Vec<Ray>)> {
         // A quorum of `need` counted stops, at least `min_observations` of them; the
         // sums carry a little slack for the weights' rounding (3 x 3/5 + ... ).
@@ -1554,8 +1671,16 @@ impl Mapper {
             let kept = rays.iter().filter(|r| counts[r.stop] > 0.0);
             let weight = |r: &Ray| counts[r.stop] * if r.shared { share } else { 1.0 };
             let enough = quorum(kept.clone().map(weight).sum(), kept.count());
-            if enough && !self.implausible(est, &rays, poses, check) {
-                return Some((est, rays));
+            if enough {
+                match self.implausible(est, &rays, poses, check) {
+                    None => return Some((est, rays)),
+                    Some(rule) => refused.push(Refused {
+                        x: est[0],
+                        y: est[1],
+                        stops: stops_of(&rays),
+                        rule,
+                    }),
+                }
             }
             for r in rays {
                 r.give_back(bearings);
@@ -1606,9 +1731,17 @@ impl Mapper {
 
     /// Whether a vote's source at `q` explaining `rays` would be removed before the merge
     /// ([`Mapper::drop_implausible`]), with the sources mapped so far masking.
-    fn implausible(&self, q: [f64; 2], rays: &[Ray], poses: &[Pose], check: &Plausible) -> bool {
-        self.misplaced(q, rays, poses)
-            || self.spoken_against(q, rays, poses, check.heard, check.complete, check.mapped)
+    fn implausible(
+        &self,
+        q: [f64; 2],
+        rays: &[Ray],
+        poses: &[Pose],
+        check: &Plausible,
+    ) -> Option<Refusal> {
+        if self.misplaced(q, rays, poses) {
+            return Some(Refusal::Misplaced);
+        }
+        self.spoken_against(q, rays, poses, check.heard, check.complete, check.mapped)
     }
 }
 
@@ -1630,6 +1763,14 @@ impl Mapper {
 /// tables), unchanged.
 fn vote_weight(miss: f64, sigma: f64) -> f64 {
     (-0.5 * (miss / sigma).powi(2)).exp()
+}
+
+/// The stops of `rays`, in order, each once.
+fn stops_of(rays: &[Ray]) -> Vec<usize> {
+    let mut stops: Vec<usize> = rays.iter().map(|r| r.stop).collect();
+    stops.sort_unstable();
+    stops.dedup();
+    stops
 }
 
 /// What the vote needs to tell whether a proposal can be a source: every stop's DoAs as
@@ -2193,24 +2334,28 @@ mod tests {
         // Stops 1-3 speak against the ghost; the first is forgiven, two remain.
         let others = [[sources[0].x, sources[0].y]];
         assert_eq!(
-            mapper.absences(
-                [2.0, 1.5],
-                3.36,
-                &poses,
-                &heard,
-                &mapper.complete_by_length(&heard),
-                &others
-            ),
+            mapper
+                .absences(
+                    [2.0, 1.5],
+                    3.36,
+                    &poses,
+                    &heard,
+                    &mapper.complete_by_length(&heard),
+                    &others
+                )
+                .len(),
             3
         );
         assert_eq!(
-            mapper.drop_implausible(
-                &mut sources,
-                &poses,
-                &heard,
-                &mapper.complete_by_length(&heard),
-                &mut left
-            ),
+            mapper
+                .drop_implausible(
+                    &mut sources,
+                    &poses,
+                    &heard,
+                    &mapper.complete_by_length(&heard),
+                    &mut left
+                )
+                .len(),
             1
         );
         assert_eq!(sources.len(), 1);
@@ -2267,41 +2412,96 @@ mod tests {
         let (mapper, poses, heard, mut sources) = ghost_survey(&[1, 2, 3]);
         let mut left = vec![Vec::new(); poses.len()];
         assert_eq!(
-            mapper.drop_implausible(
-                &mut sources,
-                &poses,
-                &heard,
-                &mapper.complete_by_length(&heard),
-                &mut left
-            ),
+            mapper
+                .drop_implausible(
+                    &mut sources,
+                    &poses,
+                    &heard,
+                    &mapper.complete_by_length(&heard),
+                    &mut left
+                )
+                .len(),
             0
         );
         // One stop's miss is forgiven (a pause, a louder moment of another source).
         let (mapper, poses, heard, mut sources) = ghost_survey(&[1, 3]);
         assert_eq!(
-            mapper.drop_implausible(
-                &mut sources,
-                &poses,
-                &heard,
-                &mapper.complete_by_length(&heard),
-                &mut left
-            ),
+            mapper
+                .drop_implausible(
+                    &mut sources,
+                    &poses,
+                    &heard,
+                    &mapper.complete_by_length(&heard),
+                    &mut left
+                )
+                .len(),
             0
         );
         // The paper's algorithm knows no absences.
         let (_, poses, heard, mut sources) = ghost_survey(&[]);
         let paper = ghost_mapper(IasmConfig::profile(Profile::Paper));
         assert_eq!(
-            paper.drop_implausible(
-                &mut sources,
-                &poses,
-                &heard,
-                &paper.complete_by_length(&heard),
-                &mut left
-            ),
+            paper
+                .drop_implausible(
+                    &mut sources,
+                    &poses,
+                    &heard,
+                    &paper.complete_by_length(&heard),
+                    &mut left
+                )
+                .len(),
             0
         );
         assert_eq!(sources.len(), 2);
+    }
+
+    #[test]
+    fn each_removed_source_carries_the_rule_that_removed_it() {
+        // The ghost survey's ghost (2, 1.5), spoken against by stops 1-3; a source 0.1 m
+        // from stop 7 (nearer than `min_range_m`); and one at (6, 2) heard from stops 6-8
+        // only, whose rows the SSL cut (three cut stops are 1.8 of the three a source
+        // needs). The talker stays.
+        let (mapper, poses, heard, mut sources) = ghost_survey(&[]);
+        sources.push(heard_from([7.0, 0.1], &poses, &[4, 5, 6]));
+        sources.push(heard_from([6.0, 2.0], &poses, &[6, 7, 8]));
+        let said_cut: Vec<bool> = (0..poses.len()).map(|k| k >= 6).collect();
+        let complete: Vec<bool> = mapper
+            .complete_by_length(&heard)
+            .iter()
+            .zip(&said_cut)
+            .map(|(&c, &cut)| c && !cut)
+            .collect();
+        let mut left = vec![Vec::new(); poses.len()];
+        let refused = mapper.drop_implausible_cut(
+            &mut sources,
+            &poses,
+            &heard,
+            &complete,
+            &said_cut,
+            &mut left,
+        );
+        assert_eq!(sources.len(), 1);
+        assert_eq!((sources[0].x, sources[0].y), (4.0, -3.0));
+        let got: Vec<([f64; 2], Vec<usize>, Refusal)> = refused
+            .into_iter()
+            .map(|r| ([r.x, r.y], r.stops, r.rule))
+            .collect();
+        assert_eq!(
+            got,
+            vec![
+                (
+                    [2.0, 1.5],
+                    vec![0, 4, 5],
+                    Refusal::SpokenAgainst {
+                        against: vec![1, 2, 3]
+                    }
+                ),
+                ([7.0, 0.1], vec![4, 5, 6], Refusal::Misplaced),
+                ([6.0, 2.0], vec![6, 7, 8], Refusal::ThinlyHeard),
+            ]
+        );
+        // Their DoAs went back: nine, three per removed source.
+        assert_eq!(left.iter().map(Vec::len).sum::<usize>(), 9);
     }
 
     #[test]
@@ -2314,25 +2514,29 @@ mod tests {
         }
         let others = [[sources[0].x, sources[0].y]];
         assert_eq!(
-            mapper.absences(
-                [2.0, 1.5],
-                3.36,
-                &poses,
-                &heard,
-                &mapper.complete_by_length(&heard),
-                &others
-            ),
+            mapper
+                .absences(
+                    [2.0, 1.5],
+                    3.36,
+                    &poses,
+                    &heard,
+                    &mapper.complete_by_length(&heard),
+                    &others
+                )
+                .len(),
             0
         );
         let mut left = vec![Vec::new(); poses.len()];
         assert_eq!(
-            mapper.drop_implausible(
-                &mut sources,
-                &poses,
-                &heard,
-                &mapper.complete_by_length(&heard),
-                &mut left
-            ),
+            mapper
+                .drop_implausible(
+                    &mut sources,
+                    &poses,
+                    &heard,
+                    &mapper.complete_by_length(&heard),
+                    &mut left
+                )
+                .len(),
             0
         );
     }
@@ -2349,25 +2553,29 @@ mod tests {
         sources.push(heard_from(near, &poses, &[1, 2, 3]));
         let others = [[4.0, -3.0], near];
         assert_eq!(
-            mapper.absences(
-                [2.0, 1.5],
-                3.36,
-                &poses,
-                &heard,
-                &mapper.complete_by_length(&heard),
-                &others
-            ),
+            mapper
+                .absences(
+                    [2.0, 1.5],
+                    3.36,
+                    &poses,
+                    &heard,
+                    &mapper.complete_by_length(&heard),
+                    &others
+                )
+                .len(),
             0
         );
         let mut left = vec![Vec::new(); poses.len()];
         assert_eq!(
-            mapper.drop_implausible(
-                &mut sources,
-                &poses,
-                &heard,
-                &mapper.complete_by_length(&heard),
-                &mut left
-            ),
+            mapper
+                .drop_implausible(
+                    &mut sources,
+                    &poses,
+                    &heard,
+                    &mapper.complete_by_length(&heard),
+                    &mut left
+                )
+                .len(),
             0
         );
     }
@@ -2385,13 +2593,15 @@ mod tests {
         sources.push(heard_from(near, &poses, &[6, 7, 8]));
         let mut left = vec![Vec::new(); poses.len()];
         assert_eq!(
-            mapper.drop_implausible(
-                &mut sources,
-                &poses,
-                &heard,
-                &mapper.complete_by_length(&heard),
-                &mut left
-            ),
+            mapper
+                .drop_implausible(
+                    &mut sources,
+                    &poses,
+                    &heard,
+                    &mapper.complete_by_length(&heard),
+                    &mut left
+                )
+                .len(),
             2
         );
         assert_eq!(sources.len(), 1);
@@ -2431,17 +2641,20 @@ mod tests {
                 &heard,
                 &kept.complete_by_length(&heard),
                 &mut left
-            ),
+            )
+            .len(),
             0
         );
         assert_eq!(
-            mapper.drop_implausible(
-                &mut sources,
-                &poses,
-                &heard,
-                &mapper.complete_by_length(&heard),
-                &mut left
-            ),
+            mapper
+                .drop_implausible(
+                    &mut sources,
+                    &poses,
+                    &heard,
+                    &mapper.complete_by_length(&heard),
+                    &mut left
+                )
+                .len(),
             1
         );
         assert_eq!(sources.len(), 1);
@@ -2455,13 +2668,15 @@ mod tests {
         sources.push(heard_from([6.2, 0.0], &poses, &[0, 1, 2, 3, 4, 5]));
         let mut left = vec![Vec::new(); poses.len()];
         assert_eq!(
-            mapper.drop_implausible(
-                &mut sources,
-                &poses,
-                &heard,
-                &mapper.complete_by_length(&heard),
-                &mut left
-            ),
+            mapper
+                .drop_implausible(
+                    &mut sources,
+                    &poses,
+                    &heard,
+                    &mapper.complete_by_length(&heard),
+                    &mut left
+                )
+                .len(),
             1
         );
         assert_eq!(sources.len(), 2);

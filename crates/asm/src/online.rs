@@ -81,6 +81,9 @@ pub struct OnlineMapper {
     rounds: usize,
     /// Sources removed by [`Mapper::drop_implausible`] in the last full map and since.
     removed: usize,
+    /// What was found and refused, and why, in the last full map and since (see
+    /// [`MapResult::refused`]).
+    refused: Vec<crate::Refused>,
     /// Stops at which the next full map runs.
     next_full: usize,
     /// The stop count of the last full map (0: none yet).
@@ -106,6 +109,7 @@ impl OnlineMapper {
             sources: Vec::new(),
             rounds: 0,
             removed: 0,
+            refused: Vec::new(),
             next_full: FIRST_FULL,
             last_full: 0,
             rng: StdRng::seed_from_u64(seed ^ 0x0e11_0e11),
@@ -180,7 +184,7 @@ impl OnlineMapper {
                 self.search(&mut update);
             }
             // As the batch mapper does before its merge.
-            self.removed += self.mapper.drop_implausible_cut(
+            let removed = self.mapper.drop_implausible_cut(
                 &mut self.sources,
                 &self.poses,
                 &self.bearings,
@@ -188,8 +192,15 @@ impl OnlineMapper {
                 &self.said_cut,
                 &mut self.pool,
             );
+            self.removed += removed.len();
+            self.refused.extend(removed);
             self.mapper.merge(&mut self.sources);
         }
+        // One refusal per place, as the map reports them: the vote tries its refused
+        // proposals again at every stop.
+        self.refused = self
+            .mapper
+            .one_per_place(std::mem::take(&mut self.refused), &self.sources);
         update.sources = self.sources.len();
         Ok(update)
     }
@@ -214,6 +225,7 @@ impl OnlineMapper {
         self.rounds += r.rounds;
         self.sources = r.sources;
         self.removed = r.removed;
+        self.refused = r.refused;
         self.last_full = self.poses.len();
         r.rounds
     }
@@ -296,8 +308,10 @@ impl OnlineMapper {
             &self.said_cut,
             &mut self.pool,
         );
-        self.removed += contradicted;
-        (taken, dissolved.contains(&true) || contradicted > 0)
+        self.removed += contradicted.len();
+        let any = !contradicted.is_empty();
+        self.refused.extend(contradicted);
+        (taken, dissolved.contains(&true) || any)
     }
 
     /// Filtering rounds over the pool until one fails (or `max_rounds` have run at this
@@ -332,13 +346,14 @@ impl OnlineMapper {
         // checked against the sources mapped so far (see `Mapper::vote`).
         while self.mapper.config().vote_min_stops > 0 && update.rounds < max_rounds {
             let mapped: Vec<[f64; 2]> = self.sources.iter().map(|s| [s.x, s.y]).collect();
-            let Some(s) = self.mapper.vote(
+            let Some(s) = self.mapper.vote_noting(
                 &self.poses,
                 &mut self.pool,
                 &self.bearings,
                 &self.complete,
                 &mapped,
                 self.rounds + 1,
+                &mut self.refused,
             ) else {
                 break;
             };
@@ -353,6 +368,7 @@ impl OnlineMapper {
     pub fn map(&self) -> MapResult {
         let mut sources = self.sources.clone();
         self.mapper.mark_mirrors(&mut sources);
+        let refused = self.mapper.one_per_place(self.refused.clone(), &sources);
         MapResult {
             sources,
             rounds: self.rounds,
@@ -360,6 +376,7 @@ impl OnlineMapper {
             unexplained: self.mapper.unexplained(&self.poses, &self.pool),
             unexplained_bearings: self.pool.clone(),
             removed: self.removed,
+            refused,
         }
     }
 }

@@ -36,6 +36,8 @@ struct MapReport<'a> {
     unexplained_doas: usize,
     /// Sources found and removed as impossible (see `asm::MapResult::removed`).
     removed_sources: usize,
+    /// What was found and refused, and why (see `asm::MapResult::refused`).
+    refused: &'a [asm::Refused],
     sources: &'a [asm::Source],
     ospa: Option<OspaReport>,
     /// The map against the truth after the best similarity transform (a diagnostic of the
@@ -115,6 +117,7 @@ pub fn run(a: &MapArgs) -> Result<Outcome> {
         particles: result.particles,
         unexplained_doas: result.unexplained,
         removed_sources: result.removed,
+        refused: &result.refused,
         sources: &result.sources,
         ospa: o,
         alignment,
@@ -271,6 +274,15 @@ fn print_explanation(e: &Explanation, c: f64) {
         };
         println!("  stop {} unexplained: {}{cut}", s.stop, az.join(", "));
     }
+    for r in &e.refused {
+        println!(
+            "  refused ({:.2}, {:.2}), heard from stops {}: {}",
+            r.x,
+            r.y,
+            list(&r.stops),
+            refusal(&r.rule)
+        );
+    }
     for m in &e.missed {
         let heard: Vec<String> = m
             .heard
@@ -287,10 +299,39 @@ fn print_explanation(e: &Explanation, c: f64) {
         } else {
             heard.join(", ")
         };
+        let refused = m.refused.as_ref().map_or_else(String::new, |r| {
+            format!("; found at ({:.2}, {:.2}) and refused (above)", r.x, r.y)
+        });
         println!(
-            "  true source {} ({:.2}, {:.2}), no mapped source within {c} m: DoAs within {}° at {heard}",
+            "  true source {} ({:.2}, {:.2}), no mapped source within {c} m: DoAs within {}° at {heard}{refused}",
             m.truth, m.x, m.y, e.tol_deg
         );
+    }
+}
+
+/// Stop numbers, comma-separated.
+fn list(stops: &[usize]) -> String {
+    stops
+        .iter()
+        .map(ToString::to_string)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The rule that refused a source, and the setting that states it.
+fn refusal(rule: &asm::Refusal) -> String {
+    match rule {
+        asm::Refusal::Misplaced => {
+            "on the robot's path or beyond the map (min_range_m, beyond_map_m)".to_owned()
+        }
+        asm::Refusal::ThinlyHeard => {
+            "too few stops once the rows the SSL cut at N count 3/5 each (vote_min_thresholded_stops)"
+                .to_owned()
+        }
+        asm::Refusal::SpokenAgainst { against } => format!(
+            "stops {} heard other sources and nothing there, as near to it as the stops that heard it (absence_ratio; the first is forgiven)",
+            list(against)
+        ),
     }
 }
 
