@@ -96,6 +96,22 @@ fn compare_reports_every_method_and_the_published_table() {
     );
     assert!(rows.iter().all(|x| x["ospa"]["aligned"].is_null()), "{r}");
     assert!(lines[2].starts_with("normmusic,ssl,"), "{csv}");
+    // How the maps' missed sources were lost, per run: exact DoAs of every source at
+    // every stop leave none missed.
+    let header: Vec<&str> = lines[0].split(',').collect();
+    let col = header.iter().position(|&h| h == "missed_per_run").unwrap();
+    assert_eq!(
+        &header[col..col + 4],
+        [
+            "missed_per_run",
+            "refused_absence",
+            "refused_thin",
+            "refused_misplaced"
+        ]
+    );
+    let exact: Vec<&str> = lines[3].split(',').collect();
+    assert_eq!(exact[col], "0.0000", "{csv}");
+    assert_eq!(rows[2]["ospa"]["missed"]["missed"], 0.0, "{r}");
 }
 
 /// The text elements of an SVG file, in order.

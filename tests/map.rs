@@ -839,3 +839,62 @@ fn a_drive_through_silence_maps_nothing() {
         );
     }
 }
+
+#[test]
+fn eval_and_explain_say_a_missed_source_was_refused_by_the_absence_rule() {
+    // Talker A heard from all nine stops along y = -1; source B (1.5, -2.5) only from
+    // stops 0, 5 and 6 (2.5-3.7 m away), while stops 1-4, 1.5-2.2 m from it, report A
+    // alone (rows shorter than N: all they heard). The mapper makes B and refuses it in
+    // every run: `iasm eval` counts one source missed per run, refused for the absences,
+    // none never made; `iasm map --explain` names the stops that spoke against it.
+    let dir = tempdir();
+    let root = path(&dir, "ds");
+    let (a, b) = ([3.5, 2.0], [1.5, -2.5]);
+    let poses: Vec<(f64, f64, f64)> = (0..9).map(|k| (-0.5 + 0.9 * k as f64, -1.0, 0.0)).collect();
+    mapping_dataset(&root, &[a, b], &poses);
+    let bearing = |s: [f64; 2], p: (f64, f64, f64)| (s[1] - p.1).atan2(s[0] - p.0).to_degrees();
+    let table: String = poses
+        .iter()
+        .enumerate()
+        .map(|(k, &p)| {
+            if [0, 5, 6].contains(&k) {
+                format!("{:.3},{:.3}\n", bearing(a, p), bearing(b, p))
+            } else {
+                format!("{:.3}\n", bearing(a, p))
+            }
+        })
+        .collect();
+    std::fs::write(root.join("doas.csv"), table).unwrap();
+    let doas = root.join("doas.csv");
+    let base = ["--dataset", arg(&root), "--doas", arg(&doas), "--num", "3"];
+    let v = json(&iasm(
+        &[&["eval"], &base[..], &["--runs", "4", "--json"]].concat(),
+    ));
+    let ca = &v["variants"][0];
+    assert_eq!(ca["variant"], "ca");
+    let missed = &ca["missed"];
+    assert_eq!(missed["missed"], 1.0, "{v}");
+    assert_eq!(missed["spoken_against"], 1.0, "{v}");
+    assert_eq!(missed["thinly_heard"], 0.0, "{v}");
+    assert_eq!(missed["misplaced"], 0.0, "{v}");
+    let o = iasm(&[&["map"], &base[..], &["--seed", "2", "--explain"]].concat());
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", show(&o));
+    assert!(
+        text.contains(
+            "heard from stops 0, 5, 6: stops 1, 2, 3, 4 heard other sources and nothing there"
+        ),
+        "{text}"
+    );
+    assert!(
+        text.contains("found at (1.50, -2.50) and refused (above)"),
+        "{text}"
+    );
+    let o = iasm(&[&["eval"], &base[..], &["--runs", "2"]].concat());
+    assert!(
+        String::from_utf8_lossy(&o.stdout)
+            .contains("1.00 for stops that heard nothing there (absence_ratio)"),
+        "{}",
+        show(&o)
+    );
+}

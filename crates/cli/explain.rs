@@ -166,13 +166,7 @@ pub fn explain(
                 x: q[0],
                 y: q[1],
                 heard: heard_of(q, result, poses, doas, tol_deg),
-                refused: result
-                    .refused
-                    .iter()
-                    .map(|r| (r, (r.x - q[0]).hypot(r.y - q[1])))
-                    .filter(|&(_, d)| d < c)
-                    .min_by(|a, b| a.1.total_cmp(&b.1))
-                    .map(|(r, _)| r.clone()),
+                refused: refused_near(result, q, c).cloned(),
             })
             .collect()
     });
@@ -182,6 +176,74 @@ pub fn explain(
         refused: result.refused.clone(),
         missed,
         tol_deg,
+    }
+}
+
+/// Of the sources `result` refused, the nearest within `c` of `q`.
+fn refused_near(result: &MapResult, q: [f64; 2], c: f64) -> Option<&asm::Refused> {
+    result
+        .refused
+        .iter()
+        .map(|r| (r, (r.x - q[0]).hypot(r.y - q[1])))
+        .filter(|&(_, d)| d < c)
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(r, _)| r)
+}
+
+/// How the true sources a map missed were lost: how many the OSPA assignment left without
+/// a mapped source within `c`, and of those, how many the mapper made and refused (a
+/// refused source within `c`), by rule. The rest it never made a source of. Averaged over
+/// runs by `iasm eval` and `iasm compare` (see [`crate::pipeline::VariantStats`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct MissedTally {
+    /// True sources missed.
+    pub missed: f64,
+    /// Of those, refused for stops that heard nothing there ([`asm::IasmConfig::absence_ratio`]).
+    pub spoken_against: f64,
+    /// Refused as too thinly heard ([`asm::IasmConfig::vote_min_thresholded_stops`]).
+    pub thinly_heard: f64,
+    /// Refused as on the robot's path or beyond the map ([`asm::IasmConfig::min_range_m`],
+    /// [`asm::IasmConfig::beyond_map_m`]).
+    pub misplaced: f64,
+}
+
+impl MissedTally {
+    /// The tally of one map against `truth`.
+    pub fn of(result: &MapResult, truth: &[[f64; 2]], c: f64) -> Self {
+        let mapped = mapped_truth(&result.positions(), truth, c);
+        let mut t = Self::default();
+        for (&q, _) in truth.iter().zip(&mapped).filter(|(_, m)| !**m) {
+            t.missed += 1.0;
+            match refused_near(result, q, c).map(|r| &r.rule) {
+                Some(asm::Refusal::SpokenAgainst { .. }) => t.spoken_against += 1.0,
+                Some(asm::Refusal::ThinlyHeard) => t.thinly_heard += 1.0,
+                Some(asm::Refusal::Misplaced) => t.misplaced += 1.0,
+                None => {}
+            }
+        }
+        t
+    }
+
+    /// The mean of `tallies` (zero for none).
+    pub fn mean(tallies: impl ExactSizeIterator<Item = Self>) -> Self {
+        let n = tallies.len().max(1) as f64;
+        let sum = tallies.fold(Self::default(), |a, b| Self {
+            missed: a.missed + b.missed,
+            spoken_against: a.spoken_against + b.spoken_against,
+            thinly_heard: a.thinly_heard + b.thinly_heard,
+            misplaced: a.misplaced + b.misplaced,
+        });
+        Self {
+            missed: sum.missed / n,
+            spoken_against: sum.spoken_against / n,
+            thinly_heard: sum.thinly_heard / n,
+            misplaced: sum.misplaced / n,
+        }
+    }
+
+    /// Missed sources the mapper never made a source of.
+    pub fn never_made(&self) -> f64 {
+        (self.missed - self.spoken_against - self.thinly_heard - self.misplaced).max(0.0)
     }
 }
 
@@ -329,6 +391,20 @@ mod tests {
             .collect();
         assert_eq!(heard, vec![(4, None), (5, None)]);
         assert!(e.missed[0].heard.iter().all(|h| h.error_deg.abs() < 1e-6));
+        // Tallied as never made: no rule refused anything. Averaged with a run that
+        // missed nothing: half a source per run, never made.
+        assert!(result.refused.is_empty(), "{:?}", result.refused);
+        assert_eq!(e.missed[0].refused, None);
+        let t = MissedTally::of(&result, &sources, 1.0);
+        assert_eq!((t.missed, t.never_made()), (1.0, 1.0));
+        let none = MissedTally::of(&result, &sources[..1], 1.0);
+        assert_eq!(none, MissedTally::default());
+        let mean = MissedTally::mean([t, none].into_iter());
+        assert_eq!((mean.missed, mean.never_made()), (0.5, 0.5));
+        assert_eq!(
+            MissedTally::mean(std::iter::empty()),
+            MissedTally::default()
+        );
     }
 
     #[test]
@@ -407,5 +483,16 @@ mod tests {
         assert_eq!(v["rule"], "spoken_against");
         assert_eq!(v["against"], serde_json::json!([1, 2, 3, 4]));
         assert_eq!(v["stops"], serde_json::json!([0, 5, 6]));
+        // The tally of the map: one source missed, made and refused for the absences.
+        let t = MissedTally::of(&result, &sources, 1.0);
+        assert_eq!(
+            t,
+            MissedTally {
+                missed: 1.0,
+                spoken_against: 1.0,
+                ..MissedTally::default()
+            }
+        );
+        assert_eq!(t.never_made(), 0.0);
     }
 }

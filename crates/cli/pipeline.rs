@@ -26,6 +26,8 @@ use rand::SeedableRng;
 use rand::rngs::StdRng;
 use rayon::prelude::*;
 use serde::Serialize;
+
+use crate::explain::MissedTally;
 use sim::scene::PreparedScene;
 use ssl::{Audio, Doa, Localizer, Located, MicArray, Scratch, SslConfig};
 
@@ -528,6 +530,10 @@ pub struct VariantStats {
     /// and rotation (degrees): a diagnostic of the data's frames (`asm::align`). `None`
     /// when no run matched three sources.
     pub aligned: Option<AlignedStats>,
+    /// True sources missed per run, and of those how many the mapper made and refused, by
+    /// rule (the mean of each run's [`MissedTally`]): a source lost to the mapper's rules
+    /// rather than to the DoAs.
+    pub missed: MissedTally,
 }
 
 /// The runs' [`asm::align::Alignment`]s, averaged.
@@ -589,6 +595,7 @@ pub fn evaluate(
                         ospa(&found, truth, c, p),
                         r.sources.len(),
                         asm::align::align(&found, truth, c),
+                        MissedTally::of(&r, truth, c),
                     ))
                 })
                 .collect::<Result<_>>()?;
@@ -599,8 +606,8 @@ pub fn evaluate(
     out
 }
 
-/// One run's OSPA, source count and alignment.
-type Run = (Ospa, usize, Option<asm::align::Alignment>);
+/// One run's OSPA, source count, alignment, and how its missed sources were lost.
+type Run = (Ospa, usize, Option<asm::align::Alignment>, MissedTally);
 
 fn summarise(variant: Variant, res: &[Run], truth: usize, seed0: u64) -> VariantStats {
     let n = res.len() as f64;
@@ -644,6 +651,7 @@ fn summarise(variant: Variant, res: &[Run], truth: usize, seed0: u64) -> Variant
         runs,
         sources: res.iter().map(|r| r.1).collect(),
         aligned,
+        missed: MissedTally::mean(res.iter().map(|r| r.3)),
     }
 }
 

@@ -99,6 +99,21 @@ pub fn run(a: &EvalArgs) -> Result<Outcome> {
                 f.mean_before_m, f.mean_after_m, f.scale, f.rotation_deg, f.runs
             );
         }
+        if let Some(m) = stats
+            .iter()
+            .find(|s| s.variant == Variant::Ca)
+            .map(|s| s.missed)
+            .filter(|m| m.missed > 0.0)
+        {
+            println!(
+                "CA: {:.2} true sources missed per run; made and refused by the mapper's rules: {:.2} for stops that heard nothing there (absence_ratio), {:.2} too thinly heard (vote_min_thresholded_stops), {:.2} on the path or beyond the map (min_range_m, beyond_map_m); {:.2} never made a source (`iasm map --explain` shows where their DoAs went)",
+                m.missed,
+                m.spoken_against,
+                m.thinly_heard,
+                m.misplaced,
+                m.never_made()
+            );
+        }
     }
     let ca = stats
         .iter()
