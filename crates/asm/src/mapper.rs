@@ -1229,8 +1229,8 @@ impl Mapper {
     /// their row of `heard` is complete (`complete`: every peak the SSL let through; see
     /// [`Mapper::run_rows`]) and not empty, none within `gamma` of the bearing to
     /// `q`, it lies no further than `reach` from `q` (the furthest stop that heard it),
-    /// and none of `others` (the other sources) is nearer than `|q - stop| / ratio`, in order. None
-    /// when the ratio is 0.
+    /// and none of `others` (the other sources) is nearer than `|q - stop| / ratio`; in
+    /// stop order, none when the ratio is 0.
     pub fn absences(
         &self,
         q: [f64; 2],

@@ -81,8 +81,8 @@ pub struct OnlineMapper {
     rounds: usize,
     /// Sources removed by [`Mapper::drop_implausible`] in the last full map and since.
     removed: usize,
-    /// What was found and refused, and why, in the last full map and since (see
-    /// [`MapResult::refused`]).
+    /// What was found and refused, and why, in the last full map and since, one per place
+    /// against the sources as each stop left them (see [`MapResult::refused`]).
     refused: Vec<crate::Refused>,
     /// Stops at which the next full map runs.
     next_full: usize,
@@ -368,7 +368,6 @@ impl OnlineMapper {
     pub fn map(&self) -> MapResult {
         let mut sources = self.sources.clone();
         self.mapper.mark_mirrors(&mut sources);
-        let refused = self.mapper.one_per_place(self.refused.clone(), &sources);
         MapResult {
             sources,
             rounds: self.rounds,
@@ -376,7 +375,7 @@ impl OnlineMapper {
             unexplained: self.mapper.unexplained(&self.poses, &self.pool),
             unexplained_bearings: self.pool.clone(),
             removed: self.removed,
-            refused,
+            refused: self.refused.clone(),
         }
     }
 }
