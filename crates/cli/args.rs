@@ -65,6 +65,11 @@ pub enum Command {
         /// A settings file (as for `map`); each method and each scene's N replace its own.
         #[arg(long, value_name = "FILE")]
         config: Option<PathBuf>,
+        /// Map every scene with this N instead of its own (3, or 4 beyond three sources),
+        /// to see how the pipeline holds when N is set higher or lower; the scenes'
+        /// thresholds were set for their own N and are not judged then.
+        #[arg(long, value_name = "N")]
+        num: Option<usize>,
         /// Print JSON instead of a table.
         #[arg(long)]
         json: bool,

@@ -67,13 +67,18 @@ pub fn run(cli: &args::Cli) -> anyhow::Result<Outcome> {
             set_threads(*threads);
             cmd::simulate::run(scene, out, *force)
         }
-        args::Command::Regress { dir, config, json } => {
+        args::Command::Regress {
+            dir,
+            config,
+            num,
+            json,
+        } => {
             let settings = settings::Settings::load(config.as_deref())?;
             anyhow::Context::with_context(settings.validate(), || match config {
                 Some(p) => format!("settings {}", p.display()),
                 None => "the default settings".to_owned(),
             })?;
-            cmd::regress::run(dir, &settings, *json)
+            cmd::regress::run(dir, &settings, *num, *json)
         }
         args::Command::Eval(a) => {
             set_threads(a.threads);

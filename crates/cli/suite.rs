@@ -56,6 +56,9 @@ pub struct SceneResult {
     pub ospa: f64,
     /// The worst map's OSPA (m).
     pub ospa_worst: f64,
+    /// Whether the scene's thresholds were checked: not when the suite ran with another N
+    /// than the scene's own (`iasm regress --num`), for which they were not set.
+    pub judged: bool,
     /// Thresholds missed, in words (empty when all hold).
     pub breaches: Vec<String>,
 }
@@ -103,7 +106,9 @@ impl SuiteReport {
             "status"
         );
         for r in &self.rows {
-            let status = if r.breaches.is_empty() {
+            let status = if !r.judged {
+                "not judged (thresholds set for another N)".to_owned()
+            } else if r.breaches.is_empty() {
                 "ok".to_owned()
             } else {
                 r.breaches.join("; ")
@@ -183,7 +188,7 @@ fn breaches(e: &Expect, r: &SceneResult) -> Vec<String> {
 ///
 /// # Errors
 /// A scene that cannot be read or simulated, named.
-pub fn run_scene(path: &Path, base: &Settings) -> Result<Vec<SceneResult>> {
+pub fn run_scene(path: &Path, base: &Settings, num: Option<usize>) -> Result<Vec<SceneResult>> {
     let (scene, e) = load_scene(path)?;
     let stem = path
         .file_stem()
@@ -207,7 +212,9 @@ pub fn run_scene(path: &Path, base: &Settings) -> Result<Vec<SceneResult>> {
     );
     let sources = scene.scene.sources.len();
     let stops = scene.stops.len();
-    let n = e.num.unwrap_or(user_n(sources));
+    let own_n = e.num.unwrap_or(user_n(sources));
+    let n = num.unwrap_or(own_n);
+    anyhow::ensure!(n >= 1, "N must be at least 1");
     let template = scene.scene.clone();
     // The first seed is the scene as loaded; the others are prepared anew from it.
     let mut loaded = Some(scene);
@@ -261,9 +268,12 @@ pub fn run_scene(path: &Path, base: &Settings) -> Result<Vec<SceneResult>> {
                 right_count: maps.iter().filter(|c| c.0 == sources).count() as f64 / count,
                 ospa: maps.iter().map(|c| c.1).sum::<f64>() / count,
                 ospa_worst: maps.iter().map(|c| c.1).fold(0.0, f64::max),
+                judged: n == own_n,
                 breaches: Vec::new(),
             };
-            r.breaches = breaches(&e, &r);
+            if r.judged {
+                r.breaches = breaches(&e, &r);
+            }
             r
         })
         .collect())
@@ -303,18 +313,19 @@ pub const DEFAULT_MAP_SEEDS: usize = 3;
 const MAP_SEED_STRIDE: u64 = 1000;
 
 /// Runs every `*.toml` scene in `dir`, in natural name order, with `base` settings (each
-/// method in turn, and each scene's N).
+/// method in turn, and each scene's N, or `num` for every scene: then the scenes'
+/// thresholds, set for their own N, are reported unjudged).
 ///
 /// # Errors
 /// A folder that cannot be read or a scene that cannot be simulated.
-pub fn run_suite(dir: &Path, base: &Settings) -> Result<SuiteReport> {
+pub fn run_suite(dir: &Path, base: &Settings, num: Option<usize>) -> Result<SuiteReport> {
     let t0 = std::time::Instant::now();
     let scenes = list_files(dir, "toml")?;
     anyhow::ensure!(!scenes.is_empty(), "no scene (*.toml) in {}", dir.display());
     let bar = crate::progress(scenes.len() as u64, "scenes");
     let mut rows = Vec::new();
     for s in &scenes {
-        rows.extend(run_scene(s, base)?);
+        rows.extend(run_scene(s, base, num)?);
         bar.inc(1);
     }
     bar.finish_and_clear();
@@ -332,7 +343,10 @@ mod tests {
     #[test]
     fn a_scene_with_no_seeds_is_a_clear_error() {
         let (_dir, p) = one_talker("seeds = 0\n");
-        let e = format!("{:#}", run_scene(&p, &Settings::default()).unwrap_err());
+        let e = format!(
+            "{:#}",
+            run_scene(&p, &Settings::default(), None).unwrap_err()
+        );
         assert!(e.contains("s.toml") && e.contains("expect.seeds"), "{e}");
     }
 
@@ -356,7 +370,10 @@ mod tests {
     #[test]
     fn a_scene_with_no_map_seeds_is_a_clear_error() {
         let (_dir, p) = one_talker("map_seeds = 0\n");
-        let e = format!("{:#}", run_scene(&p, &Settings::default()).unwrap_err());
+        let e = format!(
+            "{:#}",
+            run_scene(&p, &Settings::default(), None).unwrap_err()
+        );
         assert!(
             e.contains("s.toml") && e.contains("expect.map_seeds"),
             "{e}"
@@ -368,7 +385,7 @@ mod tests {
     #[test]
     fn every_rendering_is_mapped_map_seeds_times() {
         let (_dir, p) = one_talker("seeds = 2\nmap_seeds = 3\n");
-        for r in run_scene(&p, &Settings::default()).unwrap() {
+        for r in run_scene(&p, &Settings::default(), None).unwrap() {
             assert_eq!(
                 (r.seeds.len(), r.map_seeds, r.found.len()),
                 (2, 3, 6),
@@ -378,5 +395,46 @@ mod tests {
             assert!((r.right_count - right).abs() < 1e-12, "{r:?}");
             assert!(r.ospa <= r.ospa_worst + 1e-12, "{r:?}");
         }
+    }
+    /// `--num` maps every scene with another N: the rows say so, and the scene's
+    /// thresholds, set for its own N (3 for one talker), are not judged (an impossible
+    /// one would fail at N = 3); the same N as the scene's own is judged as ever.
+    #[test]
+    fn another_n_is_reported_and_not_judged() {
+        let (_dir, p) = one_talker(
+            "seeds = 1
+map_seeds = 1
+ospa_max = 0.0
+doa_score_min = 1.01
+",
+        );
+        let own = run_scene(&p, &Settings::default(), None).unwrap();
+        assert!(
+            own.iter()
+                .all(|r| r.n == 3 && r.judged && r.breaches.len() == 2),
+            "{own:?}"
+        );
+        let same = run_scene(&p, &Settings::default(), Some(3)).unwrap();
+        assert!(
+            same.iter().all(|r| r.judged && !r.breaches.is_empty()),
+            "{same:?}"
+        );
+        let six = run_scene(&p, &Settings::default(), Some(6)).unwrap();
+        assert!(
+            six.iter()
+                .all(|r| r.n == 6 && !r.judged && r.breaches.is_empty()),
+            "{six:?}"
+        );
+        let report = SuiteReport {
+            schema_version: 3,
+            rows: six,
+            seconds: 0.0,
+        };
+        assert!(report.breaches().is_empty() && report.table().contains("not judged"));
+        let zero = run_scene(&p, &Settings::default(), Some(0)).unwrap_err();
+        assert!(
+            format!("{zero:#}").contains("N must be at least 1"),
+            "{zero:#}"
+        );
     }
 }

@@ -14,8 +14,8 @@ use crate::suite::run_suite;
 ///
 /// # Errors
 /// As [`run_suite`].
-pub fn run(dir: &Path, settings: &Settings, json: bool) -> Result<Outcome> {
-    let report = run_suite(dir, settings)?;
+pub fn run(dir: &Path, settings: &Settings, num: Option<usize>, json: bool) -> Result<Outcome> {
+    let report = run_suite(dir, settings, num)?;
     if json {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
