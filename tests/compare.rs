@@ -101,12 +101,13 @@ fn compare_reports_every_method_and_the_published_table() {
     let header: Vec<&str> = lines[0].split(',').collect();
     let col = header.iter().position(|&h| h == "missed_per_run").unwrap();
     assert_eq!(
-        &header[col..col + 4],
+        &header[col..col + 5],
         [
             "missed_per_run",
             "refused_absence",
             "refused_thin",
-            "refused_misplaced"
+            "refused_misplaced",
+            "refused_reassigned"
         ]
     );
     let exact: Vec<&str> = lines[3].split(',').collect();

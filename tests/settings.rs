@@ -61,6 +61,7 @@ absence_ratio = 2.0
 min_range_m = 0.25
 beyond_map_m = 0.7
 share_gate_sigmas = 0.4
+reassociate = false
 "#;
 
 // See: issue 8

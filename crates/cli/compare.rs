@@ -301,7 +301,9 @@ pub fn to_csv(r: &Report) -> String {
     for b in &bands {
         out.push_str(&format!(",err_deg_{}", b.replace(' ', "")));
     }
-    out.push_str(",missed_per_run,refused_absence,refused_thin,refused_misplaced");
+    out.push_str(
+        ",missed_per_run,refused_absence,refused_thin,refused_misplaced,refused_reassigned",
+    );
     out.push_str(",near_missed,missed_no_peak,missed_cut_at_n,missed_by_thresholds,beyond_n,beyond_n_on_source");
     out.push('\n');
     let num = |v: f64| {
@@ -337,7 +339,13 @@ pub fn to_csv(r: &Report) -> String {
             out.push_str(&num(b.mean_abs_err_deg));
         }
         let m = &o.missed;
-        for v in [m.missed, m.spoken_against, m.thinly_heard, m.misplaced] {
+        for v in [
+            m.missed,
+            m.spoken_against,
+            m.thinly_heard,
+            m.misplaced,
+            m.reassigned,
+        ] {
             out.push(',');
             out.push_str(&num(v));
         }

@@ -205,6 +205,9 @@ pub struct MissedTally {
     /// Refused as on the robot's path or beyond the map ([`asm::IasmConfig::min_range_m`],
     /// [`asm::IasmConfig::beyond_map_m`]).
     pub misplaced: f64,
+    /// Refused because its DoAs fit other mapped sources better
+    /// ([`asm::IasmConfig::reassociate`]).
+    pub reassigned: f64,
 }
 
 impl MissedTally {
@@ -218,6 +221,7 @@ impl MissedTally {
                 Some(asm::Refusal::SpokenAgainst { .. }) => t.spoken_against += 1.0,
                 Some(asm::Refusal::ThinlyHeard) => t.thinly_heard += 1.0,
                 Some(asm::Refusal::Misplaced) => t.misplaced += 1.0,
+                Some(asm::Refusal::Reassigned) => t.reassigned += 1.0,
                 None => {}
             }
         }
@@ -232,18 +236,21 @@ impl MissedTally {
             spoken_against: a.spoken_against + b.spoken_against,
             thinly_heard: a.thinly_heard + b.thinly_heard,
             misplaced: a.misplaced + b.misplaced,
+            reassigned: a.reassigned + b.reassigned,
         });
         Self {
             missed: sum.missed / n,
             spoken_against: sum.spoken_against / n,
             thinly_heard: sum.thinly_heard / n,
             misplaced: sum.misplaced / n,
+            reassigned: sum.reassigned / n,
         }
     }
 
     /// Missed sources the mapper never made a source of.
     pub fn never_made(&self) -> f64 {
-        (self.missed - self.spoken_against - self.thinly_heard - self.misplaced).max(0.0)
+        (self.missed - self.spoken_against - self.thinly_heard - self.misplaced - self.reassigned)
+            .max(0.0)
     }
 }
 

@@ -184,7 +184,7 @@ impl OnlineMapper {
                 self.search(&mut update);
             }
             // As the batch mapper does before its merge.
-            let removed = self.mapper.drop_implausible_cut(
+            let mut removed = self.mapper.drop_implausible_cut(
                 &mut self.sources,
                 &self.poses,
                 &self.bearings,
@@ -192,6 +192,10 @@ impl OnlineMapper {
                 &self.said_cut,
                 &mut self.pool,
             );
+            if self.mapper.config().reassociate {
+                self.mapper.merge(&mut self.sources);
+                removed.extend(self.mapper.reassociate(&mut self.sources, &mut self.pool));
+            }
             self.removed += removed.len();
             self.refused.extend(removed);
             self.mapper.merge(&mut self.sources);

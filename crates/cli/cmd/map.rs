@@ -201,7 +201,7 @@ pub fn run(a: &MapArgs) -> Result<Outcome> {
     );
     if result.removed > 0 {
         println!(
-            "  {} more found and removed: on the robot's path, or contradicted by stops that heard nothing there (see asm::IasmConfig::min_range_m, absence_ratio)",
+            "  {} more found and removed: on the robot's path, contradicted by stops that heard nothing there, or left with too few DoAs by sources that fit them better (--explain says which; see asm::IasmConfig::min_range_m, absence_ratio, reassociate)",
             result.removed
         );
     }
@@ -332,6 +332,10 @@ fn refusal(rule: &asm::Refusal) -> String {
             "stops {} heard other sources and nothing there, as near to it as the stops that heard it (absence_ratio; the first is forgiven)",
             list(against)
         ),
+        asm::Refusal::Reassigned => {
+            "its other DoAs fit mapped sources better and went to them, leaving fewer than min_observations stops (reassociate)"
+                .to_owned()
+        }
     }
 }
 
