@@ -344,7 +344,10 @@ impl InputArgs {
     /// # Errors
     /// As [`SettingsArgs::settings`].
     pub fn settings(&self) -> Result<Settings> {
-        let mut s = self.settings.settings()?;
+        let mut s = self
+            .settings
+            .settings()?
+            .with_dataset_array(self.dataset.as_deref());
         s.iasm.refine |= self.refine;
         Ok(s)
     }

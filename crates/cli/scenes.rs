@@ -94,7 +94,9 @@ pub fn load_scene(path: &Path) -> Result<(PreparedScene, Expect)> {
 }
 
 /// Renders every stop of `scene` into `out` (created if needed): `audio/subNN.wav` (32-bit
-/// float, pascals), `pose/poses.csv`, `map/map.yaml` + `map/map.pgm`, `src_gt.csv`.
+/// float, pascals), `pose/poses.csv`, `map/map.yaml` + `map/map.pgm`, `src_gt.csv`, and
+/// `array.toml`, the microphones that heard it (read by the commands given the data set
+/// and no array; see [`crate::settings::DATASET_ARRAY_FILES`]).
 ///
 /// # Errors
 /// If a file cannot be written.
@@ -124,6 +126,7 @@ pub fn write_dataset(scene: &PreparedScene, out: &Path) -> Result<()> {
         gt.push_str(&format!("{},{},{}\n", s.pos[0], s.pos[1], s.pos[2]));
     }
     write(&out.join("src_gt.csv"), gt.as_bytes())?;
+    write(&out.join("array.toml"), array_toml(scene).as_bytes())?;
     let pgm = map_image(scene);
     write(&out.join("map/map.pgm"), &pgm)?;
     let yaml = format!(
@@ -131,6 +134,30 @@ pub fn write_dataset(scene: &PreparedScene, out: &Path) -> Result<()> {
         -MAP_MARGIN, -MAP_MARGIN
     );
     write(&out.join("map/map.yaml"), yaml.as_bytes())
+}
+
+/// The scene's microphones as an array file (`ssl::MicArray::from_file`), named after its
+/// preset when it has one; `{:?}` writes each coordinate so that it reads back exactly.
+fn array_toml(scene: &PreparedScene) -> String {
+    let name = scene
+        .scene
+        .array
+        .preset
+        .clone()
+        .unwrap_or_else(|| "scene-array".to_owned());
+    let positions: Vec<String> = scene
+        .mics
+        .iter()
+        .map(|p| format!("[{:?}, {:?}, {:?}]", p[0], p[1], p[2]))
+        .collect();
+    format!(
+        "# The microphones that recorded audio/ (m, array frame: x the robot's heading, z up),
+# channel order. iasm reads this file when no --array or settings file names an array.
+name = {name:?}
+positions = [{}]
+",
+        positions.join(", ")
+    )
 }
 
 fn write(path: &Path, bytes: &[u8]) -> Result<()> {

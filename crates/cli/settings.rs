@@ -31,8 +31,14 @@ use asm::{IasmConfig, Profile};
 use serde::{Deserialize, Serialize};
 use ssl::{MicArray, SslConfig};
 
-/// The array used when neither the settings file nor `--array` names one.
+/// The array used when neither the settings file nor `--array` names one, nor the data set
+/// holds an array file ([`DATASET_ARRAY_FILES`]).
 pub const DEFAULT_ARRAY: &str = "iasm6";
+
+/// The array file a data set folder may hold beside `audio/`, in the format of
+/// [`ssl::MicArray::from_file`]; the first found is used. `iasm simulate` writes
+/// `array.toml`.
+pub const DATASET_ARRAY_FILES: [&str; 2] = ["array.toml", "array.json"];
 
 /// Every setting of the pipeline.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -125,6 +131,23 @@ impl Settings {
     pub fn set_num(&mut self, n: usize) {
         self.ssl.num_peaks = n;
         self.iasm.num_doas = n;
+    }
+
+    /// These settings, with the array file of the data set `dir` ([`DATASET_ARRAY_FILES`])
+    /// when neither the settings file nor `--array` named an array: recordings whose
+    /// folder says which microphones made them are not localised with the default array
+    /// (a mismatch of channel counts is refused, but one of geometry would not be).
+    pub fn with_dataset_array(mut self, dir: Option<&Path>) -> Self {
+        if self.array.is_none()
+            && let Some(dir) = dir
+            && let Some(file) = DATASET_ARRAY_FILES
+                .iter()
+                .map(|name| dir.join(name))
+                .find(|p| p.is_file())
+        {
+            self.array = Some(file.display().to_string());
+        }
+        self
     }
 
     /// The array these settings name.

@@ -46,7 +46,10 @@ pub fn write_doa_csv(path: &Path, table: &Table, header: bool) -> Result<()> {
 /// # Errors
 /// Bad settings, unreadable or mismatched files.
 pub fn run(args: &SslArgs) -> Result<Outcome> {
-    let settings = args.settings.settings()?;
+    let settings = args
+        .settings
+        .settings()?
+        .with_dataset_array(args.dataset.as_deref());
     let array = settings.mic_array()?;
     let config = settings.ssl;
     let mirror = array.mirror_axis_deg();
