@@ -214,7 +214,7 @@ pub fn run_scene(path: &Path, base: &Settings, num: Option<usize>) -> Result<Vec
     let stops = scene.stops.len();
     let own_n = e.num.unwrap_or(user_n(sources));
     let n = num.unwrap_or(own_n);
-    anyhow::ensure!(n >= 1, "N must be at least 1");
+    anyhow::ensure!(n >= 1, "--num: N must be at least 1, got 0");
     let template = scene.scene.clone();
     // The first seed is the scene as loaded; the others are prepared anew from it.
     let mut loaded = Some(scene);
