@@ -1056,17 +1056,9 @@ impl Mapper {
                 sources.push(s);
             }
         }
-        let mut removed =
-            self.drop_implausible_cut(&mut sources, poses, &heard, complete, said_cut, bearings);
-        if c.reassociate {
-            // Two estimates of one source (closer than the merge distance) would split its
-            // DoAs between them and move apart: merged first, they are one.
-            self.merge(&mut sources);
-            removed.extend(self.reassociate(&mut sources, bearings));
-        }
+        let removed = self.settle(&mut sources, poses, &heard, complete, said_cut, bearings);
         let count = removed.len();
         refused.extend(removed);
-        self.merge(&mut sources);
         self.mark_mirrors(&mut sources);
         let refused = self.one_per_place(refused, &sources);
         MapResult {
@@ -1078,6 +1070,36 @@ impl Mapper {
             removed: count,
             refused,
         }
+    }
+
+    /// What follows the search for sources, in the batch map and between the online map's
+    /// full maps: the sources that cannot be are removed
+    /// ([`Mapper::drop_implausible_cut`]), then, with [`IasmConfig::reassociate`], every
+    /// DoA goes to the source it fits best ([`Mapper::reassociate`]; merged first, since two
+    /// estimates of one source closer than the merge distance would split its DoAs between
+    /// them and move apart), and sources closer than [`IasmConfig::merge_dist_m`] are
+    /// merged. Returns the removed sources with their rules; their DoAs go back to
+    /// `bearings`.
+    ///
+    /// # Panics
+    /// As [`Mapper::drop_implausible_cut`].
+    pub(crate) fn settle(
+        &self,
+        sources: &mut Vec<Source>,
+        poses: &[Pose],
+        heard: &[Vec<f64>],
+        complete: &[bool],
+        said_cut: &[bool],
+        bearings: &mut [Vec<f64>],
+    ) -> Vec<Refused> {
+        let mut removed =
+            self.drop_implausible_cut(sources, poses, heard, complete, said_cut, bearings);
+        if self.config.reassociate {
+            self.merge(sources);
+            removed.extend(self.reassociate(sources, bearings));
+        }
+        self.merge(sources);
+        removed
     }
 
     /// Gives every DoA that a source explains to the source it fits best
@@ -1136,33 +1158,33 @@ impl Mapper {
             if !touched.contains(&true) {
                 break;
             }
-            let mut kept = Vec::with_capacity(sources.len());
-            for (mut s, touched) in sources.drain(..).zip(touched) {
-                if touched {
-                    s.rays.sort_by_key(|r| r.stop);
-                    if self.config.refine
-                        && let Some(p) =
-                            refit([s.x, s.y], &mut s.rays, self.sigma, self.trim, bearings)
-                    {
-                        (s.x, s.y, s.refined) = (p[0], p[1], true);
-                    }
-                    s.observations = s.rays.len();
+            for (s, _) in sources.iter_mut().zip(touched).filter(|(_, t)| *t) {
+                // In stop order, as the rounds' association leaves them (the explanation
+                // lists them so).
+                s.rays.sort_by_key(|r| r.stop);
+                if self.config.refine
+                    && let Some(p) = refit([s.x, s.y], &mut s.rays, self.sigma, self.trim, bearings)
+                {
+                    (s.x, s.y, s.refined) = (p[0], p[1], true);
                 }
-                let mut stops: Vec<usize> = s.rays.iter().map(|r| r.stop).collect();
-                stops.dedup();
-                if stops.len() < self.config.min_observations {
-                    s.rays.iter().for_each(|r| r.give_back(bearings));
-                    refused.push(Refused {
-                        x: s.x,
-                        y: s.y,
-                        stops,
-                        rule: Refusal::Reassigned,
-                    });
-                } else {
-                    kept.push(s);
-                }
+                s.observations = s.rays.len();
             }
-            *sources = kept;
+            sources.retain_mut(|s| {
+                let stops = stops_of(&s.rays);
+                if stops.len() >= self.config.min_observations {
+                    return true;
+                }
+                refused.push(Refused {
+                    x: s.x,
+                    y: s.y,
+                    stops,
+                    rule: Refusal::Reassigned,
+                });
+                for r in s.rays.drain(..) {
+                    r.give_back(bearings);
+                }
+                false
+            });
         }
         refused
     }

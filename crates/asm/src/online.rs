@@ -183,8 +183,8 @@ impl OnlineMapper {
             if !self.pool[stop].is_empty() || returned {
                 self.search(&mut update);
             }
-            // As the batch mapper does before its merge.
-            let mut removed = self.mapper.drop_implausible_cut(
+            // As the batch mapper ends its search.
+            let removed = self.mapper.settle(
                 &mut self.sources,
                 &self.poses,
                 &self.bearings,
@@ -192,13 +192,8 @@ impl OnlineMapper {
                 &self.said_cut,
                 &mut self.pool,
             );
-            if self.mapper.config().reassociate {
-                self.mapper.merge(&mut self.sources);
-                removed.extend(self.mapper.reassociate(&mut self.sources, &mut self.pool));
-            }
             self.removed += removed.len();
             self.refused.extend(removed);
-            self.mapper.merge(&mut self.sources);
         }
         // One refusal per place, as the map reports them: the vote tries its refused
         // proposals again at every stop.
