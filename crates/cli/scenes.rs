@@ -126,7 +126,7 @@ pub fn write_dataset(scene: &PreparedScene, out: &Path) -> Result<()> {
         gt.push_str(&format!("{},{},{}\n", s.pos[0], s.pos[1], s.pos[2]));
     }
     write(&out.join("src_gt.csv"), gt.as_bytes())?;
-    write(&out.join("array.toml"), array_toml(scene).as_bytes())?;
+    write(&out.join("array.toml"), array_toml(scene)?.as_bytes())?;
     let pgm = map_image(scene);
     write(&out.join("map/map.pgm"), &pgm)?;
     let yaml = format!(
@@ -137,27 +137,22 @@ pub fn write_dataset(scene: &PreparedScene, out: &Path) -> Result<()> {
 }
 
 /// The scene's microphones as an array file (`ssl::MicArray::from_file`), named after its
-/// preset when it has one; `{:?}` writes each coordinate so that it reads back exactly.
-fn array_toml(scene: &PreparedScene) -> String {
-    let name = scene
-        .scene
-        .array
-        .preset
-        .clone()
-        .unwrap_or_else(|| "scene-array".to_owned());
-    let positions: Vec<String> = scene
-        .mics
-        .iter()
-        .map(|p| format!("[{:?}, {:?}, {:?}]", p[0], p[1], p[2]))
-        .collect();
-    format!(
-        "# The microphones that recorded audio/ (m, array frame: x the robot's heading, z up),
-# channel order. iasm reads this file when no --array or settings file names an array.
-name = {name:?}
-positions = [{}]
-",
-        positions.join(", ")
-    )
+/// preset when it has one, serialised by `toml` (which quotes the name and writes each
+/// coordinate so that it reads back exactly).
+fn array_toml(scene: &PreparedScene) -> Result<String> {
+    #[derive(serde::Serialize)]
+    struct ArrayFile<'a> {
+        name: &'a str,
+        positions: &'a [[f64; 3]],
+    }
+    let file = ArrayFile {
+        name: scene.scene.array.preset.as_deref().unwrap_or("scene-array"),
+        positions: &scene.mics,
+    };
+    Ok(format!(
+        "# The microphones that recorded audio/ (m, array frame: x the robot's heading, z up),\n# channel order. iasm reads this file when no --array or settings file names an array.\n{}",
+        toml::to_string(&file).context("writing array.toml")?
+    ))
 }
 
 fn write(path: &Path, bytes: &[u8]) -> Result<()> {
