@@ -2445,6 +2445,18 @@ mod tests {
         }
     }
 
+    /// The stops that speak against the ghost survey's ghost at (2, 1.5), whose furthest
+    /// hearer stands 3.36 m from it, with `others` mapped.
+    fn against_the_ghost(
+        mapper: &Mapper,
+        poses: &[Pose],
+        heard: &[Vec<f64>],
+        others: &[[f64; 2]],
+    ) -> Vec<usize> {
+        let complete = mapper.complete_by_length(heard);
+        mapper.absences([2.0, 1.5], 3.36, poses, heard, &complete, others)
+    }
+
     /// Nine stops along y = 0 (x = 0..8, heading 0), N = 3, every one hearing a talker at
     /// (4, -3); a "ghost" at (2, 1.5) explaining DoAs of stops 0, 4 and 5 (2.5-3.4 m from
     /// it), while stops 1-3, 1.5-1.8 m from it, report one DoA less than N and nothing
@@ -2505,19 +2517,7 @@ mod tests {
         let mut left: Vec<Vec<f64>> = vec![Vec::new(); poses.len()];
         // Stops 1-3 speak against the ghost; the first is forgiven, two remain.
         let others = [[sources[0].x, sources[0].y]];
-        assert_eq!(
-            mapper
-                .absences(
-                    [2.0, 1.5],
-                    3.36,
-                    &poses,
-                    &heard,
-                    &mapper.complete_by_length(&heard),
-                    &others
-                )
-                .len(),
-            3
-        );
+        assert_eq!(against_the_ghost(&mapper, &poses, &heard, &others).len(), 3);
         assert_eq!(
             mapper
                 .drop_implausible(
@@ -2736,19 +2736,7 @@ mod tests {
             row.clear();
         }
         let others = [[sources[0].x, sources[0].y]];
-        assert_eq!(
-            mapper
-                .absences(
-                    [2.0, 1.5],
-                    3.36,
-                    &poses,
-                    &heard,
-                    &mapper.complete_by_length(&heard),
-                    &others
-                )
-                .len(),
-            0
-        );
+        assert_eq!(against_the_ghost(&mapper, &poses, &heard, &others).len(), 0);
         let mut left = vec![Vec::new(); poses.len()];
         assert_eq!(
             mapper
@@ -2775,19 +2763,7 @@ mod tests {
         }
         sources.push(heard_from(near, &poses, &[1, 2, 3]));
         let others = [[4.0, -3.0], near];
-        assert_eq!(
-            mapper
-                .absences(
-                    [2.0, 1.5],
-                    3.36,
-                    &poses,
-                    &heard,
-                    &mapper.complete_by_length(&heard),
-                    &others
-                )
-                .len(),
-            0
-        );
+        assert_eq!(against_the_ghost(&mapper, &poses, &heard, &others).len(), 0);
         let mut left = vec![Vec::new(); poses.len()];
         assert_eq!(
             mapper
