@@ -16,7 +16,9 @@ pub enum Signal {
     SpeechShaped,
     /// A voiced, speech-like harmonic series: fundamental `f0` (Hz), harmonics up to
     /// 8 kHz (and below Nyquist), random phases, amplitude falling as `1/h` (-6 dB/octave,
-    /// the glottal source's tilt).
+    /// the glottal source's tilt). The pitch is steady (no intonation or jitter), so in a
+    /// room it behaves as a hum more than a voice: each harmonic's reflections stay coherent
+    /// with its direct path however late they arrive (see `ssl::covariance`).
     Harmonic(f64),
 }
 

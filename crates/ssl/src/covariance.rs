@@ -37,6 +37,15 @@
 //! quiet talkers of the ten-talker scenes (measured, session 19): the localizer tests
 //! pair by pair.
 //!
+//! A source whose pitch never moves (a hum: a fan, a motor; the simulator's `voiced`
+//! signal) is one sinusoid per bin, and a sinusoid's reflections are the same sinusoid
+//! however late they arrive: in its bins its whole reverberant field is one signal, part
+//! of which the fit gives to any other direction, and the two look coherent through it.
+//! Broadband sources' late reflections are decorrelated within a frame and do not do this.
+//! Measured (`BENCHMARKS.md`, session 24): the steady 180-Hz talker of `three_sources`
+//! against a louder talker 0.69-0.72 at 2.1-2.3 m, in the range of that row's reflections
+//! (0.61-0.79), so its low peaks are taken for copies.
+//!
 //! Bins where the steering vectors are nearly parallel (the array does not resolve the
 //! directions there: low frequencies, small arrays, close directions) give an
 //! ill-conditioned fit and are left out; with none left the statistic is undefined.
