@@ -152,13 +152,13 @@ pub struct SslConfig {
     /// How block spectra are pooled. Default: [`Pooling::Max`].
     ///
     /// Why max: talkers take turns, and each keeps its best moment. [`Pooling::Mean`] is
-    /// the better estimator for a few sources that sound without pause in a noisy or
-    /// reverberant room, where the best of many noisy blocks is an extreme value and lifts
-    /// the room's ripples over the thresholds; with talkers who pause it loses some of them.
-    /// Measured (`BENCHMARKS.md`, session 24): two continuous talkers at RT60 0.8 s and SNR
-    /// 5 dB 0.29 / 0.19 -> 0.06 / 0.05 m (GCC-PHAT / MVDR), but five real talkers in
-    /// pyroomacoustics rooms MVDR 0.10-0.15 -> 0.24-0.52 m, and the authors' ten
-    /// loudspeakers' GCC-PHAT maps 100 % -> 56 % of runs with all ten.
+    /// the better estimator for a few broadband sources that sound without pause in a
+    /// noisy or reverberant room, where the best of many noisy blocks is an extreme value
+    /// and lifts the room's ripples over the thresholds; with talkers who pause it loses
+    /// some of them. Measured (`BENCHMARKS.md`, session 24): two continuous talkers at
+    /// RT60 0.8 s and SNR 5 dB 0.29 / 0.19 -> 0.06 / 0.05 m (GCC-PHAT / MVDR), but five
+    /// real talkers in pyroomacoustics rooms MVDR 0.10-0.15 -> 0.24-0.52 m, and the
+    /// authors' ten loudspeakers' GCC-PHAT maps 100 % -> 56 % of runs with all ten.
     pub pooling: Pooling,
     /// With [`Pooling::Max`]: each direction keeps the mean of its `pool_top` largest
     /// block values instead of the largest alone (`>= 1`; 1 is plain max pooling, more
