@@ -16,6 +16,7 @@ elevation = { min_deg = -30.0, max_deg = 30.0, step_deg = 15.0 }
 block_frames = 3
 pooling = "mean"
 pool_top = 2
+deflate = true
 num_peaks = 2
 min_sep_deg = 15.0
 min_relative = 0.2
@@ -206,4 +207,22 @@ fn r8_two_different_ns_in_one_file_are_a_clear_error() {
     write_wav(&wav, &plane_wave_recording(&iasm6(), &[30.0], SEED), FS);
     let o = iasm(&["ssl", arg(&wav), "--config", arg(&cfg)]);
     assert_clear_error(&o, &["c.toml", "num_peaks = 3", "num_doas = 4"]);
+}
+
+/// `--deflate` turns on `ssl.deflate` for the command, over a settings file that leaves it
+/// off, and the map says so.
+#[test]
+fn the_deflate_flag_reaches_the_localizer() {
+    let dir = tempdir();
+    let root = path(&dir, "ds");
+    audio_dataset(&root, &AUDIO_TRUTH);
+    let run = |extra: &[&str]| {
+        let mut args = vec!["map", "--dataset", arg(&root), "--num", "2", "--json"];
+        args.extend_from_slice(extra);
+        json(&iasm(&args))
+    };
+    assert_eq!(run(&[])["ssl"]["deflate"], false);
+    let v = run(&["--deflate"]);
+    assert_eq!(v["ssl"]["deflate"], true, "{v}");
+    assert_eq!(v["sources"].as_array().unwrap().len(), 2, "{v}");
 }

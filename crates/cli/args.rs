@@ -225,6 +225,11 @@ pub struct SettingsArgs {
     /// (1, the default, is the plain maximum; see `ssl::SslConfig::pool_top`).
     #[arg(long, value_name = "K")]
     pub pool_top: Option<usize>,
+    /// Refine each weaker DoA of a row with the stronger ones projected out (deflation;
+    /// for compact arrays hearing two or three sources at once; see
+    /// `ssl::SslConfig::deflate`).
+    #[arg(long)]
+    pub deflate: bool,
     /// I-ASM profile: paper (the paper's algorithm exactly, Table I) or robust (bearing
     /// refinement, three observing stops per source, a vote for missed sources, no source
     /// on the robot's path or contradicted by stops that heard nothing) [default: robust,
@@ -263,6 +268,9 @@ impl SettingsArgs {
         }
         if let Some(v) = self.pool_top {
             s.ssl.pool_top = v;
+        }
+        if self.deflate {
+            s.ssl.deflate = true;
         }
         s.validate().with_context(|| match &self.config {
             Some(p) => format!("settings {} with the command's flags", p.display()),

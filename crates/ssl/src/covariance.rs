@@ -276,22 +276,7 @@ impl SpatialCovariance {
         let mf = m as f64;
         for (kb, bin) in self.bins.clone().enumerate() {
             let w = std::f64::consts::TAU * bin as f64 / frame_len as f64 * fs;
-            // Steering vectors: a microphone further along `u` hears the wave earlier,
-            // X = S e^(i w lead).
-            let steer = DMatrix::from_fn(m, k, |i, j| Complex::from_polar(1.0, w * leads[j][i]));
-            let gram = steer.adjoint() * &steer;
-            // The array must resolve the directions here: the Gram matrix's smallest
-            // eigenvalue, per microphone, at least 1 - MAX_STEERING_OVERLAP (for two
-            // directions, |aᴴb| / M at most MAX_STEERING_OVERLAP).
-            let lowest = SymmetricEigen::new(gram.clone())
-                .eigenvalues
-                .iter()
-                .copied()
-                .fold(f64::INFINITY, f64::min);
-            if lowest / mf < 1.0 - MAX_STEERING_OVERLAP {
-                continue;
-            }
-            let Some(gi) = gram.try_inverse() else {
+            let Some((steer, gi)) = resolved_steering(m, w, &leads) else {
                 continue;
             };
             let r = DMatrix::from_fn(m, m, |i, j| {
@@ -332,4 +317,34 @@ impl SpatialCovariance {
         }
         (den > 0.0).then(|| num / den)
     }
+}
+
+/// A complex matrix.
+pub(crate) type CMatrix = DMatrix<Complex<f64>>;
+
+/// The steering matrix `A` (`m x K`, one column per wave) of waves whose microphone leads
+/// (s) are `leads`, at angular frequency `w`, with the inverse of its Gram matrix `AᴴA`;
+/// `None` where the array does not resolve the waves from each other: the Gram matrix's
+/// smallest eigenvalue, per microphone, below `1 - MAX_STEERING_OVERLAP` (for two waves,
+/// `|aᴴb| / M` above `MAX_STEERING_OVERLAP`). A microphone further along a wave's
+/// direction hears it earlier: `X = S e^(i w lead)`.
+pub(crate) fn resolved_steering(
+    m: usize,
+    w: f64,
+    leads: &[Vec<f64>],
+) -> Option<(CMatrix, CMatrix)> {
+    let steer = DMatrix::from_fn(m, leads.len(), |i, j| {
+        Complex::from_polar(1.0, w * leads[j][i])
+    });
+    let gram = steer.adjoint() * &steer;
+    let lowest = SymmetricEigen::new(gram.clone())
+        .eigenvalues
+        .iter()
+        .copied()
+        .fold(f64::INFINITY, f64::min);
+    if lowest / (m as f64) < 1.0 - MAX_STEERING_OVERLAP {
+        return None;
+    }
+    let gi = gram.try_inverse()?;
+    Some((steer, gi))
 }

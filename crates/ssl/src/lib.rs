@@ -41,6 +41,7 @@ pub mod array;
 pub mod audio;
 pub mod config;
 pub mod covariance;
+pub mod deflate;
 pub mod error;
 pub mod grid;
 mod localizer;

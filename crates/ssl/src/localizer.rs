@@ -746,7 +746,42 @@ impl Localizer {
         } else {
             Vec::new()
         };
+        let doas = if self.config.deflate && !cut && doas.len() >= 2 {
+            self.deflated(doas, &scratch.spec)
+        } else {
+            doas
+        };
         Ok(Located { doas, cut, extra })
+    }
+
+    /// `doas` (a row, strongest first) with each DoA but the first refined with the
+    /// stronger ones projected out ([`SslConfig::deflate`], [`crate::deflate`]), on the
+    /// blocks of `spec` that the pooling keeps.
+    fn deflated(&self, doas: Vec<Doa>, spec: &Spectrogram) -> Vec<Doa> {
+        let blocks = self.kept_frames(spec);
+        let setup = crate::deflate::Setup {
+            positions: self.array.positions(),
+            fs: f64::from(self.sample_rate),
+            frame_len: self.stft.frame_len(),
+            c: self.config.speed_of_sound,
+            pooling: self.config.pooling,
+            pool_top: self.config.pool_top,
+        };
+        let at = |d: &Doa| (d.azimuth_deg, d.elevation_deg);
+        let strong: Vec<(f64, f64)> = doas.iter().map(at).collect();
+        doas.iter()
+            .enumerate()
+            .map(|(k, d)| Doa {
+                azimuth_deg: crate::deflate::deflated_azimuth(
+                    &setup,
+                    spec,
+                    &blocks,
+                    &strong[..k],
+                    at(d),
+                ),
+                ..*d
+            })
+            .collect()
     }
 
     /// The extra DoAs of a cut row ([`Located::extra`]) before the significance floor:
