@@ -155,13 +155,7 @@ impl SpatialCovariance {
         if m < 3 {
             return None;
         }
-        let lead = |u: [f64; 3]| -> Vec<f64> {
-            positions
-                .iter()
-                .map(|p| (p[0] * u[0] + p[1] * u[1] + p[2] * u[2]) / c)
-                .collect()
-        };
-        let (la, lb) = (lead(a), lead(b));
+        let (la, lb) = (leads(positions, a, c), leads(positions, b, c));
         let mf = m as f64;
         let (mut num, mut den) = (0.0f64, 0.0f64);
         let mut va = vec![(0.0f64, 0.0f64); m];
@@ -174,7 +168,7 @@ impl SpatialCovariance {
             })
         };
         for (k, bin) in self.bins.clone().enumerate() {
-            let w = std::f64::consts::TAU * bin as f64 / frame_len as f64 * fs;
+            let w = angular_frequency(bin, frame_len, fs);
             // Steering vectors: a microphone further along `u` hears the wave earlier,
             // X = S e^(i w lead).
             for i in 0..m {
@@ -262,21 +256,16 @@ impl SpatialCovariance {
         if others.is_empty() || k + 1 > m {
             return None;
         }
-        let leads: Vec<Vec<f64>> = others
+        let waves: Vec<Vec<f64>> = others
             .iter()
             .chain(std::iter::once(&b))
-            .map(|u| {
-                positions
-                    .iter()
-                    .map(|p| (p[0] * u[0] + p[1] * u[1] + p[2] * u[2]) / c)
-                    .collect()
-            })
+            .map(|&u| leads(positions, u, c))
             .collect();
         let (mut num, mut den) = (0.0f64, 0.0f64);
         let mf = m as f64;
         for (kb, bin) in self.bins.clone().enumerate() {
-            let w = std::f64::consts::TAU * bin as f64 / frame_len as f64 * fs;
-            let Some((steer, gi)) = resolved_steering(m, w, &leads) else {
+            let w = angular_frequency(bin, frame_len, fs);
+            let Some((steer, gi)) = resolved_steering(m, w, &waves) else {
                 continue;
             };
             let r = DMatrix::from_fn(m, m, |i, j| {
@@ -347,4 +336,19 @@ pub(crate) fn resolved_steering(
     }
     let gi = gram.try_inverse()?;
     Some((steer, gi))
+}
+
+/// Each microphone's lead (s) for a plane wave from direction `u` (a unit vector in the
+/// array frame), microphones at `positions` (m), sound at `c` (m/s): a microphone further
+/// along `u` hears the wave earlier, `X = S e^(i w lead)`.
+pub(crate) fn leads(positions: &[[f64; 3]], u: [f64; 3], c: f64) -> Vec<f64> {
+    positions
+        .iter()
+        .map(|p| (p[0] * u[0] + p[1] * u[1] + p[2] * u[2]) / c)
+        .collect()
+}
+
+/// The angular frequency (rad/s) of FFT bin `bin` of a `frame_len`-sample frame at `fs` Hz.
+pub(crate) fn angular_frequency(bin: usize, frame_len: usize, fs: f64) -> f64 {
+    std::f64::consts::TAU * bin as f64 / frame_len as f64 * fs
 }

@@ -37,7 +37,7 @@ use std::ops::Range;
 use nalgebra::{Complex, DMatrix};
 
 use crate::config::Pooling;
-use crate::covariance::resolved_steering;
+use crate::covariance::{CMatrix, angular_frequency, leads, resolved_steering};
 use crate::grid::unit_vector;
 use crate::stft::Spectrogram;
 
@@ -62,11 +62,11 @@ impl Setup<'_> {
     /// Each microphone's lead (s) for a plane wave from (azimuth, elevation) degrees: a
     /// microphone further along the direction hears it earlier, `X = S e^(i w lead)`.
     fn lead(&self, azimuth_deg: f64, elevation_deg: f64) -> Vec<f64> {
-        let u = unit_vector(azimuth_deg, elevation_deg);
-        self.positions
-            .iter()
-            .map(|p| (p[0] * u[0] + p[1] * u[1] + p[2] * u[2]) / self.c)
-            .collect()
+        leads(
+            self.positions,
+            unit_vector(azimuth_deg, elevation_deg),
+            self.c,
+        )
     }
 
     /// The pooled value of per-block values `q` (see [`crate::SslConfig::pooling`]).
@@ -100,14 +100,14 @@ pub(crate) fn deflated_azimuth(
     }
     let omega: Vec<f64> = spec
         .bins()
-        .map(|b| std::f64::consts::TAU * b as f64 / setup.frame_len as f64 * setup.fs)
+        .map(|b| angular_frequency(b, setup.frame_len, setup.fs))
         .collect();
     let nb = omega.len();
     // Per bin, the projector away from the stronger DoAs; none where the array does not
     // resolve them from each other (the smallest eigenvalue of AᴴA, per microphone, below
     // 1 - `MAX_STEERING_OVERLAP`, as the coherence statistic requires).
     let leads: Vec<Vec<f64>> = strong.iter().map(|&(a, e)| setup.lead(a, e)).collect();
-    let projectors: Vec<Option<DMatrix<Complex<f64>>>> = omega
+    let projectors: Vec<Option<CMatrix>> = omega
         .iter()
         .map(|&w| {
             let (a, gi) = resolved_steering(m, w, &leads)?;
@@ -120,7 +120,7 @@ pub(crate) fn deflated_azimuth(
         vec![0.0f64; blocks.len() * nb * mm],
         vec![0.0; blocks.len() * nb * mm],
     );
-    let mut r = DMatrix::<Complex<f64>>::zeros(m, m);
+    let mut r = CMatrix::zeros(m, m);
     for (bi, frames) in blocks.iter().enumerate() {
         for (k, p) in projectors.iter().enumerate() {
             let Some(p) = p else { continue };
