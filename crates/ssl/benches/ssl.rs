@@ -1,5 +1,6 @@
 //! Benchmarks of the SSL front end: one whole recording (file read included) per method,
-//! the STFT across frame lengths, and one block's spectrum across grids.
+//! the STFT across frame lengths, one block's spectrum across grids, and deflation's cost
+//! on a compact array.
 //!
 //! `cargo bench -p ssl`; figures go to `BENCHMARKS.md`.
 
@@ -89,6 +90,70 @@ fn whole_recording(c: &mut Criterion) {
     g.finish();
 }
 
+/// Deflation's cost where it is meant to run: the ReSpeaker 4-mic hearing two talkers,
+/// 2 s at 16 kHz, N = 2 (the row holds both and is not cut), with and without it.
+fn deflation(c: &mut Criterion) {
+    const RATE: u32 = 16_000;
+    let array = MicArray::preset("respeaker4").unwrap();
+    let n = 2 * RATE as usize;
+    let waves: Vec<PlaneWave> = [(90.0, 1.0), (30.0, 0.7)]
+        .iter()
+        .map(|&(azimuth_deg, _)| PlaneWave {
+            azimuth_deg,
+            elevation_deg: 0.0,
+            signal: Signal::SpeechShaped,
+        })
+        .collect();
+    let channels: Vec<Vec<f32>> = waves
+        .iter()
+        .zip([1.0, 0.7])
+        .enumerate()
+        .map(|(k, (w, gain))| {
+            let mics = render(
+                array.positions(),
+                &[*w],
+                RATE,
+                n,
+                343.0,
+                Some(30.0),
+                SEED + k as u64,
+            );
+            mics.into_iter()
+                .map(|ch| {
+                    ch.into_iter()
+                        .map(|x| (0.1 * gain * x) as f32)
+                        .collect::<Vec<f32>>()
+                })
+                .collect::<Vec<_>>()
+        })
+        .reduce(|a, b| {
+            a.into_iter()
+                .zip(b)
+                .map(|(x, y)| x.into_iter().zip(y).map(|(p, q)| p + q).collect())
+                .collect()
+        })
+        .unwrap();
+    let audio = Audio::new(RATE, channels).unwrap();
+    let mut g = c.benchmark_group("ssl/deflate-respeaker4-2s-16k");
+    g.sample_size(30);
+    for method in [Method::GccPhat, Method::Mvdr] {
+        for deflate in [false, true] {
+            let config = SslConfig {
+                method,
+                num_peaks: 2,
+                deflate,
+                ..SslConfig::default()
+            };
+            let loc = Localizer::new(&array, RATE, &config).unwrap();
+            let name = if deflate { "deflate" } else { "plain" };
+            g.bench_function(BenchmarkId::new(name, method), |b| {
+                b.iter(|| loc.locate(black_box(&audio)).unwrap())
+            });
+        }
+    }
+    g.finish();
+}
+
 fn stft(c: &mut Criterion) {
     let rec = recording(3.0);
     let audio = Audio::new(
@@ -152,5 +217,5 @@ fn block_spectrum(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, whole_recording, stft, block_spectrum);
+criterion_group!(benches, whole_recording, stft, block_spectrum, deflation);
 criterion_main!(benches);

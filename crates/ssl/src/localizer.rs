@@ -758,7 +758,12 @@ impl Localizer {
     /// stronger ones projected out ([`SslConfig::deflate`], [`crate::deflate`]), on the
     /// blocks of `spec` that the pooling keeps.
     fn deflated(&self, doas: Vec<Doa>, spec: &Spectrogram) -> Vec<Doa> {
+        if spec.num_channels() < 3 {
+            // One stronger DoA projected out leaves too few dimensions to search in.
+            return doas;
+        }
         let blocks = self.kept_frames(spec);
+        let cov = crate::deflate::BlockCovariances::of(spec, &blocks);
         let setup = crate::deflate::Setup {
             positions: self.array.positions(),
             fs: f64::from(self.sample_rate),
@@ -775,7 +780,7 @@ impl Localizer {
                 azimuth_deg: crate::deflate::deflated_azimuth(
                     &setup,
                     spec,
-                    &blocks,
+                    &cov,
                     &strong[..k],
                     at(d),
                 ),
