@@ -192,7 +192,9 @@ pub struct SslConfig {
     /// sources are no plane waves, MVDR's maps lose in the reverberant rooms
     /// (`reverberant_low_snr` 0.193 -> 0.302) while GCC-PHAT's gain on average (the suites'
     /// mean 0.084 -> 0.082 m), and the authors' recordings, whose rows are cut, do not
-    /// change (0.148 / 0.152 -> 0.150 / 0.153 m).
+    /// change (0.148 / 0.152 -> 0.150 / 0.153 m). Cost: a row it refines takes about twice
+    /// as long to localise (ReSpeaker, two talkers, 2 s: 1.25 -> 2.47 ms GCC-PHAT, 1.93 ->
+    /// 3.77 ms MVDR; `BENCHMARKS.md`, session 25).
     pub deflate: bool,
     /// Number of DoAs reported, strongest first (`>= 1`). Default: 4.
     pub num_peaks: usize,
