@@ -17,6 +17,7 @@ block_frames = 3
 pooling = "mean"
 pool_top = 2
 deflate = true
+deflate_max_residual = 0.5
 num_peaks = 2
 min_sep_deg = 15.0
 min_relative = 0.2

@@ -21,7 +21,7 @@
 //! their best block here too. From the DoA the search climbs the pooled projected power
 //! (1-degree steps, then 0.25) to its local maximum, at most [`REACH_DEG`] away; the
 //! elevation stays. The blocks' covariances are the recording's alone: they are computed
-//! once per row ([`BlockCovariances`]) and the projection is applied to the steering
+//! once per row (`BlockCovariances`) and the projection is applied to the steering
 //! vector, `(P⊥ a)ᴴ R (P⊥ a)`, rather than to each block's matrix. Bins where the array does not resolve the stronger DoAs from each
 //! other, and candidate directions that the projection all but removes (`‖a_p‖²` under a
 //! fifth of `M`), are left out.
@@ -29,10 +29,14 @@
 //! When not. The step assumes the row's DoAs are the sources the recording holds, and
 //! plane waves. A row cut at `N` holds fewer ([`crate::Located::cut`]) and is left alone.
 //! In a crowd that the array does not resolve (ten talkers heard by the ReSpeaker, rows of
-//! two or three), the residual is the other talkers' and the refined DoAs follow them; and
-//! a source nearer than the array's far-field distance (2 D² / λ: 2.6 m for the paper's
-//! 0.235-m array at 8 kHz) is no plane wave, so that projecting its DoA out leaves much of
-//! it. Hence off by default; measured in `BENCHMARKS.md` (session 24).
+//! two or three), the residual is the other talkers' and the refined DoAs follow them:
+//! hence a gate (`residual_share`, [`crate::SslConfig::deflate_max_residual`]) that
+//! refines a row only when its DoAs, projected out all at once, leave clearly less power
+//! per dimension than noise would (a crowd, or a reverberant room, leaves nearly as
+//! much; measured in `BENCHMARKS.md`, session 25). And a source nearer than the array's
+//! far-field distance (2 D² / λ: 2.6 m for the paper's 0.235-m array at 8 kHz) is no
+//! plane wave, so that projecting its DoA out leaves much of it. Hence off by default;
+//! measured in `BENCHMARKS.md` (sessions 24 and 25).
 
 use std::collections::HashMap;
 use std::ops::Range;
@@ -167,6 +171,65 @@ fn diagonal(i: usize, m: usize) -> usize {
     i * m - i * i.saturating_sub(1) / 2
 }
 
+/// How much of the field a row's DoAs leave unexplained: the power left once all of
+/// `doas` are projected out, per dimension left, as a share of the power per dimension
+/// (`(tr(P⊥ R) / (M - s)) / (tr(R) / M)` for `s` DoAs and `M` microphones), averaged over
+/// the blocks of `cov` and the bins where the array resolves the DoAs. About 1 for
+/// spatially white noise, or for a field of many more sources than the row holds; the
+/// noise's share of the power when the row's plane waves are all there is. `None` when the
+/// DoAs leave fewer than two dimensions (one dimension is explained by any field) or no
+/// bin resolves them ([`crate::SslConfig::deflate_max_residual`]).
+pub(crate) fn residual_share(
+    setup: &Setup<'_>,
+    spec: &Spectrogram,
+    cov: &BlockCovariances,
+    doas: &[(f64, f64)],
+) -> Option<f64> {
+    let (m, nb) = (cov.m, cov.bins);
+    let s = doas.len();
+    if s + 2 > m {
+        return None;
+    }
+    let leads: Vec<Vec<f64>> = doas.iter().map(|&(a, e)| setup.lead(a, e)).collect();
+    let pairs = m * (m + 1) / 2;
+    let (mut sum, mut count) = (0.0f64, 0usize);
+    for (k, bin) in spec.bins().enumerate() {
+        let w = angular_frequency(bin, setup.frame_len, setup.fs);
+        let Some((a, gi)) = resolved_steering(m, w, &leads) else {
+            continue;
+        };
+        let p: CMatrix = DMatrix::identity(m, m) - &a * gi * a.adjoint();
+        for block in 0..cov.blocks {
+            let entry = |pair: usize| {
+                let at = (block * pairs + pair) * nb + k;
+                Complex::new(cov.re[at], cov.im[at])
+            };
+            // A block silent in this bin was stored as zero: it says nothing.
+            let trace: f64 = (0..m).map(|i| entry(diagonal(i, m)).re).sum();
+            if trace < 0.5 {
+                continue;
+            }
+            // tr(P⊥ R) = Σ_i P_ii R_ii + 2 Re Σ_{i<j} P_ij conj(R_ij), R Hermitian.
+            let mut pair = 0;
+            let mut left = 0.0;
+            for i in 0..m {
+                for j in i..m {
+                    let r = entry(pair);
+                    left += if i == j {
+                        p[(i, i)].re * r.re
+                    } else {
+                        2.0 * (p[(i, j)] * r.conj()).re
+                    };
+                    pair += 1;
+                }
+            }
+            sum += left;
+            count += 1;
+        }
+    }
+    (count > 0).then(|| sum / count as f64 * m as f64 / (m - s) as f64)
+}
+
 /// The azimuth (degrees, wrapped) of the DoA at `weak` (azimuth, elevation) refined with
 /// the DoAs at `strong` projected out of the blocks whose covariances are `cov`; `weak`'s
 /// own azimuth when there is nothing to refine against (no stronger DoA, more than
@@ -279,6 +342,109 @@ pub(crate) fn deflated_azimuth(
 mod tests {
     use super::*;
     use realfft::num_complex::Complex32;
+
+    /// Complex Gaussian deviates of unit power from a fixed seed (a 64-bit LCG and
+    /// Box-Muller): the tests' noise without a generator crate.
+    fn gaussians(n: usize, seed: u64) -> Vec<Complex<f64>> {
+        let mut state = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
+        let mut uniform = || {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            ((state >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+        };
+        (0..n)
+            .map(|_| {
+                let (r, t) = ((-uniform().ln()).sqrt(), std::f64::consts::TAU * uniform());
+                Complex::from_polar(r, t)
+            })
+            .collect()
+    }
+
+    /// The ReSpeaker 4-mic's positions (m), 16 kHz, 512-sample frames.
+    const MICS: [[f64; 3]; 4] = [
+        [-0.032, 0.0, 0.0],
+        [0.0, -0.032, 0.0],
+        [0.032, 0.0, 0.0],
+        [0.0, 0.032, 0.0],
+    ];
+
+    fn setup() -> Setup<'static> {
+        Setup {
+            positions: &MICS,
+            fs: 16_000.0,
+            frame_len: 512,
+            c: 343.0,
+            pooling: Pooling::Max,
+            pool_top: 1,
+        }
+    }
+
+    /// A spectrogram of `frames` frames over bins 20..200 (625-6250 Hz) holding plane
+    /// waves from `waves` (azimuth degrees, in the plane; independent unit-power signals,
+    /// amplitude each) and white sensor noise of power `noise` per microphone.
+    fn field(waves: &[(f64, f64)], noise: f64, frames: usize) -> Spectrogram {
+        let (m, bins) = (MICS.len(), 20..200);
+        let nb = bins.len();
+        let setup = setup();
+        let mut data = vec![Complex32::new(0.0, 0.0); frames * m * nb];
+        let sensor = gaussians(data.len(), 1);
+        for (n, x) in data.iter_mut().enumerate() {
+            *x = Complex32::new(
+                (noise.sqrt() * sensor[n].re) as f32,
+                (noise.sqrt() * sensor[n].im) as f32,
+            );
+        }
+        for (w, &(azimuth, amplitude)) in waves.iter().enumerate() {
+            let lead = setup.lead(azimuth, 0.0);
+            let signal = gaussians(frames * nb, 100 + w as u64);
+            for f in 0..frames {
+                for (k, bin) in bins.clone().enumerate() {
+                    let omega = angular_frequency(bin, setup.frame_len, setup.fs);
+                    for (i, l) in lead.iter().enumerate() {
+                        let x =
+                            amplitude * signal[f * nb + k] * Complex::from_polar(1.0, omega * l);
+                        let at = (f * m + i) * nb + k;
+                        data[at] += Complex32::new(x.re as f32, x.im as f32);
+                    }
+                }
+            }
+        }
+        Spectrogram::from_parts(frames, m, bins, data)
+    }
+
+    /// The residual share is about 1 for spatially white noise, whatever directions are
+    /// projected out; the noise's share of the power when the row's plane waves are all
+    /// the field holds; near 1 again when the row holds two of six equal sources (a crowd);
+    /// and undefined when one dimension would be left.
+    #[test]
+    fn the_residual_share_tells_a_row_that_explains_its_field_from_a_crowd() {
+        let setup = setup();
+        let share = |spec: &Spectrogram, doas: &[(f64, f64)]| {
+            let blocks: Vec<Range<usize>> = (0..8).map(|b| 4 * b..4 * b + 4).collect();
+            residual_share(&setup, spec, &BlockCovariances::of(spec, &blocks), doas)
+        };
+        let row = [(90.0, 0.0), (10.0, 0.0)];
+        let noise = share(&field(&[], 1.0, 32), &row).unwrap();
+        assert!((noise - 1.0).abs() < 0.1, "white noise: {noise}");
+        // Two waves of power 1 each and noise of 0.1 per microphone: the noise holds
+        // 0.4 / (8 + 0.4) of the power.
+        let two = share(&field(&[(90.0, 1.0), (10.0, 1.0)], 0.1, 32), &row).unwrap();
+        assert!(two < 0.1, "two talkers, both in the row: {two}");
+        let crowd: Vec<(f64, f64)> = [90.0, 10.0, -50.0, -110.0, 150.0, 40.0]
+            .iter()
+            .map(|&a| (a, 1.0))
+            .collect();
+        let many = share(&field(&crowd, 0.1, 32), &row).unwrap();
+        assert!(many > 0.65, "six talkers, two in the row: {many}");
+        assert_eq!(
+            share(
+                &field(&[], 1.0, 32),
+                &[(90.0, 0.0), (10.0, 0.0), (-60.0, 0.0)]
+            ),
+            None
+        );
+    }
 
     #[test]
     fn diagonal_indexes_the_upper_triangle_row_by_row() {

@@ -774,6 +774,13 @@ impl Localizer {
         };
         let at = |d: &Doa| (d.azimuth_deg, d.elevation_deg);
         let strong: Vec<(f64, f64)> = doas.iter().map(at).collect();
+        let gate = self.config.deflate_max_residual;
+        if gate > 0.0
+            && !crate::deflate::residual_share(&setup, spec, &cov, &strong)
+                .is_some_and(|r| r < gate)
+        {
+            return doas;
+        }
         doas.iter()
             .enumerate()
             .map(|(k, d)| Doa {

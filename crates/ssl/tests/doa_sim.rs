@@ -1049,3 +1049,40 @@ fn deflation_moves_a_weak_talker_off_a_strong_ones_lobe() {
         assert_eq!(deflated[0], plain[0]);
     }
 }
+
+/// Deflation refines a row only when the row's DoAs explain what the array hears
+/// (`SslConfig::deflate_max_residual`): two talkers in 30-dB sensor noise leave, once
+/// both are projected out, a few percent of the power per dimension, so the default gate
+/// (0.65) lets the weaker DoA be refined, as the gate off (0) does; a gate below that
+/// share (0.01) leaves the row as the spectrum gave it.
+#[test]
+fn deflation_refines_a_row_only_when_its_doas_explain_the_field() {
+    let array = MicArray::preset("respeaker4").unwrap();
+    let (strong, weak) = (90.0, 30.0);
+    let (fs, audio) = two_talkers(&array, strong, weak, 0.7);
+    let row = |deflate: bool, gate: f64| {
+        let config = SslConfig {
+            method: Method::GccPhat,
+            num_peaks: 2,
+            deflate,
+            deflate_max_residual: gate,
+            ..SslConfig::default()
+        };
+        let located = Localizer::new(&array, fs, &config)
+            .unwrap()
+            .locate_row_with_scratch(&audio, &mut Default::default())
+            .unwrap();
+        assert!(!located.cut, "the row holds both talkers and nothing more");
+        located.doas
+    };
+    let plain = row(false, 0.65);
+    assert_eq!(plain.len(), 2, "{plain:?}");
+    let refined = row(true, 0.65);
+    let off = |d: &ssl::Doa| wrap_deg(d.azimuth_deg - weak).abs();
+    assert!(
+        off(&refined[1]) < off(&plain[1]),
+        "{plain:?} -> {refined:?}"
+    );
+    assert_eq!(row(true, 0.0), refined, "the gate off");
+    assert_eq!(row(true, 0.01), plain, "a gate below the row's residual");
+}
