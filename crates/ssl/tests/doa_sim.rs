@@ -1002,6 +1002,25 @@ fn two_talkers(array: &MicArray, az_a: f64, az_b: f64, gain_b: f64) -> (u32, Aud
     (fs, audio)
 }
 
+/// The row (N = 2, GCC-PHAT) that `array` gives for `audio` of two talkers, deflated or
+/// not, with the deflation gate `gate` ([`SslConfig::deflate_max_residual`]); the row
+/// must hold both and nothing more (not cut).
+fn two_talker_row(array: &MicArray, audio: &Audio, deflate: bool, gate: f64) -> Vec<ssl::Doa> {
+    let config = SslConfig {
+        method: Method::GccPhat,
+        num_peaks: 2,
+        deflate,
+        deflate_max_residual: gate,
+        ..SslConfig::default()
+    };
+    let located = Localizer::new(array, audio.sample_rate(), &config)
+        .unwrap()
+        .locate_row_with_scratch(audio, &mut Default::default())
+        .unwrap();
+    assert!(!located.cut, "the row holds both talkers and nothing more");
+    located.doas
+}
+
 /// On the ReSpeaker 4-mic (6.4 cm across) the weaker of two talkers 60-120 degrees apart
 /// peaks on the stronger one's wide lobe, 3-10 degrees off its plane wave (GCC-PHAT);
 /// deflation (`SslConfig::deflate`: the stronger DoA projected out) puts it back within
@@ -1019,21 +1038,8 @@ fn deflation_moves_a_weak_talker_off_a_strong_ones_lobe() {
         (90.0, 20.0, 0.8),
     ];
     for (strong, weak, gain) in cases {
-        let (fs, audio) = two_talkers(&array, strong, weak, gain);
-        let row = |deflate: bool| {
-            let config = SslConfig {
-                method: Method::GccPhat,
-                num_peaks: 2,
-                deflate,
-                ..SslConfig::default()
-            };
-            let located = Localizer::new(&array, fs, &config)
-                .unwrap()
-                .locate_row_with_scratch(&audio, &mut Default::default())
-                .unwrap();
-            assert!(!located.cut, "{strong}/{weak}: the row holds both talkers");
-            located.doas
-        };
+        let (_, audio) = two_talkers(&array, strong, weak, gain);
+        let row = |deflate: bool| two_talker_row(&array, &audio, deflate, 0.65);
         let (plain, deflated) = (row(false), row(true));
         assert_eq!(plain.len(), 2, "{strong}/{weak}: {plain:?}");
         let off = |d: &ssl::Doa| wrap_deg(d.azimuth_deg - weak).abs();
@@ -1059,22 +1065,8 @@ fn deflation_moves_a_weak_talker_off_a_strong_ones_lobe() {
 fn deflation_refines_a_row_only_when_its_doas_explain_the_field() {
     let array = MicArray::preset("respeaker4").unwrap();
     let (strong, weak) = (90.0, 30.0);
-    let (fs, audio) = two_talkers(&array, strong, weak, 0.7);
-    let row = |deflate: bool, gate: f64| {
-        let config = SslConfig {
-            method: Method::GccPhat,
-            num_peaks: 2,
-            deflate,
-            deflate_max_residual: gate,
-            ..SslConfig::default()
-        };
-        let located = Localizer::new(&array, fs, &config)
-            .unwrap()
-            .locate_row_with_scratch(&audio, &mut Default::default())
-            .unwrap();
-        assert!(!located.cut, "the row holds both talkers and nothing more");
-        located.doas
-    };
+    let (_, audio) = two_talkers(&array, strong, weak, 0.7);
+    let row = |deflate: bool, gate: f64| two_talker_row(&array, &audio, deflate, gate);
     let plain = row(false, 0.65);
     assert_eq!(plain.len(), 2, "{plain:?}");
     let refined = row(true, 0.65);
