@@ -186,18 +186,20 @@ pub struct SslConfig {
     ///
     /// Why one might turn it on: on a compact array (a ReSpeaker) a weaker source heard
     /// beside a stronger one peaks on the stronger one's wide lobe, 5-25 degrees off;
-    /// deflated, within a degree or two. Measured (`BENCHMARKS.md`, session 24; 3
+    /// deflated, within a degree or two. Measured (`BENCHMARKS.md`, sessions 24 and 25; 3
     /// renderings x 3 maps): two talkers heard by the ReSpeaker 4-mic 0.173 / 0.242 ->
-    /// 0.067 / 0.090 m (GCC-PHAT / MVDR), a pyroomacoustics survey of five talkers heard by
-    /// it 0.677 / 0.426 -> 0.453 / 0.369. Why it is off: the step assumes the row's DoAs
-    /// are all the sources and plane waves. Ten talkers heard by the ReSpeaker (rows of
-    /// two or three) 0.116 / 0.149 -> 0.210 / 0.290 m; on the paper's array, whose near
-    /// sources are no plane waves, MVDR's maps lose in the reverberant rooms
-    /// (`reverberant_low_snr` 0.193 -> 0.302) while GCC-PHAT's gain on average (the suites'
-    /// mean 0.084 -> 0.082 m), and the authors' recordings, whose rows are cut, do not
-    /// change (0.148 / 0.152 -> 0.150 / 0.153 m). Cost: a row it refines takes about twice
-    /// as long to localise (ReSpeaker, two talkers, 2 s: 1.25 -> 2.47 ms GCC-PHAT, 1.93 ->
-    /// 3.77 ms MVDR; `BENCHMARKS.md`, session 25).
+    /// 0.067 / 0.090 m (GCC-PHAT / MVDR), gated or not. Why it is off: the step assumes
+    /// the row's DoAs are all the sources and plane waves. Ungated, ten talkers heard by
+    /// the ReSpeaker (rows of two or three) went 0.116 / 0.149 -> 0.210 / 0.290 m and, on
+    /// the paper's array, whose near sources are no plane waves, MVDR lost in the
+    /// reverberant rooms (`reverberant_low_snr` 0.193 -> 0.302). The gate leaves those
+    /// rows alone (0.126 / 0.137 m and 0.193; the suites' mean 0.0900 -> 0.0894 m), but
+    /// the crowd still loses one of its ten sources in one GCC-PHAT map of nine, and the
+    /// ungated gain on a pyroomacoustics survey of five talkers heard by the ReSpeaker
+    /// (0.677 / 0.426 -> 0.453 / 0.369 m) goes with it. The authors' recordings, whose
+    /// rows are cut, do not change. Cost: a row it refines takes about twice as long to
+    /// localise (ReSpeaker, two talkers, 2 s: 1.25 -> 2.47 ms GCC-PHAT, 1.93 -> 3.77 ms
+    /// MVDR; `BENCHMARKS.md`, session 25).
     pub deflate: bool,
     /// With [`SslConfig::deflate`], a row is refined only when its DoAs explain the field:
     /// once they are all projected out, the power left per dimension is less than this
