@@ -96,43 +96,30 @@ fn deflation(c: &mut Criterion) {
     const RATE: u32 = 16_000;
     let array = MicArray::preset("respeaker4").unwrap();
     let n = 2 * RATE as usize;
-    let waves: Vec<PlaneWave> = [(90.0, 1.0), (30.0, 0.7)]
-        .iter()
-        .map(|&(azimuth_deg, _)| PlaneWave {
+    // (azimuth, amplitude) of each talker, each rendered with its own seed and noise.
+    let talkers = [(90.0, 1.0), (30.0, 0.7)];
+    let mut channels = vec![vec![0.0f32; n]; array.positions().len()];
+    for (k, &(azimuth_deg, gain)) in talkers.iter().enumerate() {
+        let wave = PlaneWave {
             azimuth_deg,
             elevation_deg: 0.0,
             signal: Signal::SpeechShaped,
-        })
-        .collect();
-    let channels: Vec<Vec<f32>> = waves
-        .iter()
-        .zip([1.0, 0.7])
-        .enumerate()
-        .map(|(k, (w, gain))| {
-            let mics = render(
-                array.positions(),
-                &[*w],
-                RATE,
-                n,
-                343.0,
-                Some(30.0),
-                SEED + k as u64,
-            );
-            mics.into_iter()
-                .map(|ch| {
-                    ch.into_iter()
-                        .map(|x| (0.1 * gain * x) as f32)
-                        .collect::<Vec<f32>>()
-                })
-                .collect::<Vec<_>>()
-        })
-        .reduce(|a, b| {
-            a.into_iter()
-                .zip(b)
-                .map(|(x, y)| x.into_iter().zip(y).map(|(p, q)| p + q).collect())
-                .collect()
-        })
-        .unwrap();
+        };
+        let mics = render(
+            array.positions(),
+            &[wave],
+            RATE,
+            n,
+            343.0,
+            Some(30.0),
+            SEED + k as u64,
+        );
+        for (out, mic) in channels.iter_mut().zip(mics) {
+            for (o, x) in out.iter_mut().zip(mic) {
+                *o += (0.1 * gain * x) as f32;
+            }
+        }
+    }
     let audio = Audio::new(RATE, channels).unwrap();
     let mut g = c.benchmark_group("ssl/deflate-respeaker4-2s-16k");
     g.sample_size(30);

@@ -22,9 +22,9 @@
 //! (1-degree steps, then 0.25) to its local maximum, at most [`REACH_DEG`] away; the
 //! elevation stays. The blocks' covariances are the recording's alone: they are computed
 //! once per row (`BlockCovariances`) and the projection is applied to the steering
-//! vector, `(P⊥ a)ᴴ R (P⊥ a)`, rather than to each block's matrix. Bins where the array does not resolve the stronger DoAs from each
-//! other, and candidate directions that the projection all but removes (`‖a_p‖²` under a
-//! fifth of `M`), are left out.
+//! vector, `(P⊥ a)ᴴ R (P⊥ a)`, rather than to each block's matrix. Bins where the array
+//! does not resolve the stronger DoAs from each other, and candidate directions that the
+//! projection all but removes (`‖a_p‖²` under a fifth of `M`), are left out.
 //!
 //! When not. The step assumes the row's DoAs are the sources the recording holds, and
 //! plane waves. A row cut at `N` holds fewer ([`crate::Located::cut`]) and is left alone.
@@ -171,6 +171,20 @@ fn diagonal(i: usize, m: usize) -> usize {
     i * m - i * i.saturating_sub(1) / 2
 }
 
+/// The projector away from the waves whose microphone leads are `leads`, at angular
+/// frequency `w`, `P⊥ = I - A (AᴴA)⁻¹ Aᴴ` (`m x m`); `None` where the array does not
+/// resolve them from each other ([`resolved_steering`]).
+fn projector(m: usize, w: f64, leads: &[Vec<f64>]) -> Option<CMatrix> {
+    let (a, gi) = resolved_steering(m, w, leads)?;
+    Some(DMatrix::identity(m, m) - &a * gi * a.adjoint())
+}
+
+/// Whether `s` DoAs on `m` microphones leave the two dimensions that
+/// [`residual_share`] needs to test them (one dimension is explained by any field).
+pub(crate) fn testable(s: usize, m: usize) -> bool {
+    s + 2 <= m
+}
+
 /// How much of the field a row's DoAs leave unexplained: the power left once all of
 /// `doas` are projected out, per dimension left, as a share of the power per dimension
 /// (`(tr(P⊥ R) / (M - s)) / (tr(R) / M)` for `s` DoAs and `M` microphones), averaged over
@@ -187,7 +201,7 @@ pub(crate) fn residual_share(
 ) -> Option<f64> {
     let (m, nb) = (cov.m, cov.bins);
     let s = doas.len();
-    if s + 2 > m {
+    if !testable(s, m) {
         return None;
     }
     let leads: Vec<Vec<f64>> = doas.iter().map(|&(a, e)| setup.lead(a, e)).collect();
@@ -195,10 +209,9 @@ pub(crate) fn residual_share(
     let (mut sum, mut count) = (0.0f64, 0usize);
     for (k, bin) in spec.bins().enumerate() {
         let w = angular_frequency(bin, setup.frame_len, setup.fs);
-        let Some((a, gi)) = resolved_steering(m, w, &leads) else {
+        let Some(p) = projector(m, w, &leads) else {
             continue;
         };
-        let p: CMatrix = DMatrix::identity(m, m) - &a * gi * a.adjoint();
         for block in 0..cov.blocks {
             let entry = |pair: usize| {
                 let at = (block * pairs + pair) * nb + k;
@@ -254,13 +267,7 @@ pub(crate) fn deflated_azimuth(
     // resolve them from each other (the smallest eigenvalue of AᴴA, per microphone, below
     // 1 - `MAX_STEERING_OVERLAP`, as the coherence statistic requires).
     let leads: Vec<Vec<f64>> = strong.iter().map(|&(a, e)| setup.lead(a, e)).collect();
-    let projectors: Vec<Option<CMatrix>> = omega
-        .iter()
-        .map(|&w| {
-            let (a, gi) = resolved_steering(m, w, &leads)?;
-            Some(DMatrix::identity(m, m) - &a * gi * a.adjoint())
-        })
-        .collect();
+    let projectors: Vec<Option<CMatrix>> = omega.iter().map(|&w| projector(m, w, &leads)).collect();
     let pairs = m * (m + 1) / 2;
     let mut per_block = vec![0.0f64; cov.blocks];
     let mut a = vec![Complex::new(0.0, 0.0); m];

@@ -762,6 +762,11 @@ impl Localizer {
             // One stronger DoA projected out leaves too few dimensions to search in.
             return doas;
         }
+        let gate = self.config.deflate_max_residual;
+        if gate > 0.0 && !crate::deflate::testable(doas.len(), spec.num_channels()) {
+            // The gate cannot test the row: leave it before computing its covariances.
+            return doas;
+        }
         let blocks = self.kept_frames(spec);
         let cov = crate::deflate::BlockCovariances::of(spec, &blocks);
         let setup = crate::deflate::Setup {
@@ -774,7 +779,6 @@ impl Localizer {
         };
         let at = |d: &Doa| (d.azimuth_deg, d.elevation_deg);
         let strong: Vec<(f64, f64)> = doas.iter().map(at).collect();
-        let gate = self.config.deflate_max_residual;
         if gate > 0.0
             && !crate::deflate::residual_share(&setup, spec, &cov, &strong)
                 .is_some_and(|r| r < gate)
