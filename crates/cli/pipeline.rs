@@ -19,11 +19,11 @@ use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
 use anyhow::{Context, Result, bail, ensure};
+use asm::MapRng;
 use asm::map::OccupancyMap;
 use asm::ospa::{Ospa, ospa};
 use asm::{IasmConfig, MapResult, Mapper, Pose, Variant};
 use rand::SeedableRng;
-use rand::rngs::StdRng;
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -474,7 +474,7 @@ impl Survey {
             &self.poses,
             &self.doas_rad(),
             self.cut.as_deref(),
-            &mut StdRng::seed_from_u64(seed),
+            &mut MapRng::seed_from_u64(seed),
         )?)
     }
 
@@ -582,7 +582,7 @@ pub fn evaluate(
             let res: Vec<Run> = (0..runs as u64)
                 .into_par_iter()
                 .map(|s| {
-                    let mut rng = StdRng::seed_from_u64(seed0 + s);
+                    let mut rng = MapRng::seed_from_u64(seed0 + s);
                     let r = mapper.run_rows(
                         &survey.poses,
                         &doas_rad,

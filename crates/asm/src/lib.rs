@@ -15,13 +15,13 @@
 //! # Example
 //!
 //! ```
-//! use asm::{IasmConfig, Mapper, Pose, map::{Cell, OccupancyMap}, ospa::ospa};
-//! use rand::{SeedableRng, rngs::StdRng};
+//! use asm::{IasmConfig, MapRng, Mapper, Pose, map::{Cell, OccupancyMap}, ospa::ospa};
+//! use rand::SeedableRng;
 //! // A free 4 x 4 m room, a robot at 8 stops, one source at (2, 3).
 //! let map = OccupancyMap::new(80, 80, 0.05, [0.0, 0.0], vec![Cell::Free; 6400]);
 //! let poses: Vec<Pose> = (0..8).map(|k| Pose { x: 0.5 + 0.4 * k as f64, y: 0.5, theta: 0.0 }).collect();
 //! let doas: Vec<Vec<f64>> = poses.iter().map(|p| vec![(3.0 - p.y).atan2(2.0 - p.x)]).collect();
-//! let result = Mapper::new(&map, &IasmConfig::default())?.run(&poses, &doas, &mut StdRng::seed_from_u64(1))?;
+//! let result = Mapper::new(&map, &IasmConfig::default())?.run(&poses, &doas, &mut MapRng::seed_from_u64(1))?;
 //! assert!(ospa(&result.positions(), &[[2.0, 3.0]], 1.0, 1.0).total < 0.2);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
@@ -31,7 +31,8 @@
 //! SI units (m, s); angles in radians inside this crate (degrees only at the CLI's edges);
 //! world frame right-handed, azimuth counter-clockwise from `x`; DoAs are in the array
 //! frame, whose `x` axis is the robot's heading. All randomness comes from the caller's
-//! `Rng`: the same seed gives the same map.
+//! `Rng`: the same seed gives the same map ([`MapRng`] is the generator the `iasm` CLI
+//! seeds).
 
 pub mod align;
 pub mod assoc;
@@ -49,3 +50,13 @@ pub use mapper::{
     IasmConfig, MapResult, Mapper, Profile, Refusal, Refused, Round, Source, Trim, Variant,
 };
 pub use online::{OnlineMapper, StopUpdate};
+
+/// The random-number generator the `iasm` pipeline seeds its maps with: xoshiro256++
+/// (`rand_xoshiro`), whose output for a seed is fixed by its specification.
+///
+/// Why not `rand`'s `StdRng` (ChaCha12): a map draws two normal deviates per particle per
+/// stop, and with ChaCha the generator took 45 % of a map's time (`perf`, arrangement II,
+/// `BENCHMARKS.md`, session 26). A particle filter needs no cryptographic strength, only
+/// good equidistribution, which xoshiro256++ has (it passes BigCrush and PractRand).
+/// Any `Rng` can be given to [`Mapper::run`]; this one is what the CLI's seeds mean.
+pub type MapRng = rand_xoshiro::Xoshiro256PlusPlus;

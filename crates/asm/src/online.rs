@@ -35,8 +35,8 @@
 //!
 //! [`IasmConfig::refine`]: crate::IasmConfig::refine
 
+use crate::MapRng;
 use rand::SeedableRng;
-use rand::rngs::StdRng;
 
 use crate::Pose;
 use crate::error::{Error, Result};
@@ -88,7 +88,7 @@ pub struct OnlineMapper {
     next_full: usize,
     /// The stop count of the last full map (0: none yet).
     last_full: usize,
-    rng: StdRng,
+    rng: MapRng,
 }
 
 /// The first full map runs at this many stops; then at twice as many each time.
@@ -112,7 +112,7 @@ impl OnlineMapper {
             refused: Vec::new(),
             next_full: FIRST_FULL,
             last_full: 0,
-            rng: StdRng::seed_from_u64(seed ^ 0x0e11_0e11),
+            rng: MapRng::seed_from_u64(seed ^ 0x0e11_0e11),
         }
     }
 
@@ -211,7 +211,7 @@ impl OnlineMapper {
         if self.last_full == self.poses.len() {
             return 0;
         }
-        let mut rng = StdRng::seed_from_u64(self.seed);
+        let mut rng = MapRng::seed_from_u64(self.seed);
         let mut pool = self.bearings.clone();
         let r = self.mapper.run_bearings_complete(
             &self.poses,
@@ -452,7 +452,7 @@ mod tests {
         ] {
             let doas = if clutter { &with_clutter } else { &sparse };
             let batch = mapper
-                .run(&poses, doas, &mut StdRng::seed_from_u64(seed))
+                .run(&poses, doas, &mut crate::MapRng::seed_from_u64(seed))
                 .unwrap();
             let mut online = OnlineMapper::new(mapper.clone(), seed);
             for (p, row) in poses.iter().zip(doas) {
@@ -499,7 +499,12 @@ mod tests {
             .collect();
         for seed in 0..3 {
             let batch = mapper
-                .run_rows(&poses, &doas, Some(&cut), &mut StdRng::seed_from_u64(seed))
+                .run_rows(
+                    &poses,
+                    &doas,
+                    Some(&cut),
+                    &mut crate::MapRng::seed_from_u64(seed),
+                )
                 .unwrap();
             let mut online = OnlineMapper::new(mapper.clone(), seed);
             for ((p, row), &c) in poses.iter().zip(&doas).zip(&cut) {
@@ -521,7 +526,11 @@ mod tests {
         let recompute: usize = (1..=poses.len())
             .map(|k| {
                 mapper
-                    .run(&poses[..k], &doas[..k], &mut StdRng::seed_from_u64(1))
+                    .run(
+                        &poses[..k],
+                        &doas[..k],
+                        &mut crate::MapRng::seed_from_u64(1),
+                    )
                     .unwrap()
                     .rounds
             })
