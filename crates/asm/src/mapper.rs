@@ -1402,7 +1402,7 @@ impl Mapper {
                     break 'pairs;
                 }
             }
-            let Some((i, j, p, best, union)) = done else {
+            let Some((i, j, p, mut best, union)) = done else {
                 return;
             };
             for r in &union {
@@ -1413,7 +1413,6 @@ impl Mapper {
                     r.give_back(bearings);
                 }
             }
-            let mut best = best;
             best.sort_by_key(|r| r.stop);
             let s = &mut sources[i];
             (s.x, s.y) = (p[0], p[1]);
