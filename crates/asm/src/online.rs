@@ -35,13 +35,12 @@
 //!
 //! [`IasmConfig::refine`]: crate::IasmConfig::refine
 
-use crate::MapRng;
 use rand::SeedableRng;
 
-use crate::Pose;
 use crate::error::{Error, Result};
 use crate::mapper::{MapResult, Mapper, Round, Source, Variant, refit};
 use crate::pf::{ParticleFilter, covariance, mean};
+use crate::{MapRng, Pose};
 
 /// What one stop changed.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -452,7 +451,7 @@ mod tests {
         ] {
             let doas = if clutter { &with_clutter } else { &sparse };
             let batch = mapper
-                .run(&poses, doas, &mut crate::MapRng::seed_from_u64(seed))
+                .run(&poses, doas, &mut MapRng::seed_from_u64(seed))
                 .unwrap();
             let mut online = OnlineMapper::new(mapper.clone(), seed);
             for (p, row) in poses.iter().zip(doas) {
@@ -499,12 +498,7 @@ mod tests {
             .collect();
         for seed in 0..3 {
             let batch = mapper
-                .run_rows(
-                    &poses,
-                    &doas,
-                    Some(&cut),
-                    &mut crate::MapRng::seed_from_u64(seed),
-                )
+                .run_rows(&poses, &doas, Some(&cut), &mut MapRng::seed_from_u64(seed))
                 .unwrap();
             let mut online = OnlineMapper::new(mapper.clone(), seed);
             for ((p, row), &c) in poses.iter().zip(&doas).zip(&cut) {
@@ -526,11 +520,7 @@ mod tests {
         let recompute: usize = (1..=poses.len())
             .map(|k| {
                 mapper
-                    .run(
-                        &poses[..k],
-                        &doas[..k],
-                        &mut crate::MapRng::seed_from_u64(1),
-                    )
+                    .run(&poses[..k], &doas[..k], &mut MapRng::seed_from_u64(1))
                     .unwrap()
                     .rounds
             })
