@@ -2586,6 +2586,16 @@ mod tests {
         }
     }
 
+    /// A mapped source at `q` holding the DoAs that `stops` heard of a source at `of`
+    /// (exact bearings to `of`): a cloud that took another source's DoAs.
+    fn holding(q: [f64; 2], of: [f64; 2], poses: &[Pose], stops: &[usize]) -> Source {
+        let mut s = heard_from(q, poses, stops);
+        for r in &mut s.rays {
+            r.bearing = poses[r.stop].bearing_to(of);
+        }
+        s
+    }
+
     /// The stops that speak against the ghost survey's ghost at (2, 1.5), whose furthest
     /// hearer stands 3.36 m from it, with `others` mapped.
     fn against_the_ghost(
@@ -2828,16 +2838,9 @@ mod tests {
         let (talker, other) = ([2.0, 3.0], [6.0, -2.5]);
         // 60 % of the way from stop 5 to the talker: on stop 5's ray, off the others'.
         let ghost = [5.0 + 0.6 * (talker[0] - 5.0), 0.6 * talker[1]];
-        let with_talkers_doas = |q: [f64; 2], stops: &[usize]| {
-            let mut s = heard_from(q, &poses, stops);
-            for r in &mut s.rays {
-                r.bearing = poses[r.stop].bearing_to(talker);
-            }
-            s
-        };
         let mut mapped = vec![
             heard_from(talker, &poses, &[0, 1, 2, 3]),
-            with_talkers_doas(ghost, &[4, 5, 6, 7, 8]),
+            holding(ghost, talker, &poses, &[4, 5, 6, 7, 8]),
             heard_from(other, &poses, &[2, 4, 5, 6, 7]),
         ];
         let mapper = ghost_mapper(IasmConfig::default());
@@ -2880,12 +2883,9 @@ mod tests {
         // Every stop hears the talker; stops 0 and 1 hear a reflection through the ghost.
         let heard = rows(&poses, talker, ghost, |k| k < 2);
         let mut ghost_source = heard_from(ghost, &poses, &[0, 1]);
-        for k in 4..9 {
-            ghost_source.rays.push(Ray {
-                bearing: poses[k].bearing_to(talker),
-                ..heard_from(ghost, &poses, &[k]).rays[0]
-            });
-        }
+        ghost_source
+            .rays
+            .extend(holding(ghost, talker, &poses, &[4, 5, 6, 7, 8]).rays);
         ghost_source.observations = ghost_source.rays.len();
         let mapper = ghost_mapper(IasmConfig::default());
         let complete = mapper.complete_by_length(&heard);
@@ -2979,13 +2979,6 @@ mod tests {
         let said_cut = vec![true; poses.len()];
         let complete = vec![false; poses.len()];
         let mapper = ghost_mapper(IasmConfig::default());
-        let half = |q: [f64; 2], of: [f64; 2], stops: &[usize]| {
-            let mut s = heard_from(q, &poses, stops);
-            for r in &mut s.rays {
-                r.bearing = poses[r.stop].bearing_to(of);
-            }
-            s
-        };
         let run = |mut sources: Vec<Source>| {
             let mut left = vec![Vec::new(); poses.len()];
             let refused = mapper.drop_implausible_cut(
@@ -3000,8 +2993,8 @@ mod tests {
         };
         // Either side of the talker, each holding four of its stops (one in common).
         let (kept, refused) = run(vec![
-            half([1.8, 2.5], talker, &[0, 1, 2, 3]),
-            half([2.3, 3.6], talker, &[3, 4, 5, 6]),
+            holding([1.8, 2.5], talker, &poses, &[0, 1, 2, 3]),
+            holding([2.3, 3.6], talker, &poses, &[3, 4, 5, 6]),
         ]);
         assert!(refused.is_empty(), "{refused:?}");
         assert_eq!(kept.len(), 1);
@@ -3013,8 +3006,8 @@ mod tests {
         assert_eq!(stops_of(&kept[0].rays), (0..7).collect::<Vec<_>>());
         // Four stops of one talker and four of another meet nowhere: both refused.
         let (kept, refused) = run(vec![
-            half([1.8, 2.5], talker, &[0, 1, 2, 3]),
-            half([6.2, -2.0], other, &[4, 5, 6, 7]),
+            holding([1.8, 2.5], talker, &poses, &[0, 1, 2, 3]),
+            holding([6.2, -2.0], other, &poses, &[4, 5, 6, 7]),
         ]);
         assert!(kept.is_empty(), "{kept:?}");
         assert_eq!(refused.len(), 2);
