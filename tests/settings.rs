@@ -16,6 +16,7 @@ elevation = { min_deg = -30.0, max_deg = 30.0, step_deg = 15.0 }
 block_frames = 3
 pooling = "mean"
 pool_top = 2
+placement_share = 0.5
 deflate = true
 deflate_max_residual = 0.5
 num_peaks = 2

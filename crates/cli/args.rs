@@ -225,6 +225,12 @@ pub struct SettingsArgs {
     /// (1, the default, is the plain maximum; see `ssl::SslConfig::pool_top`).
     #[arg(long, value_name = "K")]
     pub pool_top: Option<usize>,
+    /// With max pooling: place each DoA that was the strongest direction of a block at the
+    /// peak of the mean of its best SHARE of the blocks, within half the minimum
+    /// separation (0 keeps the pooled peak's azimuth; default 0.25; see
+    /// `ssl::SslConfig::placement_share`).
+    #[arg(long, value_name = "SHARE")]
+    pub placement_share: Option<f64>,
     /// Refine each weaker DoA of a row with the stronger ones projected out (deflation;
     /// for compact arrays hearing two or three sources at once; see
     /// `ssl::SslConfig::deflate`).
@@ -268,6 +274,9 @@ impl SettingsArgs {
         }
         if let Some(v) = self.pool_top {
             s.ssl.pool_top = v;
+        }
+        if let Some(v) = self.placement_share {
+            s.ssl.placement_share = v;
         }
         if self.deflate {
             s.ssl.deflate = true;

@@ -361,6 +361,8 @@ impl Localizer {
                     fmin_hz: lo,
                     fmax_hz: hi,
                     subband_votes: 0,
+                    // An octave's DoAs are its block maxima, not placed peaks.
+                    placement_share: 0.0,
                     az_step_deg: coarser(grid.az_step_deg(), SUBBAND_AZ_STEP_DEG),
                     elevation: Some(ElevationRange {
                         step_deg: coarser(elevation.step_deg, SUBBAND_EL_STEP_DEG),
@@ -530,6 +532,12 @@ impl Localizer {
             Pooling::Max => vec![f32::NEG_INFINITY; pooled.len() * k],
             Pooling::Mean => Vec::new(),
         };
+        // Each block's azimuth profile, for placing the DoAs (`SslConfig::placement_share`):
+        // the band's own pooling only, not an octave's.
+        let place = self.config.pooling == Pooling::Max
+            && self.config.placement_share > 0.0
+            && !matches!(source, Blocks::Stored { .. });
+        let mut profiles: Vec<f32> = Vec::with_capacity(if place { kept * n_az } else { 0 });
         let kept_blocks: Vec<usize> = (0..n_blocks).filter(|&b| keep[b]).collect();
         let ranges: Vec<Range<usize>> = kept_blocks.iter().map(|&b| frames(b)).collect();
         let mut sink = |i: usize, block: &[f32]| {
@@ -542,6 +550,16 @@ impl Localizer {
                     }
                 }
                 votes[at % n_az] += 1;
+            }
+            if place {
+                let at = profiles.len();
+                profiles.extend_from_slice(&block[..n_az]);
+                for row in block.chunks_exact(n_az).skip(1) {
+                    profiles[at..]
+                        .iter_mut()
+                        .zip(row)
+                        .for_each(|(p, &v)| *p = p.max(v));
+                }
             }
             match self.config.pooling {
                 // The plain maximum as one vectorisable pass.
@@ -602,6 +620,7 @@ impl Localizer {
         AngularSpectrum::new(self.grid.clone(), pooled)
             .with_votes(votes)
             .with_mirror_axis(self.mirror_axis_deg)
+            .with_block_profiles(profiles)
     }
 
     /// How `nf` frames split into blocks: their number, and each block's frames. Blocks
@@ -746,6 +765,9 @@ impl Localizer {
         } else {
             Vec::new()
         };
+        // Where each DoA lies: from its own best blocks (`SslConfig::placement_share`).
+        let sep = self.config.min_sep_deg;
+        let doas = spectrum.placed(doas, self.config.placement_share, 0.5 * sep, sep);
         let doas = if self.config.deflate && !cut && doas.len() >= 2 {
             self.deflated(doas, &scratch.spec)
         } else {

@@ -49,6 +49,9 @@ pub struct AngularSpectrum {
     /// For a linear array, the azimuth of its line (degrees): peaks are searched on its
     /// counter-clockwise side only ([`AngularSpectrum::with_mirror_axis`]).
     mirror_axis_deg: Option<f64>,
+    /// Every pooled block's azimuth profile (the largest value over elevations), one block
+    /// after the other; empty when not kept ([`AngularSpectrum::with_block_profiles`]).
+    profiles: Vec<f32>,
 }
 
 /// The median of `values` (the upper one of an even count): the background that
@@ -78,7 +81,84 @@ impl AngularSpectrum {
             values,
             votes: Vec::new(),
             mirror_axis_deg: None,
+            profiles: Vec::new(),
         }
+    }
+
+    /// The same spectrum with the azimuth profiles of the blocks it pooled (one
+    /// [`DirectionGrid::num_azimuths`] run per block), for [`AngularSpectrum::placed`].
+    ///
+    /// # Panics
+    /// If `profiles` is not a whole number of azimuth profiles.
+    #[must_use]
+    pub fn with_block_profiles(self, profiles: Vec<f32>) -> Self {
+        assert!(
+            profiles.len().is_multiple_of(self.grid.num_azimuths()),
+            "whole azimuth profiles"
+        );
+        Self { profiles, ..self }
+    }
+
+    /// `doas` (strongest first), each that was the strongest direction of a block
+    /// ([`Doa::dominant_blocks`] at least 1) moved to the highest local maximum within
+    /// `window_deg` of it of the mean azimuth profile of the `share` of the pooled blocks
+    /// (at least one) in which its direction stood highest, unless that would bring it
+    /// nearer than `min_sep_deg` to a DoA before it (see [`crate::SslConfig::placement_share`]).
+    /// Each azimuth is refined between cells as [`AngularSpectrum::peaks`] refines it; the
+    /// other fields stay the pooled peak's. Without block profiles, or with `share` 0, the
+    /// DoAs are returned as they are.
+    pub fn placed(
+        &self,
+        doas: Vec<Doa>,
+        share: f64,
+        window_deg: f64,
+        min_sep_deg: f64,
+    ) -> Vec<Doa> {
+        let n = self.grid.num_azimuths();
+        let blocks = self.profiles.len() / n;
+        if blocks == 0 || share <= 0.0 || window_deg <= 0.0 {
+            return doas;
+        }
+        let take = ((share * blocks as f64).ceil() as usize).clamp(1, blocks);
+        let step = self.grid.az_step_deg();
+        let reach = (window_deg / step).ceil() as usize;
+        let mut order: Vec<usize> = (0..blocks).collect();
+        let mut mean = vec![0.0f32; n];
+        let mut out: Vec<Doa> = Vec::with_capacity(doas.len());
+        for d in doas {
+            if d.dominant_blocks == 0 {
+                out.push(d);
+                continue;
+            }
+            let cell = self.grid.azimuth_cell(d.azimuth_deg);
+            let at = |b: usize| self.profiles[b * n + cell];
+            order.sort_unstable_by(|&a, &b| at(b).total_cmp(&at(a)));
+            mean.fill(0.0);
+            for &b in &order[..take] {
+                let row = &self.profiles[b * n..(b + 1) * n];
+                mean.iter_mut().zip(row).for_each(|(m, &v)| *m += v);
+            }
+            // The highest local maximum within the window.
+            let mut best: Option<(f64, f64)> = None; // (azimuth, height)
+            for o in 0..=2 * reach {
+                let i = (cell + n + o - reach) % n;
+                if let Some((az, height)) = self.local_max(&mean, i)
+                    && wrap_deg(az - d.azimuth_deg).abs() <= window_deg
+                    && best.is_none_or(|b| height > b.1)
+                {
+                    best = Some((az, height));
+                }
+            }
+            let placed = best.map(|(az, _)| az).filter(|&az| {
+                out.iter()
+                    .all(|e: &Doa| wrap_deg(e.azimuth_deg - az).abs() >= min_sep_deg)
+            });
+            out.push(match placed {
+                Some(azimuth_deg) => Doa { azimuth_deg, ..d },
+                None => d,
+            });
+        }
+        out
     }
 
     /// The same spectrum heard by a linear array whose line lies at `axis_deg` (array
@@ -161,6 +241,30 @@ impl AngularSpectrum {
         (best, at)
     }
 
+    /// Whether cell `i` of the azimuth profile `v` is a local maximum (`>=` on one side
+    /// only: a two-cell plateau yields one, not two), and if so its azimuth refined between
+    /// cells by a parabola through the cell and its two neighbours, and the parabola's
+    /// height there.
+    fn local_max(&self, v: &[f32], i: usize) -> Option<(f64, f64)> {
+        let n = v.len();
+        let (l, c, r) = (v[(i + n - 1) % n], v[i], v[(i + 1) % n]);
+        if !(c >= l && c > r) {
+            return None;
+        }
+        let (l, c, r) = (f64::from(l), f64::from(c), f64::from(r));
+        let den = l - 2.0 * c + r;
+        let delta = if den < 0.0 {
+            (0.5 * (l - r) / den).clamp(-0.5, 0.5)
+        } else {
+            0.0
+        };
+        let az = wrap_deg(self.grid.azimuths()[i] + delta * self.grid.az_step_deg());
+        // On a linear array's line a peak is its own mirror image: refined a fraction of a
+        // cell across, it is folded back (see `with_mirror_axis`).
+        let az = crate::fold_azimuth(az, self.mirror_axis_deg);
+        Some((az, c - 0.25 * (l - r) * delta))
+    }
+
     /// The strongest local maxima of the azimuth profile, at least `min_sep_deg` apart
     /// (circularly), strongest first, at most `max_peaks`.
     ///
@@ -181,24 +285,12 @@ impl AngularSpectrum {
     ) -> Vec<Doa> {
         let (v, el_at) = self.azimuth_profile();
         let n = v.len();
-        let step = self.grid.az_step_deg();
         let mut cands: Vec<(usize, f64, f64)> = Vec::new(); // (cell, refined az, value)
         for i in 0..n {
-            let (l, c, r) = (v[(i + n - 1) % n], v[i], v[(i + 1) % n]);
-            // >= on one side only: a two-cell plateau yields one peak, not two.
-            if c >= l && c > r && self.searched(self.grid.azimuths()[i]) {
-                let (l, c, r) = (f64::from(l), f64::from(c), f64::from(r));
-                let den = l - 2.0 * c + r;
-                let delta = if den < 0.0 {
-                    (0.5 * (l - r) / den).clamp(-0.5, 0.5)
-                } else {
-                    0.0
-                };
-                let az = wrap_deg(self.grid.azimuths()[i] + delta * step);
-                // On a linear array's line a peak is its own mirror image: refined a
-                // fraction of a cell across, it is folded back (see `with_mirror_axis`).
-                let az = crate::fold_azimuth(az, self.mirror_axis_deg);
-                cands.push((i, az, c - 0.25 * (l - r) * delta));
+            if self.searched(self.grid.azimuths()[i])
+                && let Some((az, height)) = self.local_max(&v, i)
+            {
+                cands.push((i, az, height));
             }
         }
         cands.sort_by(|a, b| b.2.total_cmp(&a.2));
@@ -392,5 +484,118 @@ mod tests {
         let az: Vec<i64> = p.iter().map(|d| d.azimuth_deg.round() as i64).collect();
         assert_eq!(az, vec![0, 60]);
         assert_eq!(s.peaks(1, 20.0).len(), 1);
+    }
+
+    /// Azimuth profiles of blocks, each a sum of Gaussian bumps (centre, height), as
+    /// `spectrum_with_bumps` draws them, one block after the other.
+    fn block_profiles(g: &DirectionGrid, blocks: &[Vec<(f64, f32)>]) -> Vec<f32> {
+        blocks
+            .iter()
+            .flat_map(|bumps| {
+                g.azimuths().iter().map(move |&a| {
+                    bumps
+                        .iter()
+                        .map(|&(c, h)| h * (-(wrap_deg(a - c) / 4.0).powi(2) as f32).exp())
+                        .sum::<f32>()
+                })
+            })
+            .collect()
+    }
+
+    fn doa_at(azimuth_deg: f64) -> Doa {
+        Doa {
+            azimuth_deg,
+            elevation_deg: 0.0,
+            strength: 1.0,
+            relative: 1.0,
+            dominant_blocks: 1,
+            prominence: 1.0,
+            significance: 0.0,
+        }
+    }
+
+    #[test]
+    fn a_doa_is_placed_where_its_own_best_blocks_peak_together() {
+        // A source at 33 degrees sounds in blocks 0-2; block 3 holds a fluke 3 degrees
+        // off it, higher than any of them, where max pooling puts the peak; blocks 4-7
+        // hold another source at -90 only.
+        let g = DirectionGrid::new(1.0, ElevationRange::default()).unwrap();
+        let mut blocks = vec![vec![(33.0, 1.0)]; 3];
+        blocks.push(vec![(30.0, 1.2)]);
+        blocks.extend(vec![vec![(-90.0, 1.0)]; 4]);
+        let profiles = block_profiles(&g, &blocks);
+        let n = g.num_azimuths();
+        let pooled: Vec<f32> = (0..n)
+            .map(|a| {
+                (0..blocks.len())
+                    .map(|b| profiles[b * n + a])
+                    .fold(0.0, f32::max)
+            })
+            .collect();
+        let mut values = pooled.clone();
+        for _ in 1..g.elevations().len() {
+            values.extend_from_slice(&pooled);
+        }
+        // Each source was the strongest direction of a block.
+        let mut votes = vec![0u32; n];
+        votes[g.azimuth_cell(30.0)] = 1;
+        votes[g.azimuth_cell(-90.0)] = 4;
+        let s = AngularSpectrum::new(g.clone(), values)
+            .with_votes(votes)
+            .with_block_profiles(profiles);
+        let peaks = s.peaks(2, 10.0);
+        assert!((peaks[0].azimuth_deg - 30.0).abs() < 0.3, "{peaks:?}");
+        // Half the blocks: the four highest at 30 degrees are blocks 0-3, and their mean
+        // peaks where a fine search of the bumps' mean puts it.
+        let mean = |a: f64| {
+            (3.0 * (-((a - 33.0) / 4.0).powi(2)).exp() + 1.2 * (-((a - 30.0) / 4.0).powi(2)).exp())
+                / 4.0
+        };
+        let want = (0..=1000)
+            .map(|k| 28.0 + 0.007 * f64::from(k))
+            .max_by(|a, b| mean(*a).total_cmp(&mean(*b)))
+            .unwrap();
+        let placed = s.placed(peaks.clone(), 0.5, 5.0, 10.0);
+        assert!(
+            (placed[0].azimuth_deg - want).abs() < 0.2,
+            "{placed:?}, want {want:.2}"
+        );
+        assert!((placed[1].azimuth_deg + 90.0).abs() < 0.2, "{placed:?}");
+        // Only the azimuth moves; a share of 0 or no block profiles moves nothing.
+        assert_eq!(placed[0].strength, peaks[0].strength);
+        assert_eq!(s.placed(peaks.clone(), 0.0, 5.0, 10.0), peaks);
+        let bare = AngularSpectrum::new(g, s.values().to_vec());
+        assert_eq!(bare.placed(peaks.clone(), 0.5, 5.0, 10.0), peaks);
+        // A DoA that was never the strongest direction of a block has no blocks of its
+        // own: it stays where the pooling put it.
+        let unvoted: Vec<Doa> = peaks
+            .iter()
+            .map(|d| Doa {
+                dominant_blocks: 0,
+                ..*d
+            })
+            .collect();
+        assert_eq!(s.placed(unvoted.clone(), 0.5, 5.0, 10.0), unvoted);
+    }
+
+    #[test]
+    fn a_doa_stays_where_its_window_holds_no_maximum_or_the_place_is_taken() {
+        let g = DirectionGrid::new(1.0, ElevationRange::default()).unwrap();
+        // The blocks peak 10 degrees from the DoA: beyond a 5-degree window, whose cells
+        // lie on the bump's flank.
+        let profiles = block_profiles(&g, &[vec![(40.0, 1.0)], vec![(40.0, 0.9)]]);
+        let s = AngularSpectrum::new(g.clone(), vec![0.0; g.len()]).with_block_profiles(profiles);
+        let placed = s.placed(vec![doa_at(30.0)], 1.0, 5.0, 10.0);
+        assert_eq!(placed[0].azimuth_deg, 30.0);
+        // A weaker DoA at 12 degrees whose blocks peak at 8 would come within 10 degrees
+        // of the stronger one at 0: it stays.
+        let profiles = block_profiles(&g, &[vec![(0.0, 1.0), (8.0, 0.6)]]);
+        let s = AngularSpectrum::new(g.clone(), vec![0.0; g.len()]).with_block_profiles(profiles);
+        let placed = s.placed(vec![doa_at(0.0), doa_at(12.0)], 1.0, 5.0, 10.0);
+        assert!(placed[0].azimuth_deg.abs() < 0.2, "{placed:?}");
+        assert_eq!(placed[1].azimuth_deg, 12.0);
+        // With a separation of 5 degrees it moves.
+        let placed = s.placed(vec![doa_at(0.0), doa_at(12.0)], 1.0, 5.0, 5.0);
+        assert!((placed[1].azimuth_deg - 8.0).abs() < 0.5, "{placed:?}");
     }
 }

@@ -1078,3 +1078,42 @@ fn deflation_refines_a_row_only_when_its_doas_explain_the_field() {
     assert_eq!(row(true, 0.0), refined, "the gate off");
     assert_eq!(row(true, 0.01), plain, "a gate below the row's residual");
 }
+
+/// A steady noise source 12 dB under the sensor noise (per microphone), heard from 24
+/// azimuths all around: the max-pooled peak lies where one block's noise put the maximum;
+/// placed at the peak of the mean of its best quarter of the blocks (`placement_share`, the
+/// default), the DoA lies nearer the bearing, for every method the paper used (measured:
+/// mean |error| GCC-PHAT 1.24 -> 0.72 degrees, MVDR 0.86 -> 0.66).
+#[test]
+fn a_doa_placed_from_its_best_blocks_lies_nearer_the_source_than_the_pooled_peak() {
+    let array = MicArray::default();
+    for method in Method::PAPER {
+        let (mut pooled, mut placed) = (Vec::new(), Vec::new());
+        for k in 0..24 {
+            let az = wrap_deg(-180.0 + 15.0 * k as f64 + 3.7);
+            let audio = render(&array, &[(az, 0.0, Signal::Noise)], 0.5, -12.0, SEED + k);
+            let error = |share: f64| {
+                let config = SslConfig {
+                    method,
+                    num_peaks: 1,
+                    placement_share: share,
+                    ..SslConfig::default()
+                };
+                let doas = locate(&audio, &config);
+                assert!(
+                    !doas.is_empty(),
+                    "{method}: no DoA for the source at {az:.1}"
+                );
+                wrap_deg(doas[0].azimuth_deg - az).abs()
+            };
+            pooled.push(error(0.0));
+            placed.push(error(SslConfig::default().placement_share));
+        }
+        let mean = |e: &[f64]| e.iter().sum::<f64>() / e.len() as f64;
+        let (pooled, placed) = (mean(&pooled), mean(&placed));
+        assert!(
+            placed < 0.85 * pooled && placed < 1.0,
+            "{method}: mean |error| pooled peak {pooled:.2}, placed {placed:.2} degrees"
+        );
+    }
+}
