@@ -7,7 +7,8 @@
 //! ([`stft`]), the direction grid and every microphone pair's delay tables ([`grid`]).
 //! [`Localizer::locate`] then transforms the audio, computes one angular spectrum per block
 //! of frames with the chosen [`Method`] (see [`method`]), pools the blocks, and returns the
-//! strongest peaks of the pooled spectrum as [`Doa`]s.
+//! strongest peaks of the pooled spectrum as [`Doa`]s, each placed where the mean of the
+//! blocks that heard it best peaks ([`SslConfig::placement_share`]).
 //!
 //! # Example
 //!
