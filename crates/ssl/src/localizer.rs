@@ -532,11 +532,9 @@ impl Localizer {
             Pooling::Max => vec![f32::NEG_INFINITY; pooled.len() * k],
             Pooling::Mean => Vec::new(),
         };
-        // Each block's azimuth profile, for placing the DoAs (`SslConfig::placement_share`):
-        // the band's own pooling only, not an octave's.
-        let place = self.config.pooling == Pooling::Max
-            && self.config.placement_share > 0.0
-            && !matches!(source, Blocks::Stored { .. });
+        // Each block's azimuth profile, for placing the DoAs (`SslConfig::placement_share`;
+        // the octaves' localizers have it off: their DoAs are block maxima).
+        let place = self.config.pooling == Pooling::Max && self.config.placement_share > 0.0;
         let mut profiles: Vec<f32> = Vec::with_capacity(if place { kept * n_az } else { 0 });
         let kept_blocks: Vec<usize> = (0..n_blocks).filter(|&b| keep[b]).collect();
         let ranges: Vec<Range<usize>> = kept_blocks.iter().map(|&b| frames(b)).collect();
