@@ -211,10 +211,11 @@ fn r8_two_different_ns_in_one_file_are_a_clear_error() {
     assert_clear_error(&o, &["c.toml", "num_peaks = 3", "num_doas = 4"]);
 }
 
-/// `--deflate` turns on `ssl.deflate` for the command, over a settings file that leaves it
-/// off, and the map says so.
+/// `--deflate` and `--no-deflate` set `ssl.deflate` for the command (by default it is
+/// left to the array: `null`, deflated only for a compact one), and the map says so; the
+/// two at once are refused.
 #[test]
-fn the_deflate_flag_reaches_the_localizer() {
+fn the_deflate_flags_reach_the_localizer() {
     let dir = tempdir();
     let root = path(&dir, "ds");
     audio_dataset(&root, &AUDIO_TRUTH);
@@ -223,8 +224,16 @@ fn the_deflate_flag_reaches_the_localizer() {
         args.extend_from_slice(extra);
         json(&iasm(&args))
     };
-    assert_eq!(run(&[])["ssl"]["deflate"], false);
+    assert_eq!(run(&[])["ssl"]["deflate"], serde_json::Value::Null);
     let v = run(&["--deflate"]);
     assert_eq!(v["ssl"]["deflate"], true, "{v}");
     assert_eq!(v["sources"].as_array().unwrap().len(), 2, "{v}");
+    assert_eq!(run(&["--no-deflate"])["ssl"]["deflate"], false);
+    let o = iasm(&["map", "--dataset", arg(&root), "--deflate", "--no-deflate"]);
+    assert!(!o.status.success());
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("--no-deflate"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
 }

@@ -231,11 +231,14 @@ pub struct SettingsArgs {
     /// `ssl::SslConfig::placement_share`).
     #[arg(long, value_name = "SHARE")]
     pub placement_share: Option<f64>,
-    /// Refine each weaker DoA of a row with the stronger ones projected out (deflation;
-    /// for compact arrays hearing two or three sources at once; see
-    /// `ssl::SslConfig::deflate`).
-    #[arg(long)]
+    /// Refine each weaker DoA of a row with the stronger ones projected out (deflation),
+    /// whatever the array [default: on for a compact array, whose far-field distance at
+    /// the band's top is under 1 m, such as a ReSpeaker; see `ssl::SslConfig::deflate`]
+    #[arg(long, conflicts_with = "no_deflate")]
     pub deflate: bool,
+    /// Never deflate, not even for a compact array (see --deflate).
+    #[arg(long)]
+    pub no_deflate: bool,
     /// I-ASM profile: paper (the paper's algorithm exactly, Table I) or robust (bearing
     /// refinement, three observing stops per source, a vote for missed sources, no source
     /// on the robot's path or contradicted by stops that heard nothing) [default: robust,
@@ -279,7 +282,10 @@ impl SettingsArgs {
             s.ssl.placement_share = v;
         }
         if self.deflate {
-            s.ssl.deflate = true;
+            s.ssl.deflate = Some(true);
+        }
+        if self.no_deflate {
+            s.ssl.deflate = Some(false);
         }
         s.validate().with_context(|| match &self.config {
             Some(p) => format!("settings {} with the command's flags", p.display()),

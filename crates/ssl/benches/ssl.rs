@@ -128,7 +128,7 @@ fn deflation(c: &mut Criterion) {
             let config = SslConfig {
                 method,
                 num_peaks: 2,
-                deflate,
+                deflate: Some(deflate),
                 ..SslConfig::default()
             };
             let loc = Localizer::new(&array, RATE, &config).unwrap();

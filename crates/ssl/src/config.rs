@@ -217,28 +217,34 @@ pub struct SslConfig {
     /// Refines each DoA of a row but the first on what the recording holds once the
     /// stronger DoAs are projected out (deflation, the alternating-projection step of the
     /// maximum-likelihood DoA estimator; see [`crate::deflate`]), in rows that `N` did not
-    /// cut. Default: false.
+    /// cut. `Some(true)` or `Some(false)` turns it on or off for every array. Default:
+    /// `None`, on for a compact array: one whose far-field distance at the band's top,
+    /// `2 D² f / c` ([`SslConfig::deflates`]), is under [`DEFLATE_FAR_FIELD_M`] (the
+    /// ReSpeaker 4-mic 0.19 m, the 6-mic 0.40, the UMA-8 0.35 at 8 kHz), off for the
+    /// paper's array (2.1 m) and a Kinect's line (2.4 m).
     ///
     /// Only rows whose DoAs explain what the array hears are refined
     /// ([`SslConfig::deflate_max_residual`]).
     ///
-    /// Why one might turn it on: on a compact array (a ReSpeaker) a weaker source heard
-    /// beside a stronger one peaks on the stronger one's wide lobe, 5-25 degrees off;
-    /// deflated, within a degree or two. Measured (`BENCHMARKS.md`, sessions 24 and 25; 3
-    /// renderings x 3 maps): two talkers heard by the ReSpeaker 4-mic 0.173 / 0.242 ->
-    /// 0.067 / 0.090 m (GCC-PHAT / MVDR), gated or not. Why it is off: the step assumes
-    /// the row's DoAs are all the sources and plane waves. Ungated, ten talkers heard by
-    /// the ReSpeaker (rows of two or three) went 0.116 / 0.149 -> 0.210 / 0.290 m and, on
-    /// the paper's array, whose near sources are no plane waves, MVDR lost in the
-    /// reverberant rooms (`reverberant_low_snr` 0.193 -> 0.302). The gate leaves those
-    /// rows alone (0.126 / 0.137 m and 0.193; the suites' mean 0.0900 -> 0.0894 m), but
-    /// the crowd still loses one of its ten sources in one GCC-PHAT map of nine, and the
-    /// ungated gain on a pyroomacoustics survey of five talkers heard by the ReSpeaker
-    /// (0.677 / 0.426 -> 0.453 / 0.369 m) goes with it. The authors' recordings, whose
-    /// rows are cut, do not change. Cost: a row it refines takes about twice as long to
-    /// localise (ReSpeaker, two talkers, 2 s: 1.25 -> 2.47 ms GCC-PHAT, 1.93 -> 3.77 ms
-    /// MVDR; `BENCHMARKS.md`, session 25).
-    pub deflate: bool,
+    /// Why: on a compact array a weaker source heard beside a stronger one peaks on the
+    /// stronger one's wide lobe, 5-25 degrees off; deflated, within a degree or two.
+    /// Measured (`BENCHMARKS.md`, session 28; 78 renderings of the 26 simulated scenes, 20
+    /// maps each): two talkers heard by the ReSpeaker 4-mic 0.128 / 0.168 -> 0.085 /
+    /// 0.056 m (GCC-PHAT / MVDR), six sources heard by the UMA-8 0.129 / 0.126 -> 0.130 /
+    /// 0.116 (but with N = 8, held out, MVDR 0.107 -> 0.141), ten talkers heard by the
+    /// ReSpeaker unchanged (the gate leaves their rows alone); `fixtures/heldout` 0.0753
+    /// -> 0.0684 m, all 78 renderings 0.0803 -> 0.0771. Why not for a larger array: the step
+    /// projects each stronger DoA out as a plane wave, and a source nearer than the
+    /// array's far-field distance is none, so that much of it is left. On the paper's
+    /// array deflating moves maps both ways (two talkers 0.026 / 0.018 -> 0.033 / 0.022 m,
+    /// ten in rows 0.031 / 0.039 -> 0.030 / 0.038) and their mean not at all (0.0742 ->
+    /// 0.0744 m over its 66 renderings, both methods); before the gate, MVDR lost in its reverberant rooms
+    /// (`reverberant_low_snr` 0.193 -> 0.302 m, session 25). The authors' recordings
+    /// (rows cut at `N = 4`) and the pyroomacoustics surveys of five talkers (rows the
+    /// gate refuses) do not change either way. Cost: a row it refines takes about twice as
+    /// long to localise (ReSpeaker, two talkers, 2 s: 1.25 -> 2.47 ms GCC-PHAT, 1.93 ->
+    /// 3.77 ms MVDR; `BENCHMARKS.md`, session 25).
+    pub deflate: Option<bool>,
     /// With [`SslConfig::deflate`], a row is refined only when its DoAs explain the field:
     /// once they are all projected out, the power left per dimension is less than this
     /// share of the power per dimension (`[0, 1]`; 0 refines every row that `N` did not
@@ -506,7 +512,7 @@ impl Default for SslConfig {
             pooling: Pooling::default(),
             pool_top: 1,
             placement_share: 0.25,
-            deflate: false,
+            deflate: None,
             deflate_max_residual: 0.65,
             num_peaks: 4,
             min_sep_deg: 10.0,
@@ -530,7 +536,25 @@ impl Default for SslConfig {
     }
 }
 
+/// [`SslConfig::deflate`]'s default deflates for arrays whose far-field distance at the
+/// band's top is under this (m): the range of the nearest sources a mapping robot passes
+/// (arrangement II's nearest loudspeakers stand 0.6 m from the path, most of its sources 1-3
+/// m away), beyond which a source is a plane wave to such an array.
+pub const DEFLATE_FAR_FIELD_M: f64 = 1.0;
+
 impl SslConfig {
+    /// Whether rows are deflated ([`SslConfig::deflate`]) for `array` at `sample_rate`:
+    /// as set, or, by default, when the array's far-field (Fraunhofer) distance at the
+    /// band's top, `2 D² f / c` (`D` its aperture, `f` the band's upper edge capped at the
+    /// Nyquist frequency), is under [`DEFLATE_FAR_FIELD_M`].
+    pub fn deflates(&self, array: &crate::MicArray, sample_rate: u32) -> bool {
+        self.deflate.unwrap_or_else(|| {
+            let f = self.fmax_hz.min(f64::from(sample_rate) / 2.0);
+            let d = array.aperture();
+            2.0 * d * d * f / self.speed_of_sound < DEFLATE_FAR_FIELD_M
+        })
+    }
+
     /// The frame length used at `sample_rate`.
     pub fn frame_len_at(&self, sample_rate: u32) -> usize {
         self.frame_len.unwrap_or_else(|| {
@@ -600,6 +624,7 @@ impl SslConfig {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::MicArray;
 
     #[test]
     fn default_frame_is_about_20_ms() {
@@ -615,6 +640,44 @@ mod tests {
         let a2 = crate::MicArray::preset("respeaker6").unwrap();
         assert_eq!(ElevationRange::auto(&a3), ElevationRange::ROBOT);
         assert_eq!(ElevationRange::auto(&a2), ElevationRange::PLANE);
+    }
+
+    /// The default deflates where every source a robot maps is a plane wave to the array:
+    /// its far-field distance `2 D² f / c` at the band's top under a metre. The paper's
+    /// array (aperture 0.211 m: 2.08 m at 8 kHz) is not deflated unless the band stops
+    /// below 3.84 kHz; a ReSpeaker (64 mm: 0.19 m) always is; a setting decides for both.
+    #[test]
+    fn the_default_deflates_compact_arrays_only() {
+        let iasm6 = MicArray::preset("iasm6").unwrap();
+        let respeaker = MicArray::preset("respeaker4").unwrap();
+        let d = SslConfig::default();
+        let far = |a: &MicArray, f: f64| 2.0 * a.aperture().powi(2) * f / d.speed_of_sound;
+        assert!(
+            (far(&iasm6, 8000.0) - 2.08).abs() < 0.01,
+            "{}",
+            far(&iasm6, 8000.0)
+        );
+        assert!((far(&respeaker, 8000.0) - 0.19).abs() < 0.01);
+        for rate in [16_000, 44_100, 48_000] {
+            assert!(!d.deflates(&iasm6, rate));
+            assert!(d.deflates(&respeaker, rate));
+        }
+        // The band's top, not the sample rate, sets it: capped at Nyquist (8 kHz at 16 kHz).
+        let low = |fmax_hz: f64| SslConfig {
+            fmax_hz,
+            ..SslConfig::default()
+        };
+        assert!(!low(3900.0).deflates(&iasm6, 16_000));
+        assert!(low(3700.0).deflates(&iasm6, 16_000));
+        assert!(low(20_000.0).deflates(&iasm6, 7_200));
+        for (set, want) in [(Some(true), true), (Some(false), false)] {
+            let c = SslConfig {
+                deflate: set,
+                ..SslConfig::default()
+            };
+            assert_eq!(c.deflates(&iasm6, 16_000), want);
+            assert_eq!(c.deflates(&respeaker, 16_000), want);
+        }
     }
 
     #[test]

@@ -1,5 +1,5 @@
 //! Deflation: a weak DoA refined on what the recording holds once the stronger DoAs of its
-//! row are projected out ([`crate::SslConfig::deflate`], off by default).
+//! row are projected out ([`crate::SslConfig::deflate`]; by default for compact arrays only).
 //!
 //! Why. A compact array's main lobe is wide (the ReSpeaker 4-mic, 6.4 cm across, spans
 //! tens of degrees at speech frequencies), and where two sources sound at once the weaker
@@ -34,9 +34,11 @@
 //! refines a row only when its DoAs, projected out all at once, leave clearly less power
 //! per dimension than noise would (a crowd, or a reverberant room, leaves nearly as
 //! much; measured in `BENCHMARKS.md`, session 25). And a source nearer than the array's
-//! far-field distance (2 D² / λ: 2.6 m for the paper's 0.235-m array at 8 kHz) is no
-//! plane wave, so that projecting its DoA out leaves much of it. Hence off by default;
-//! measured in `BENCHMARKS.md` (sessions 24 and 25).
+//! far-field distance (2 D² / λ: 2.1 m for the paper's array, 0.211 m across, at 8 kHz) is
+//! no plane wave, so that projecting its DoA out leaves much of it. Hence on by default
+//! only for an array whose far-field distance at the band's top is under a metre (a
+//! ReSpeaker's is 0.19 m; [`crate::SslConfig::deflates`]); measured in `BENCHMARKS.md`
+//! (sessions 24, 25 and 28).
 
 use std::collections::HashMap;
 use std::ops::Range;

@@ -8,7 +8,9 @@
 //! [`Localizer::locate`] then transforms the audio, computes one angular spectrum per block
 //! of frames with the chosen [`Method`] (see [`method`]), pools the blocks, and returns the
 //! strongest peaks of the pooled spectrum as [`Doa`]s, each placed where the mean of the
-//! blocks that heard it best peaks ([`SslConfig::placement_share`]).
+//! blocks that heard it best peaks ([`SslConfig::placement_share`]). On a compact array
+//! (a ReSpeaker), each weaker DoA of a row is then refined with the stronger ones
+//! projected out ([`deflate`], [`SslConfig::deflates`]).
 //!
 //! # Example
 //!

@@ -268,6 +268,8 @@ pub struct Localizer {
     octave_dirs: Vec<usize>,
     /// For a linear array, the azimuth of its line ([`Localizer::mirror_axis_deg`]).
     mirror_axis_deg: Option<f64>,
+    /// Whether rows are deflated ([`SslConfig::deflates`]).
+    deflate: bool,
 }
 
 impl std::fmt::Debug for Localizer {
@@ -389,6 +391,7 @@ impl Localizer {
             octave_dirs,
             subbands,
             mirror_axis_deg: array.mirror_axis_deg(),
+            deflate: config.deflates(array, sample_rate),
         })
     }
 
@@ -766,7 +769,7 @@ impl Localizer {
         // Where each DoA lies: from its own best blocks (`SslConfig::placement_share`).
         let sep = self.config.min_sep_deg;
         let doas = spectrum.placed(doas, self.config.placement_share, 0.5 * sep, sep);
-        let doas = if self.config.deflate && !cut && doas.len() >= 2 {
+        let doas = if self.deflate && !cut && doas.len() >= 2 {
             self.deflated(doas, &scratch.spec)
         } else {
             doas
