@@ -13,6 +13,9 @@ Hand-run only (no test or CI uses Python); the figures it gave are in BENCHMARKS
 
     pip install pyroomacoustics scipy; apt-get install espeak-ng sox
     python3 scripts/pra_mobile_survey.py OUT [RT60_S] [SNR_DB] [SEED] [iasm6|respeaker4]
+
+`TALKERS=1,3` (environment) keeps only those talkers of the five (0-based), for scenes of
+fewer sources (BENCHMARKS.md, session 28).
 """
 import os
 import subprocess
@@ -35,13 +38,14 @@ ARRAYS = {
 DIMS = [7.5, 6.0, 2.8]
 ARRAY_Z = 0.6
 CLIP_S = 2.0
-TALKERS = [
+TALKERS_ALL = [
     ("en-us", [1.2, 4.9, 1.5], "Good morning. The meeting starts at nine, so please be on time, and bring the report."),
     ("en-gb+f3", [4.0, 5.2, 1.1], "I think the printer on the second floor is broken again. Could someone call the technician?"),
     ("en-us+m3", [6.6, 3.4, 1.6], "Turn left at the corridor, then walk straight until you see the red door on your right."),
     ("en-gb+f2", [5.2, 0.7, 1.0], "The weather will be cloudy this afternoon with a chance of light rain in the evening."),
     ("en-us+m7", [2.3, 0.9, 1.3], "Numbers one, two, three, four, five. Testing the microphones once more, one more time."),
 ]
+TALKERS = [TALKERS_ALL[i] for i in map(int, os.environ.get("TALKERS", "0,1,2,3,4").split(","))]
 WAYPOINTS = [(0.8, 2.6), (5.2, 2.6), (5.2, 4.2)]
 SPACING = 0.5
 
