@@ -110,7 +110,7 @@ impl FromStr for Pooling {
 /// - **Elevation searched for 3-D arrays** ([`ElevationRange::auto`]). Loudspeakers a metre
 ///   from a robot sit 30 degrees below its array; searched in the plane, their DoAs bend
 ///   towards the array's axis and the map's sources with them.
-/// - **Blocks of 4 frames (about 50 ms), pooled with max.** Within a block one talker tends
+/// - **Blocks of 4 frames (80 ms), pooled with max.** Within a block one talker tends
 ///   to dominate each bin, so the block's covariance is close to rank one and its peak sharp;
 ///   across blocks, talkers take turns, and max pooling keeps every talker's best moment.
 ///
@@ -130,8 +130,26 @@ impl FromStr for Pooling {
 pub struct SslConfig {
     /// Angular-spectrum method. Default: [`Method::Mvdr`].
     pub method: Method,
-    /// STFT frame length (samples, `>= 16`). Default: `None`, the power of two at or above
-    /// 20 ms at the recording's sample rate (1024 at 48 kHz, 512 at 16 kHz).
+    /// STFT frame length (samples, `>= 16`). Default: `None`: for GCC-PHAT, MVDR and
+    /// SRP-PHAT, 32 ms at the recording's sample rate ([`FRAME_S`]), rounded up to a length
+    /// of 2s, 3s and 5s (512 at 16 kHz, 1440 at 44.1 kHz, 1536 at 48 kHz); for MUSIC and
+    /// NormMUSIC, the power of two at or above 20 ms (512 at 16 kHz, 1024 at 44.1 and 48).
+    ///
+    /// Why a duration: the same sound recorded at another rate is then cut into the same
+    /// frames, bins (31.25 Hz apart at 16 and 48 kHz) and blocks, and gives the same DoAs.
+    /// The default was the power of two at or above 20 ms for every method: 32 ms at 16
+    /// kHz but 21 ms at 48, and the simulated scenes resampled from 16 to 48 kHz gave
+    /// other rows and other maps (`reverberant_low_snr` MVDR 0.095 -> 0.443 m); with 32 ms
+    /// at both, their rows agree within 1-3 degrees (`BENCHMARKS.md`, session 28). Why 32
+    /// ms: every simulated scene (16 kHz) was always analysed so, and on the authors'
+    /// recordings (48 kHz) it does better than 21 ms: DoA score 0.506 / 0.487 -> 0.544 /
+    /// 0.531 (MVDR / GCC-PHAT, published truth; 0.744 / 0.762 -> 0.762 / 0.769 in the
+    /// poses' frame), maps 0.152 / 0.154 -> 0.147 / 0.152 m (50 runs, ten sources in
+    /// every one). Why not for the subspace methods: their covariances want snapshots,
+    /// and at 48 kHz NormMUSIC maps those recordings better with 21-ms frames (0.146
+    /// against 0.157 m, 20 runs), MUSIC resolves two sources 40 degrees apart in 0.6 s with
+    /// them and not with 32 ms. Cost: none (at 48 kHz, 1536-sample frames localise a
+    /// recording as fast as 1024-sample ones, or a little faster).
     pub frame_len: Option<usize>,
     /// STFT hop (samples, `1..=frame_len`). Default: `None`, half the frame.
     pub hop: Option<usize>,
@@ -145,7 +163,7 @@ pub struct SslConfig {
     /// [`ElevationRange::auto`]: -60 to 60 degrees for a 3-D array, 0 for a planar one.
     pub elevation: Option<ElevationRange>,
     /// Frames per block: statistics are averaged within a block, then blocks are pooled
-    /// (`>= 1`). Default: 4 (53 ms at the default frame and hop at 48 kHz). A value beyond
+    /// (`>= 1`). Default: 4 (80 ms at the default frame and hop). A value beyond
     /// a recording's frames makes one block of the whole recording (one spectrum per
     /// recording, as pyroomacoustics computes by default).
     pub block_frames: usize,
@@ -536,6 +554,25 @@ impl Default for SslConfig {
     }
 }
 
+/// The default STFT frame (s) of the pairwise and beamforming methods:
+/// [`SslConfig::frame_len`].
+pub const FRAME_S: f64 = 0.032;
+
+/// The least length `>= n` whose only prime factors are 2, 3 and 5.
+fn smooth_at_or_above(n: usize) -> usize {
+    let smooth = |mut m: usize| {
+        for p in [2, 3, 5] {
+            while m.is_multiple_of(p) {
+                m /= p;
+            }
+        }
+        m == 1
+    };
+    (n.max(1)..)
+        .find(|&m| smooth(m))
+        .expect("a power of two lies beyond any n")
+}
+
 /// [`SslConfig::deflate`]'s default deflates for arrays whose far-field distance at the
 /// band's top is under this (m): the range of the nearest sources a mapping robot passes
 /// (arrangement II's nearest loudspeakers stand 0.6 m from the path, most of its sources 1-3
@@ -555,10 +592,16 @@ impl SslConfig {
         })
     }
 
-    /// The frame length used at `sample_rate`.
+    /// The frame length used at `sample_rate` ([`SslConfig::frame_len`]): as set; else,
+    /// for MUSIC and NormMUSIC, the power of two at or above 20 ms; for the other methods,
+    /// [`FRAME_S`] rounded up to a length whose only prime factors are 2, 3 and 5 (an FFT
+    /// as fast as a power of two's).
     pub fn frame_len_at(&self, sample_rate: u32) -> usize {
-        self.frame_len.unwrap_or_else(|| {
-            ((0.020 * f64::from(sample_rate)).ceil() as usize).next_power_of_two()
+        let fs = f64::from(sample_rate);
+        self.frame_len.unwrap_or(match self.method {
+            Method::Music | Method::NormMusic => ((0.020 * fs).ceil() as usize).next_power_of_two(),
+            // Less a hair, so that 32 ms of a round rate is not one sample more.
+            _ => smooth_at_or_above((FRAME_S * fs - 1e-6).ceil() as usize),
         })
     }
 
@@ -626,12 +669,41 @@ mod tests {
     use super::*;
     use crate::MicArray;
 
+    /// 32 ms at every rate, rounded up to a length of 2s, 3s and 5s (the same bins, 31.25
+    /// Hz apart, at 16 and 48 kHz); the power of two at or above 20 ms for the subspace
+    /// methods; a set length stands.
     #[test]
-    fn default_frame_is_about_20_ms() {
+    fn default_frame_is_32_ms_at_every_rate() {
         let c = SslConfig::default();
-        assert_eq!(c.frame_len_at(48_000), 1024);
-        assert_eq!(c.frame_len_at(44_100), 1024);
-        assert_eq!(c.frame_len_at(16_000), 512);
+        for (rate, len) in [
+            (8_000, 256),
+            (16_000, 512),
+            (22_050, 720),
+            (44_100, 1440),
+            (48_000, 1536),
+            (96_000, 3072),
+        ] {
+            assert_eq!(c.frame_len_at(rate), len, "{rate} Hz");
+            let ms = 1e3 * len as f64 / f64::from(rate);
+            assert!((32.0..32.7).contains(&ms), "{rate} Hz: {ms} ms");
+        }
+        assert_eq!(smooth_at_or_above(1411), 1440);
+        assert_eq!(smooth_at_or_above(7), 8);
+        assert_eq!(smooth_at_or_above(1), 1);
+        for method in [Method::Music, Method::NormMusic] {
+            let c = SslConfig {
+                method,
+                ..SslConfig::default()
+            };
+            assert_eq!(c.frame_len_at(48_000), 1024);
+            assert_eq!(c.frame_len_at(44_100), 1024);
+            assert_eq!(c.frame_len_at(16_000), 512);
+        }
+        let set = SslConfig {
+            frame_len: Some(1000),
+            ..SslConfig::default()
+        };
+        assert_eq!(set.frame_len_at(48_000), 1000);
     }
 
     #[test]

@@ -120,7 +120,7 @@ fn a_quiet_source_below_min_relative_is_reported_and_a_copy_is_not() {
                 .locate(audio)
                 .unwrap()
         };
-        for db in [6.0, 7.0, 8.0, 9.0] {
+        for db in [6.0, 7.0, 7.5, 8.0, 8.5, 9.0] {
             let gain = 10f64.powf(-db / 20.0);
             let other = scene(loud, quiet, gain, false, 0.003, 40.0);
             let copy = scene(loud, quiet, gain, true, 0.003, 40.0);
@@ -170,7 +170,8 @@ fn a_quiet_source_below_min_relative_is_reported_and_a_copy_is_not() {
             );
         }
     }
-    // GCC-PHAT (6-9 dB), SRP-PHAT, MUSIC and NormMUSIC at some levels, measured.
+    // GCC-PHAT (7.5-9 dB with its 32-ms frame), SRP-PHAT, MUSIC and NormMUSIC at some
+    // levels, measured.
     assert!(between.len() >= 6, "between the floors only: {between:?}");
     assert!(
         between.iter().filter(|c| c.starts_with("gcc-phat")).count() >= 3,

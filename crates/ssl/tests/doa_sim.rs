@@ -417,14 +417,17 @@ fn a_block_longer_than_the_recording_is_one_spectrum_of_it() {
     }
 }
 
-/// A source heard for 50 ms (about one block), 6 dB louder, beside one heard throughout:
-/// max pooling keeps the burst's block high; averaging each direction's 4 best blocks
-/// (`pool_top = 4`) keeps the steady source first and the burst under 0.6 of that height.
+/// A source heard for one block's span (80 ms with the default frame), 6 dB louder,
+/// beside one heard throughout: max pooling keeps the burst's block high; averaging each
+/// direction's 4 best blocks (`pool_top = 4`) keeps the steady source first and the burst
+/// under 0.6 of that height.
 #[test]
 fn averaging_the_best_blocks_lets_a_one_block_burst_fade() {
     let n = FS as usize; // 1 s
     let (steady, burst) = (40.0, -100.0);
-    let on = (n / 2)..(n / 2 + FS as usize / 20);
+    // A block: 4 frames, each half a frame after the one before.
+    let frame = SslConfig::default().frame_len_at(FS);
+    let on = (n / 2)..(n / 2 + frame + 3 * frame / 2);
     let audio = two_noises(steady, burst, |i| {
         (1.0, if on.contains(&i) { 2.0 } else { 0.0 })
     });
@@ -466,7 +469,7 @@ fn averaging_the_best_blocks_lets_a_one_block_burst_fade() {
 /// because of them, with the decay gate on or off.
 #[test]
 fn a_source_that_dominates_blocks_is_reported_below_min_relative() {
-    let n = FS as usize; // 1 s: 23 blocks of 4 hops of 512 samples (42.7 ms)
+    let n = FS as usize; // 1 s: blocks of 4 hops of half the default frame
     let (steady, second) = (40.0, -100.0);
     // Gains of the two sources inside the window `on` (samples).
     let mix = |on: std::ops::Range<usize>, ga: f64, gb: f64| {
@@ -483,9 +486,11 @@ fn a_source_that_dominates_blocks_is_reported_below_min_relative() {
     // to the end: a pause, where nothing votes, not even once the decay gate's 0.5-s
     // memory has let its last blocks back into the pooling.
     let pause = mix(3 * n / 10..n, 0.1, 0.2);
-    // Blocks wholly inside the 0.2-s window: its 9600 samples span at least 3 whole
-    // blocks of 2048 frames' hops; a block it only partly covers may go either way.
-    let block_s = 4.0 * 512.0 / f64::from(FS);
+    // Blocks wholly inside the 0.2-s window (of 4 hops of half a frame each); a block it
+    // only partly covers may go either way.
+    let frame = SslConfig::default().frame_len_at(FS);
+    let block_s = 4.0 * (frame / 2) as f64 / f64::from(FS);
+    let blocks = ((n - frame) / (frame / 2) + 1) as u32 / 4;
     let inside = (0.2 / block_s).floor() as u32 - 1;
     for method in Method::PAPER {
         let run_gated = |audio: &Audio, dominance_blocks: usize, decay_gate_db: f64| {
@@ -523,7 +528,7 @@ fn a_source_that_dominates_blocks_is_reported_below_min_relative() {
         assert!(doa.relative < 1.0, "{method}: {doa:?}");
         // The steady source dominated every other block.
         assert!(
-            with[0].dominant_blocks >= 23 - inside - 2,
+            with[0].dominant_blocks >= blocks - inside - 2,
             "{method}: {with:?}"
         );
         // Without the count, height alone decides: only the strongest peak.
@@ -671,10 +676,12 @@ fn a_plane_wave_below_the_sensor_noise_is_significant() {
     let doas = loc.locate(&audio).unwrap();
     assert_eq!(doas.len(), 1, "{doas:?}");
     assert!(wrap_deg(doas[0].azimuth_deg - az).abs() < 3.0, "{doas:?}");
-    // F frames (hop 512 of 0.4 s at 48 kHz), B bins of the 200-8000 Hz band at
-    // 48000 / 1024 Hz, P = 15 pairs.
-    let frames = (0.4 * f64::from(FS) - 1024.0) / 512.0 + 1.0;
-    let bins = (8000.0f64 / 46.875).floor() - (200.0f64 / 46.875).ceil() + 1.0;
+    // F frames (the default frame, half of it the hop, over 0.4 s at 48 kHz), B bins of
+    // the 200-8000 Hz band at 48000 / frame Hz, P = 15 pairs.
+    let frame = config.frame_len_at(FS) as f64;
+    let frames = (0.4 * f64::from(FS) - frame) / (frame / 2.0) + 1.0;
+    let spacing = f64::from(FS) / frame;
+    let bins = (8000.0 / spacing).floor() - (200.0 / spacing).ceil() + 1.0;
     let rho = 0.1f64 / 1.1;
     let hyp = 1.0 + rho * rho / 8.0; // 2F1(1/2, 1/2; 2; rho^2) to second order
     let mean = std::f64::consts::FRAC_PI_4 * rho * hyp;
