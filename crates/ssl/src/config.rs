@@ -586,7 +586,7 @@ impl SslConfig {
     /// Nyquist frequency), is under [`DEFLATE_FAR_FIELD_M`].
     pub fn deflates(&self, array: &crate::MicArray, sample_rate: u32) -> bool {
         self.deflate.unwrap_or_else(|| {
-            let f = self.fmax_hz.min(f64::from(sample_rate) / 2.0);
+            let f = self.band_top_hz(sample_rate);
             let d = array.aperture();
             2.0 * d * d * f / self.speed_of_sound < DEFLATE_FAR_FIELD_M
         })
@@ -598,11 +598,17 @@ impl SslConfig {
     /// as fast as a power of two's).
     pub fn frame_len_at(&self, sample_rate: u32) -> usize {
         let fs = f64::from(sample_rate);
-        self.frame_len.unwrap_or(match self.method {
+        self.frame_len.unwrap_or_else(|| match self.method {
             Method::Music | Method::NormMusic => ((0.020 * fs).ceil() as usize).next_power_of_two(),
             // Less a hair, so that 32 ms of a round rate is not one sample more.
             _ => smooth_at_or_above((FRAME_S * fs - 1e-6).ceil() as usize),
         })
+    }
+
+    /// The analysis band's upper edge at `sample_rate` (Hz): [`SslConfig::fmax_hz`],
+    /// capped at the Nyquist frequency.
+    pub fn band_top_hz(&self, sample_rate: u32) -> f64 {
+        self.fmax_hz.min(f64::from(sample_rate) / 2.0)
     }
 
     /// Checks every setting that does not depend on the sample rate.

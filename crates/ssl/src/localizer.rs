@@ -302,7 +302,7 @@ impl Localizer {
         let frame_len = config.frame_len_at(sample_rate);
         let stft = Stft::new(frame_len, config.hop.unwrap_or(frame_len / 2))?;
         let nyquist = fs / 2.0;
-        let fmax = config.fmax_hz.min(nyquist);
+        let fmax = config.band_top_hz(sample_rate);
         if !(config.fmin_hz >= 0.0 && config.fmin_hz < fmax) {
             return Err(ConfigError::Band {
                 fmin: config.fmin_hz,
