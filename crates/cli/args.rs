@@ -218,7 +218,8 @@ pub struct SettingsArgs {
     /// Frames per pooling block.
     #[arg(long)]
     pub block_frames: Option<usize>,
-    /// Block pooling: max or mean.
+    /// Block pooling: auto (the default: the mean for a recording whose sound is steady and
+    /// noise-like in every octave, max for any other; see `ssl::steady`), max or mean.
     #[arg(long)]
     pub pooling: Option<Pooling>,
     /// With max pooling: keep the mean of each direction's K largest block values

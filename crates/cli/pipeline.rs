@@ -52,6 +52,9 @@ pub struct FileDoas {
     /// ([`ssl::Located::extra`]): the mapper takes them after the DoAs.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub extra: Vec<Doa>,
+    /// How its blocks were pooled ([`ssl::Located::pooling`]: with the default
+    /// [`ssl::Pooling::Auto`], the mean for a steady, noise-like recording, else max).
+    pub pooling: ssl::Pooling,
     /// The time it took to read and localise it on one thread (s). Not serialised: the
     /// DoA output stays the same from run to run.
     #[serde(skip)]
@@ -94,7 +97,12 @@ pub fn localise_files(
                     }
                 }
             };
-            let Located { doas, cut, extra } = loc
+            let Located {
+                doas,
+                cut,
+                extra,
+                pooling,
+            } = loc
                 .locate_row_with_scratch(&audio, scratch)
                 .with_context(|| format!("localising {}", f.display()))?;
             bar.inc(1);
@@ -103,6 +111,7 @@ pub fn localise_files(
                 doas,
                 cut,
                 extra,
+                pooling,
                 seconds: t0.elapsed().as_secs_f64(),
             })
         })

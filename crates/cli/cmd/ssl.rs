@@ -72,12 +72,13 @@ pub fn run(args: &SslArgs) -> Result<Outcome> {
     let rows = localise_files(&ds.audio, &array, &config)?;
     let elapsed = t0.elapsed().as_secs_f64();
     eprintln!(
-        "{}: {} recordings localised with {} in {:.2} s ({:.1} ms per recording)",
+        "{}: {} recordings localised with {} in {:.2} s ({:.1} ms per recording){}",
         dir.display(),
         rows.len(),
         config.method,
         elapsed,
-        1e3 * elapsed / rows.len() as f64
+        1e3 * elapsed / rows.len() as f64,
+        pooling_note(&rows, config.pooling)
     );
     let table = doa_table(rows.iter().map(|r| &r.doas[..]), config.num_peaks);
     if let Some(out) = &args.out {
@@ -388,4 +389,20 @@ fn print_rows(rows: &[FileDoas], config: &SslConfig, array: &MicArray, json: boo
         writeln!(out, "{}\t{}", r.file.display(), cells.join("  "))?;
     }
     Ok(())
+}
+
+/// With the default pooling ([`ssl::Pooling::Auto`]), how many recordings were steady and
+/// pooled by their mean (empty when the pooling was set).
+fn pooling_note(rows: &[crate::pipeline::FileDoas], set: ssl::Pooling) -> String {
+    if set != ssl::Pooling::Auto {
+        return String::new();
+    }
+    let mean = rows
+        .iter()
+        .filter(|r| r.pooling == ssl::Pooling::Mean)
+        .count();
+    format!(
+        "; {mean} of {} steady, pooled by their mean (ssl::Pooling::Auto)",
+        rows.len()
+    )
 }

@@ -78,10 +78,17 @@ impl FromStr for Method {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Pooling {
+    /// [`Pooling::Mean`] for a recording whose sound is steady and noise-like,
+    /// [`Pooling::Max`] for any other, decided per recording from its blocks' levels and
+    /// its spectrum in each octave of the band ([`crate::steady`]). A source that never
+    /// pauses loses nothing to averaging, and averaging is what its noise and
+    /// reverberation need; where anything starts, stops or takes turns, each source keeps
+    /// its best moment.
+    #[default]
+    Auto,
     /// The largest value any block reached. Speech sources take turns: a talker who
     /// dominates only a few blocks keeps the peak of those blocks instead of having it
     /// averaged away by the blocks where another talker dominates.
-    #[default]
     Max,
     /// The mean over blocks: a stationary source's peak sharpens, an intermittent one fades.
     Mean,
@@ -91,6 +98,7 @@ impl FromStr for Pooling {
     type Err = ConfigError;
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         match s.to_ascii_lowercase().as_str() {
+            "auto" => Ok(Pooling::Auto),
             "max" => Ok(Pooling::Max),
             "mean" | "sum" => Ok(Pooling::Mean),
             _ => Err(ConfigError::UnknownPooling(s.to_owned())),
@@ -110,9 +118,12 @@ impl FromStr for Pooling {
 /// - **Elevation searched for 3-D arrays** ([`ElevationRange::auto`]). Loudspeakers a metre
 ///   from a robot sit 30 degrees below its array; searched in the plane, their DoAs bend
 ///   towards the array's axis and the map's sources with them.
-/// - **Blocks of 4 frames (80 ms), pooled with max.** Within a block one talker tends
-///   to dominate each bin, so the block's covariance is close to rank one and its peak sharp;
-///   across blocks, talkers take turns, and max pooling keeps every talker's best moment.
+/// - **Blocks of 4 frames (80 ms), pooled with max** where anything starts, stops or
+///   takes turns. Within a block one talker tends to dominate each bin, so the block's
+///   covariance is close to rank one and its peak sharp; across blocks, talkers take
+///   turns, and max pooling keeps every talker's best moment. A recording whose sound is
+///   steady and noise-like is pooled by the blocks' mean ([`Pooling::Auto`]): nothing in
+///   it has a best moment, and the mean averages its noise down.
 ///
 /// - **Blocks of the room's decay left out** ([`SslConfig::decay_gate_db`]): after a
 ///   sound stops and in a talker's pauses, the diffuse decay would otherwise win the max
@@ -167,16 +178,19 @@ pub struct SslConfig {
     /// a recording's frames makes one block of the whole recording (one spectrum per
     /// recording, as pyroomacoustics computes by default).
     pub block_frames: usize,
-    /// How block spectra are pooled. Default: [`Pooling::Max`].
+    /// How block spectra are pooled. Default: [`Pooling::Auto`], per recording: the mean
+    /// where its sound is steady and noise-like, max elsewhere ([`crate::steady`]).
     ///
     /// Why max: talkers take turns, and each keeps its best moment. [`Pooling::Mean`] is
-    /// the better estimator for a few broadband sources that sound without pause in a
-    /// noisy or reverberant room, where the best of many noisy blocks is an extreme value
-    /// and lifts the room's ripples over the thresholds; with talkers who pause it loses
-    /// some of them. Measured (`BENCHMARKS.md`, session 24): two continuous talkers at
-    /// RT60 0.8 s and SNR 5 dB 0.29 / 0.19 -> 0.06 / 0.05 m (GCC-PHAT / MVDR), but five
-    /// real talkers in pyroomacoustics rooms MVDR 0.10-0.15 -> 0.24-0.52 m, and the
-    /// authors' ten loudspeakers' GCC-PHAT maps 100 % -> 56 % of runs with all ten.
+    /// the better estimator for broadband sources that sound without pause in a noisy or
+    /// reverberant room, where the best of many noisy blocks is an extreme value and lifts
+    /// the room's ripples over the thresholds; with talkers who pause it loses some of
+    /// them. Measured (`BENCHMARKS.md`, session 24): two continuous talkers at RT60 0.8 s
+    /// and SNR 5 dB 0.29 / 0.19 -> 0.06 / 0.05 m (GCC-PHAT / MVDR), but five real talkers
+    /// in pyroomacoustics rooms MVDR 0.10-0.15 -> 0.24-0.52 m, and the authors' ten
+    /// loudspeakers' GCC-PHAT maps 100 % -> 56 % of runs with all ten. Hence the choice
+    /// per recording, which keeps max for every recording of speech we have and takes the
+    /// mean for steady noise (session 29, below and `BENCHMARKS.md`).
     pub pooling: Pooling,
     /// With [`Pooling::Max`]: each direction keeps the mean of its `pool_top` largest
     /// block values instead of the largest alone (`>= 1`; 1 is plain max pooling, more

@@ -62,7 +62,9 @@ pub(crate) struct Setup<'a> {
     pub fs: f64,
     pub frame_len: usize,
     pub c: f64,
-    /// How block values are pooled, and `pool_top`.
+    /// How block values are pooled ([`Pooling::Max`] or [`Pooling::Mean`]: a localizer
+    /// passes the one it chose for the recording; [`Pooling::Auto`] pools as max), and
+    /// `pool_top`.
     pub pooling: Pooling,
     pub pool_top: usize,
 }
@@ -82,7 +84,7 @@ impl Setup<'_> {
     fn pool(&self, q: &mut [f64]) -> f64 {
         match self.pooling {
             Pooling::Mean => q.iter().sum::<f64>() / q.len() as f64,
-            Pooling::Max => {
+            Pooling::Max | Pooling::Auto => {
                 let k = self.pool_top.clamp(1, q.len());
                 q.sort_unstable_by(|a, b| b.total_cmp(a));
                 q[..k].iter().sum::<f64>() / k as f64

@@ -102,7 +102,7 @@ pub enum ConfigError {
     #[error("unknown method {0:?}; expected one of: gcc-phat, mvdr, srp-phat, music, normmusic")]
     UnknownMethod(String),
     /// A pooling name that is not known.
-    #[error("unknown pooling {0:?}; expected one of: max, mean")]
+    #[error("unknown pooling {0:?}; expected one of: auto, max, mean")]
     UnknownPooling(String),
 }
 

@@ -50,6 +50,7 @@ pub mod grid;
 mod localizer;
 pub mod method;
 pub mod spectrum;
+pub mod steady;
 pub mod stft;
 
 pub use array::{MicArray, fold_azimuth};

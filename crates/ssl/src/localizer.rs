@@ -218,6 +218,9 @@ pub struct Located {
     /// pooled peaks left out. Each has the full band's pooled values at its direction, and
     /// its octaves' votes as [`Doa::dominant_blocks`]. Empty in a row that was not cut.
     pub extra: Vec<Doa>,
+    /// How this recording's blocks were pooled: [`Pooling::Max`] or [`Pooling::Mean`],
+    /// the one [`Pooling::Auto`] chose (see [`crate::steady`]) or the one set.
+    pub pooling: Pooling,
 }
 
 impl Located {
@@ -485,9 +488,27 @@ impl Localizer {
         }
         let mut spec = std::mem::take(&mut scratch.spec);
         let analysed = self.stft.analyze_into(audio, self.bins.clone(), &mut spec);
-        let pooled = analysed.map(|()| self.pool(&spec, scratch, blocks));
+        let pooled = analysed.map(|()| {
+            let pooling = self.pooling_of(&spec);
+            self.pool(&spec, scratch, blocks, pooling)
+        });
         scratch.spec = spec;
         pooled
+    }
+
+    /// How the blocks of `spec` are pooled: as set, or for [`Pooling::Auto`], the mean
+    /// where the recording is steady and noise-like in each octave of the band
+    /// ([`crate::steady`]), else max.
+    fn pooling_of(&self, spec: &Spectrogram) -> Pooling {
+        if self.config.pooling != Pooling::Auto {
+            return self.config.pooling;
+        }
+        let (n_blocks, frames) = self.blocks(spec.num_frames());
+        if crate::steady::Octaves::of(spec, n_blocks, &frames).is_steady() {
+            Pooling::Mean
+        } else {
+            Pooling::Max
+        }
     }
 
     /// The pooled spectrum of the blocks of `spec` (this localizer's band, or a wider one
@@ -498,6 +519,7 @@ impl Localizer {
         spec: &Spectrogram,
         scratch: &mut Scratch,
         source: Blocks<'_>,
+        pooling: Pooling,
     ) -> AngularSpectrum {
         let nf = spec.num_frames();
         let (n_blocks, frames) = self.blocks(nf);
@@ -531,13 +553,15 @@ impl Localizer {
         // Max pooling keeps each direction's `k` largest block values, largest first (k = 1:
         // the plain maximum), and pools their mean.
         let k = self.config.pool_top.min(kept).max(1);
-        let mut top = match self.config.pooling {
-            Pooling::Max => vec![f32::NEG_INFINITY; pooled.len() * k],
-            Pooling::Mean => Vec::new(),
+        let max = pooling != Pooling::Mean;
+        let mut top = if max {
+            vec![f32::NEG_INFINITY; pooled.len() * k]
+        } else {
+            Vec::new()
         };
         // Each block's azimuth profile, for placing the DoAs (`SslConfig::placement_share`;
         // the octaves' localizers have it off: their DoAs are block maxima).
-        let place = self.config.pooling == Pooling::Max && self.config.placement_share > 0.0;
+        let place = max && self.config.placement_share > 0.0;
         let mut profiles: Vec<f32> = Vec::with_capacity(if place { kept * n_az } else { 0 });
         let kept_blocks: Vec<usize> = (0..n_blocks).filter(|&b| keep[b]).collect();
         let ranges: Vec<Range<usize>> = kept_blocks.iter().map(|&b| frames(b)).collect();
@@ -562,12 +586,10 @@ impl Localizer {
                         .for_each(|(p, &v)| *p = p.max(v));
                 }
             }
-            match self.config.pooling {
+            match (max, k) {
                 // The plain maximum as one vectorisable pass.
-                Pooling::Max if k == 1 => {
-                    top.iter_mut().zip(block).for_each(|(t, &v)| *t = t.max(v))
-                }
-                Pooling::Max => {
+                (true, 1) => top.iter_mut().zip(block).for_each(|(t, &v)| *t = t.max(v)),
+                (true, _) => {
                     for (t, &v) in top.chunks_exact_mut(k).zip(block) {
                         if v > t[k - 1] {
                             let mut i = k - 1;
@@ -579,7 +601,7 @@ impl Localizer {
                         }
                     }
                 }
-                Pooling::Mean => pooled
+                (false, _) => pooled
                     .iter_mut()
                     .zip(block)
                     .for_each(|(p, &v)| *p += v / kept as f32),
@@ -612,13 +634,14 @@ impl Localizer {
                 }
             }
         }
-        if self.config.pooling == Pooling::Max {
+        if max {
             for (p, t) in pooled.iter_mut().zip(top.chunks_exact(k)) {
                 *p = t.iter().sum::<f32>() / k as f32;
             }
         }
         scratch.block = block;
         AngularSpectrum::new(self.grid.clone(), pooled)
+            .with_pooling(if max { Pooling::Max } else { Pooling::Mean })
             .with_votes(votes)
             .with_mirror_axis(self.mirror_axis_deg)
             .with_block_profiles(profiles)
@@ -769,18 +792,24 @@ impl Localizer {
         // Where each DoA lies: from its own best blocks (`SslConfig::placement_share`).
         let sep = self.config.min_sep_deg;
         let doas = spectrum.placed(doas, self.config.placement_share, 0.5 * sep, sep);
+        let pooling = spectrum.pooling();
         let doas = if self.deflate && !cut && doas.len() >= 2 {
-            self.deflated(doas, &scratch.spec)
+            self.deflated(doas, &scratch.spec, pooling)
         } else {
             doas
         };
-        Ok(Located { doas, cut, extra })
+        Ok(Located {
+            doas,
+            cut,
+            extra,
+            pooling,
+        })
     }
 
     /// `doas` (a row, strongest first) with each DoA but the first refined with the
     /// stronger ones projected out ([`SslConfig::deflate`], [`crate::deflate`]), on the
     /// blocks of `spec` that the pooling keeps.
-    fn deflated(&self, doas: Vec<Doa>, spec: &Spectrogram) -> Vec<Doa> {
+    fn deflated(&self, doas: Vec<Doa>, spec: &Spectrogram, pooling: Pooling) -> Vec<Doa> {
         if spec.num_channels() < 3 {
             // One stronger DoA projected out leaves too few dimensions to search in.
             return doas;
@@ -797,7 +826,7 @@ impl Localizer {
             fs: f64::from(self.sample_rate),
             frame_len: self.stft.frame_len(),
             c: self.config.speed_of_sound,
-            pooling: self.config.pooling,
+            pooling,
             pool_top: self.config.pool_top,
         };
         let at = |d: &Doa| (d.azimuth_deg, d.elevation_deg);
@@ -854,7 +883,7 @@ impl Localizer {
             } else {
                 Blocks::Estimate
             };
-            let pooled = sub.pool(&octave, scratch, source);
+            let pooled = sub.pool(&octave, scratch, source, spectrum.pooling());
             peaks.extend(
                 pooled
                     .resolved_peaks(2 * c.num_peaks, c.min_sep_deg, c.min_prominence)

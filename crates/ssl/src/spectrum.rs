@@ -2,6 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::config::Pooling;
 use crate::grid::DirectionGrid;
 
 /// One direction of arrival: azimuth and elevation (degrees, array frame) and the
@@ -52,6 +53,8 @@ pub struct AngularSpectrum {
     /// Every pooled block's azimuth profile (the largest value over elevations), one block
     /// after the other; empty when not kept ([`AngularSpectrum::with_block_profiles`]).
     profiles: Vec<f32>,
+    /// How the blocks were pooled into these values.
+    pooling: Pooling,
 }
 
 /// The median of `values` (the upper one of an even count): the background that
@@ -82,7 +85,21 @@ impl AngularSpectrum {
             votes: Vec::new(),
             mirror_axis_deg: None,
             profiles: Vec::new(),
+            pooling: Pooling::Max,
         }
+    }
+
+    /// The same spectrum, marked as pooled by `pooling`.
+    #[must_use]
+    pub fn with_pooling(self, pooling: Pooling) -> Self {
+        Self { pooling, ..self }
+    }
+
+    /// How the blocks were pooled into this spectrum: [`Pooling::Max`] (also the mark of a
+    /// spectrum built from values alone) or [`Pooling::Mean`]; for a localizer set to
+    /// [`Pooling::Auto`], the one it chose for the recording.
+    pub fn pooling(&self) -> Pooling {
+        self.pooling
     }
 
     /// The same spectrum with the azimuth profiles of the blocks it pooled (one
