@@ -15,7 +15,9 @@ Hand-run only (no test or CI uses Python); the figures it gave are in BENCHMARKS
     python3 scripts/pra_mobile_survey.py OUT [RT60_S] [SNR_DB] [SEED] [iasm6|respeaker4]
 
 `TALKERS=1,3` (environment) keeps only those talkers of the five (0-based), for scenes of
-fewer sources (BENCHMARKS.md, session 28).
+fewer sources (BENCHMARKS.md, session 28). `SIGNAL=noise` makes each source a steady
+white-noise source (a fan, an air vent) in place of its sentence, for the steady-recording
+pooling (`ssl::Pooling::Auto`; BENCHMARKS.md, session 29).
 """
 import os
 import subprocess
@@ -74,8 +76,11 @@ def main():
     snr = float(sys.argv[3]) if len(sys.argv) > 3 else 20.0
     rng = np.random.default_rng(int(sys.argv[4]) if len(sys.argv) > 4 else 1)
     array = ARRAYS[sys.argv[5] if len(sys.argv) > 5 else "iasm6"]
-    with tempfile.TemporaryDirectory() as tmp:
-        sigs = [speech(v, t, tmp) for v, _, t in TALKERS]
+    if os.environ.get("SIGNAL", "speech") == "noise":
+        sigs = [rng.normal(0.0, 1.0, int(10 * FS)) for _ in TALKERS]
+    else:
+        with tempfile.TemporaryDirectory() as tmp:
+            sigs = [speech(v, t, tmp) for v, _, t in TALKERS]
     e_abs, max_order = pra.inverse_sabine(rt60, DIMS)
     os.makedirs(out + "/audio", exist_ok=True)
     os.makedirs(out + "/pose", exist_ok=True)

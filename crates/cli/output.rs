@@ -21,9 +21,30 @@ fn sibling(path: &Path, tag: &str) -> PathBuf {
 
 /// Writes `bytes` to `path` through a temporary file beside it and a rename.
 ///
+/// Only a regular file is replaced so: a path that names something else (a device such as
+/// `/dev/null` or `/dev/stdout`, a named pipe) is written in place, since a rename would
+/// put a plain file where the device was (run as root, `--out /dev/null` once replaced
+/// the machine's `/dev/null`); a symbolic link is followed, and the file it points to is
+/// replaced, not the link.
+///
 /// # Errors
-/// If the temporary file cannot be written or renamed; the message names `path`.
+/// If `path` is a folder, or the temporary file cannot be written or renamed; the message
+/// names `path`.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    let resolved;
+    let path = match std::fs::metadata(path) {
+        Ok(m) if m.is_dir() => bail!("{} is a folder, not a file", path.display()),
+        Ok(m) if !m.is_file() => {
+            return std::fs::write(path, bytes)
+                .with_context(|| format!("writing {}", path.display()));
+        }
+        Ok(_) if path.is_symlink() => {
+            resolved = std::fs::canonicalize(path)
+                .with_context(|| format!("following the link {}", path.display()))?;
+            resolved.as_path()
+        }
+        _ => path,
+    };
     let tmp = sibling(path, "tmp");
     let written = std::fs::write(&tmp, bytes).and_then(|()| std::fs::rename(&tmp, path));
     if written.is_err() {
@@ -92,6 +113,33 @@ mod tests {
         write_atomic(&p, b"new").unwrap();
         assert_eq!(std::fs::read_to_string(&p).unwrap(), "new");
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_device_is_written_in_place_and_a_link_is_followed() {
+        use std::os::unix::fs::FileTypeExt;
+        // `--out /dev/null`: the device stays a device (a rename would replace it).
+        let null = Path::new("/dev/null");
+        if std::fs::metadata(null).is_ok_and(|m| m.file_type().is_char_device()) {
+            write_atomic(null, b"discarded").unwrap();
+            let m = std::fs::metadata(null).unwrap();
+            assert!(
+                m.file_type().is_char_device(),
+                "/dev/null is no longer a device"
+            );
+        }
+        // A link to a file: the file gets the bytes, the link stays a link.
+        let dir = tempfile::tempdir().unwrap();
+        let (target, link) = (dir.path().join("t.csv"), dir.path().join("l.csv"));
+        std::fs::write(&target, "old").unwrap();
+        std::os::unix::fs::symlink(&target, &link).unwrap();
+        write_atomic(&link, b"new").unwrap();
+        assert!(link.is_symlink());
+        assert_eq!(std::fs::read_to_string(&target).unwrap(), "new");
+        // A folder is refused by name.
+        let e = write_atomic(dir.path(), b"x").unwrap_err();
+        assert!(format!("{e:#}").contains("is a folder"), "{e:#}");
     }
 
     #[test]
