@@ -190,11 +190,12 @@ pub struct SslConfig {
     /// in pyroomacoustics rooms MVDR 0.10-0.15 -> 0.24-0.52 m, and the authors' ten
     /// loudspeakers' GCC-PHAT maps 100 % -> 56 % of runs with all ten. Hence the choice
     /// per recording, which keeps max for every recording of speech we have and takes the
-    /// mean for steady noise (session 29, below and `BENCHMARKS.md`).
+    /// mean for steady noise ([`crate::steady`] has the figures; `BENCHMARKS.md`, session 29).
     pub pooling: Pooling,
-    /// With [`Pooling::Max`]: each direction keeps the mean of its `pool_top` largest
-    /// block values instead of the largest alone (`>= 1`; 1 is plain max pooling, more
-    /// than the blocks kept averages them all). Default: 1.
+    /// With max pooling ([`Pooling::Max`], or [`Pooling::Auto`] on a recording that is not
+    /// steady): each direction keeps the mean of its `pool_top` largest block values
+    /// instead of the largest alone (`>= 1`; 1 is plain max pooling, more than the blocks
+    /// kept averages them all). Default: 1.
     ///
     /// Why one might raise it: under max pooling, one block's chance peak (sensor noise,
     /// a burst of reverberation) stands in the pooled spectrum as high as a source that
@@ -208,7 +209,8 @@ pub struct SslConfig {
     /// talker's weak secondary peaks above [`SslConfig::min_relative`], and in the
     /// one-talker scene they cross into a ghost source in every seed.
     pub pool_top: usize,
-    /// With [`Pooling::Max`], where each DoA lies: max pooling decides which directions hold
+    /// With max pooling ([`Pooling::Max`], or [`Pooling::Auto`] on a recording that is not
+    /// steady), where each DoA lies: max pooling decides which directions hold
     /// sources, and each DoA that was the strongest direction of a block
     /// ([`crate::Doa::dominant_blocks`] at least 1) is then placed at the highest local
     /// maximum, within half of [`SslConfig::min_sep_deg`] of its pooled peak, of the mean
