@@ -354,6 +354,40 @@ fn two_noises(az_a: f64, az_b: f64, gains: impl Fn(usize) -> (f64, f64)) -> Audi
     )
 }
 
+/// What each microphone of `array` hears in `seconds` at `fs` of plane waves `(azimuth,
+/// signal)` in the plane, summed: wave `k` of unit power (with white sensor noise `snr_db`
+/// under it, none for `None`), rendered with seed `SEED + k` and scaled at sample `i` by
+/// `gain(k, i)`.
+fn mixed_waves(
+    array: &MicArray,
+    fs: u32,
+    waves: &[(f64, Signal)],
+    seconds: f64,
+    snr_db: Option<f64>,
+    gain: impl Fn(usize, usize) -> f64,
+) -> Vec<Vec<f64>> {
+    let n = (seconds * f64::from(fs)) as usize;
+    let mut mix = vec![vec![0.0f64; n]; array.len()];
+    for (k, &(az, signal)) in waves.iter().enumerate() {
+        let wave: PlaneWave = (az, 0.0, signal).into();
+        let mics = farfield::render(
+            array.positions(),
+            &[wave],
+            fs,
+            n,
+            C,
+            snr_db,
+            SEED + k as u64,
+        );
+        for (m, ch) in mix.iter_mut().zip(mics) {
+            for (i, (o, v)) in m.iter_mut().zip(ch).enumerate() {
+                *o += gain(k, i) * v;
+            }
+        }
+    }
+    mix
+}
+
 /// One second at `fs` of two plane waves of `signal` heard by `array` from azimuths
 /// `az.0` and `az.1` (elevation 0), scaled at each sample `i` by `gains(i)`, with white
 /// sensor noise `snr_db` under a unit-power wave (none for `None`).
@@ -365,23 +399,14 @@ fn two_waves(
     az: (f64, f64),
     gains: impl Fn(usize) -> (f64, f64),
 ) -> Audio {
-    let n = fs as usize;
-    let mics = |az: f64, seed: u64| {
-        let wave: PlaneWave = (az, 0.0, signal).into();
-        farfield::render(array.positions(), &[wave], fs, n, C, snr_db, seed)
-    };
-    let (a, b) = (mics(az.0, SEED), mics(az.1, SEED + 1));
-    let channels = a
+    let waves = [(az.0, signal), (az.1, signal)];
+    let mix = mixed_waves(array, fs, &waves, 1.0, snr_db, |k, i| {
+        let (ga, gb) = gains(i);
+        if k == 0 { ga } else { gb }
+    });
+    let channels = mix
         .iter()
-        .zip(&b)
-        .map(|(x, y)| {
-            (0..n)
-                .map(|i| {
-                    let (ga, gb) = gains(i);
-                    (0.1 * (ga * x[i] + gb * y[i])) as f32
-                })
-                .collect()
-        })
+        .map(|m| m.iter().map(|&v| (0.1 * v) as f32).collect())
         .collect();
     Audio::new(fs, channels).unwrap()
 }
@@ -1170,17 +1195,7 @@ fn gated_waves(
     seconds: f64,
     gain: impl Fn(usize, usize) -> f64,
 ) -> Audio {
-    let n = (seconds * f64::from(FS)) as usize;
-    let mut mix = vec![vec![0.0f64; n]; array.len()];
-    for (k, &(az, signal)) in waves.iter().enumerate() {
-        let wave: PlaneWave = (az, 0.0, signal).into();
-        let mics = farfield::render(array.positions(), &[wave], FS, n, C, None, SEED + k as u64);
-        for (m, ch) in mix.iter_mut().zip(mics) {
-            for (i, (o, v)) in m.iter_mut().zip(ch).enumerate() {
-                *o += gain(k, i) * v;
-            }
-        }
-    }
+    let mix = mixed_waves(array, FS, waves, seconds, None, gain);
     let noise = independent_noise(array.len(), seconds, SEED + 99);
     let channels = mix
         .iter()
