@@ -37,6 +37,7 @@ mvdr_freq_smoothing = 1
 music_sources = 3
 music_freq_smoothing = 1
 music_coarse = true
+screen_channels = false
 
 [iasm]
 density_d = 8.0

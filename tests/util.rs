@@ -34,6 +34,19 @@ pub fn write_wav(path: &Path, channels: &[Vec<f64>], fs: u32) {
     w.finalize().unwrap();
 }
 
+/// Rewrites the WAV at `path` with its channel `channel` (from 0) all zeros: a dead
+/// microphone.
+pub fn zero_channel(path: &Path, channel: usize) {
+    let audio = ssl::read_wav(path).unwrap();
+    let mut channels: Vec<Vec<f64>> = audio
+        .channels()
+        .iter()
+        .map(|c| c.iter().map(|&v| f64::from(v)).collect())
+        .collect();
+    channels[channel].iter_mut().for_each(|v| *v = 0.0);
+    write_wav(path, &channels, audio.sample_rate());
+}
+
 /// A 0.5 s recording at the given microphones of noise sources at the given azimuths.
 pub fn plane_wave_recording(mics: &[[f64; 3]], azimuths_deg: &[f64], seed: u64) -> Vec<Vec<f64>> {
     let waves: Vec<PlaneWave> = azimuths_deg

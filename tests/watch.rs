@@ -9,6 +9,24 @@ use std::time::{Duration, Instant};
 
 use crate::util::*;
 
+/// A microphone dead at one stop only (a loose connector) is named on that stop's line.
+#[test]
+fn a_stop_with_a_dead_microphone_says_so_on_its_line() {
+    let dir = tempdir();
+    let root = path(&dir, "ds");
+    audio_dataset(&root, &AUDIO_TRUTH);
+    zero_channel(&root.join("audio/sub3.wav"), 3);
+    let o = iasm(&["watch", arg(&root), "--replay", "--num", "2"]);
+    assert!(o.status.success(), "{}", show(&o));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    let flagged: Vec<&str> = stdout
+        .lines()
+        .filter(|l| l.contains("channel 4 silent, left out"))
+        .collect();
+    assert_eq!(flagged.len(), 1, "{stdout}");
+    assert!(flagged[0].starts_with("stop   3  sub3.wav"), "{stdout}");
+}
+
 #[test]
 fn a_replay_writes_one_curve_row_per_stop_and_ends_on_the_batch_map() {
     let dir = tempdir();

@@ -188,6 +188,9 @@ pub fn compare(
         let mut s = settings.clone();
         s.ssl.method = method;
         let files = localise_files(&ds.audio, &array, &s.ssl)?;
+        if Some(&method) == opts.methods.first() {
+            crate::pipeline::warn_faulty_channels(&files);
+        }
         let ms = 1e3 * files.iter().map(|f| f.seconds).sum::<f64>() / files.len() as f64;
         let table = mapped_table(files.iter().map(|f| (&f.doas[..], &f.extra[..])), n);
         let cut = Some(files.iter().map(|f| f.cut).collect());

@@ -40,6 +40,9 @@ pub struct StopRecord {
     pub map_ms: f64,
     /// Whether the stop ran a full map (see [`asm::online`]).
     pub full_map: bool,
+    /// The recording's channels found not to hear the room ([`ssl::channels`]).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub faulty_channels: Vec<crate::pipeline::FaultyChannel>,
 }
 
 /// The SSL front end and the online mapper, fed one recording at a time.
@@ -109,6 +112,12 @@ impl Session {
     /// # Errors
     /// As [`Session::localise`].
     pub fn localise_row(&mut self, audio: &Audio) -> Result<(Vec<f64>, bool)> {
+        let row = self.locate(audio)?;
+        Ok((row.all().map(|d| d.azimuth_deg).collect(), row.cut))
+    }
+
+    /// The SSL's row for `audio`, with a localizer for its sample rate.
+    fn locate(&mut self, audio: &Audio) -> Result<ssl::Located> {
         let fs = audio.sample_rate();
         let i = match self.localizers.iter().position(|l| l.sample_rate() == fs) {
             Some(i) => i,
@@ -120,8 +129,7 @@ impl Session {
                 self.localizers.len() - 1
             }
         };
-        let row = self.localizers[i].locate_row_with_scratch(audio, &mut self.scratch)?;
-        Ok((row.all().map(|d| d.azimuth_deg).collect(), row.cut))
+        Ok(self.localizers[i].locate_row_with_scratch(audio, &mut self.scratch)?)
     }
 
     /// Localises `audio` (the recording `name`, heard at `pose`) and adds it as the next
@@ -131,12 +139,14 @@ impl Session {
     /// As [`Session::localise`], or a pose the mapper refuses; named.
     pub fn add_recording(&mut self, name: &str, pose: Pose, audio: &Audio) -> Result<StopRecord> {
         let t0 = Instant::now();
-        let (doas, cut) = self
-            .localise_row(audio)
+        let row = self
+            .locate(audio)
             .with_context(|| format!("localising {name}"))?;
+        let doas: Vec<f64> = row.all().map(|d| d.azimuth_deg).collect();
         let ssl_ms = 1e3 * t0.elapsed().as_secs_f64();
-        let mut r = self.add_row(name, pose, &doas, Some(cut))?;
+        let mut r = self.add_row(name, pose, &doas, Some(row.cut))?;
         r.ssl_ms = ssl_ms;
+        r.faulty_channels = crate::pipeline::FaultyChannel::of(&row, self.array.len());
         Ok(r)
     }
 
@@ -188,6 +198,7 @@ impl Session {
             ssl_ms: 0.0,
             map_ms,
             full_map: u.full,
+            faulty_channels: Vec::new(),
         })
     }
 

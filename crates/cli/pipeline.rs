@@ -55,10 +55,133 @@ pub struct FileDoas {
     /// How its blocks were pooled ([`ssl::Located::pooling`]: with the default
     /// [`ssl::Pooling::Auto`], the mean for a steady, noise-like recording, else max).
     pub pooling: ssl::Pooling,
+    /// The channels found not to hear the room ([`ssl::Located::faulty_channels`]).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub faulty_channels: Vec<FaultyChannel>,
     /// The time it took to read and localise it on one thread (s). Not serialised: the
     /// DoA output stays the same from run to run.
     #[serde(skip)]
     pub seconds: f64,
+}
+
+/// A channel of a recording that does not hear the room ([`ssl::channels`]).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct FaultyChannel {
+    /// The channel, counted from 1 as in the file.
+    pub channel: usize,
+    /// Whether the recording was localised without it ([`ssl::Located::microphones`]).
+    pub left_out: bool,
+    /// Why it was found faulty.
+    #[serde(flatten)]
+    pub fault: ssl::channels::Fault,
+}
+
+impl FaultyChannel {
+    /// The faulty channels of a row localised with an array of `microphones`.
+    pub fn of(row: &Located, microphones: usize) -> Vec<Self> {
+        row.faulty_channels
+            .iter()
+            .map(|&(c, fault)| Self {
+                channel: c + 1,
+                left_out: row.microphones < microphones,
+                fault,
+            })
+            .collect()
+    }
+}
+
+/// One warning line per faulty channel of `rows` (the recordings `names`, in order),
+/// grouped by channel and kind of fault: how many recordings, which, why (the first
+/// one's figures) and whether they were localised without it.
+pub fn faulty_channel_warnings<'a>(
+    rows: impl IntoIterator<Item = (&'a str, &'a [FaultyChannel])>,
+) -> Vec<String> {
+    /// The recordings in which one channel had one kind of fault.
+    struct Group<'a> {
+        channel: usize,
+        silent: bool,
+        /// The first recording's fault (its figures are quoted).
+        first: FaultyChannel,
+        /// Whether every one of them was localised without the channel.
+        left_out: bool,
+        names: Vec<&'a str>,
+    }
+    let mut total = 0usize;
+    let mut groups: Vec<Group<'a>> = Vec::new();
+    for (name, faults) in rows {
+        total += 1;
+        for f in faults {
+            let silent = matches!(f.fault, ssl::channels::Fault::Silent { .. });
+            match groups
+                .iter_mut()
+                .find(|g| g.channel == f.channel && g.silent == silent)
+            {
+                Some(g) => {
+                    g.left_out &= f.left_out;
+                    g.names.push(name);
+                }
+                None => groups.push(Group {
+                    channel: f.channel,
+                    silent,
+                    first: *f,
+                    left_out: f.left_out,
+                    names: vec![name],
+                }),
+            }
+        }
+    }
+    groups.sort_by_key(|g| (g.channel, g.silent));
+    groups
+        .into_iter()
+        .map(|g| {
+            let Group {
+                channel,
+                first,
+                left_out,
+                names,
+                ..
+            } = g;
+            let shown: Vec<&str> = names.iter().take(3).copied().collect();
+            let more = match names.len().saturating_sub(3) {
+                0 => String::new(),
+                n => format!(" and {n} more"),
+            };
+            format!(
+                "warning: channel {channel} in {} of {total} recordings ({}{more}): {}; {}",
+                names.len(),
+                shown.join(", "),
+                first.fault,
+                if left_out {
+                    "localised without it (a microphone that does not hear the room; \
+                     `screen_channels = false` under [ssl] keeps it)"
+                } else {
+                    "localised with it all the same (the microphones left would not \
+                     localise by themselves; see ssl::Located::microphones)"
+                }
+            )
+        })
+        .collect()
+}
+
+/// Prints [`faulty_channel_warnings`] of `rows` to standard error.
+pub fn warn_faulty_channels(rows: &[FileDoas]) {
+    let names: Vec<String> = rows
+        .iter()
+        .map(|r| {
+            r.file.file_name().map_or_else(
+                || r.file.display().to_string(),
+                |n| n.to_string_lossy().into(),
+            )
+        })
+        .collect();
+    for w in faulty_channel_warnings(
+        names
+            .iter()
+            .zip(rows)
+            .map(|(n, r)| (n.as_str(), &r.faulty_channels[..])),
+    ) {
+        eprintln!("{w}");
+    }
 }
 
 /// Localises every file with one localizer per sample rate, in parallel, keeping order.
@@ -97,14 +220,17 @@ pub fn localise_files(
                     }
                 }
             };
+            let row = loc
+                .locate_row_with_scratch(&audio, scratch)
+                .with_context(|| format!("localising {}", f.display()))?;
+            let faulty_channels = FaultyChannel::of(&row, array.len());
             let Located {
                 doas,
                 cut,
                 extra,
                 pooling,
-            } = loc
-                .locate_row_with_scratch(&audio, scratch)
-                .with_context(|| format!("localising {}", f.display()))?;
+                ..
+            } = row;
             bar.inc(1);
             Ok(FileDoas {
                 file: f.clone(),
@@ -112,6 +238,7 @@ pub fn localise_files(
                 cut,
                 extra,
                 pooling,
+                faulty_channels,
                 seconds: t0.elapsed().as_secs_f64(),
             })
         })
@@ -344,8 +471,19 @@ impl Survey {
                     pose_path.display()
                 )
             })?;
-            let rows = localise_audio(&windows, &settings.mic_array()?, &settings.ssl)
+            let array = settings.mic_array()?;
+            let rows = localise_audio(&windows, &array, &settings.ssl)
                 .with_context(|| format!("localising {}", rec.display()))?;
+            let names: Vec<String> = (1..=rows.len()).map(|k| format!("window {k}")).collect();
+            let faults: Vec<Vec<FaultyChannel>> = rows
+                .iter()
+                .map(|r| FaultyChannel::of(r, array.len()))
+                .collect();
+            for w in faulty_channel_warnings(
+                names.iter().zip(&faults).map(|(n, f)| (n.as_str(), &f[..])),
+            ) {
+                eprintln!("{}: {w}", rec.display());
+            }
             cut = Some(rows.iter().map(|r| r.cut).collect());
             (
                 mapped_table(
@@ -378,6 +516,7 @@ impl Survey {
                 pose_path.display()
             );
             let rows = localise_files(&files, &settings.mic_array()?, &settings.ssl)?;
+            warn_faulty_channels(&rows);
             cut = Some(rows.iter().map(|r| r.cut).collect());
             (
                 mapped_table(

@@ -58,6 +58,7 @@ pub fn run(args: &SslArgs) -> Result<Outcome> {
     }
     let Some(dir) = &args.dataset else {
         let rows = localise_files(&args.files, &array, &config)?;
+        crate::pipeline::warn_faulty_channels(&rows);
         print_rows(&rows, &config, &array, args.json)?;
         return Ok(Outcome::Success);
     };
@@ -71,6 +72,7 @@ pub fn run(args: &SslArgs) -> Result<Outcome> {
     let t0 = Instant::now();
     let rows = localise_files(&ds.audio, &array, &config)?;
     let elapsed = t0.elapsed().as_secs_f64();
+    crate::pipeline::warn_faulty_channels(&rows);
     eprintln!(
         "{}: {} recordings localised with {} in {:.2} s ({:.1} ms per recording){}",
         dir.display(),

@@ -98,8 +98,25 @@ fn line(r: &StopRecord) -> String {
     let o = r
         .ospa
         .map_or(String::new(), |o| format!("  OSPA {:.3} m", o.total));
+    // A faulty microphone is named on the stop's line: a connector that works loose
+    // mid-survey shows where it did.
+    let faulty: String = r
+        .faulty_channels
+        .iter()
+        .map(|f| {
+            format!(
+                "  channel {} {}{}",
+                f.channel,
+                match f.fault {
+                    ssl::channels::Fault::Silent { .. } => "silent",
+                    ssl::channels::Fault::Incoherent { .. } => "incoherent",
+                },
+                if f.left_out { ", left out" } else { "" }
+            )
+        })
+        .collect();
     format!(
-        "stop {:>3}  {:<14} {} DoAs  {:>2} sources{o}  ssl {:.0} ms  map {:.0} ms{}",
+        "stop {:>3}  {:<14} {} DoAs  {:>2} sources{o}  ssl {:.0} ms  map {:.0} ms{}{faulty}",
         r.stop,
         r.file,
         r.doas,

@@ -530,6 +530,14 @@ pub struct SslConfig {
     /// 25.8 against 18.3 ms, medians of 7 interleaved runs), and it is kept only to
     /// reproduce those measurements.
     pub music_coarse: bool,
+    /// Leave out of each recording the channels that do not hear the room: silent ones
+    /// (a dead or muted microphone) and ones that hold only noise of their own (a
+    /// disconnected microphone's preamplifier), and localise it with the others
+    /// ([`crate::channels`], where the tests and their measurements are;
+    /// [`crate::Located::faulty_channels`] says which). A recording of working
+    /// microphones is localised exactly as without the screen. Default: true (false
+    /// localises every channel whatever it holds, as MBSS Locate does).
+    pub screen_channels: bool,
 }
 
 impl Default for SslConfig {
@@ -566,6 +574,7 @@ impl Default for SslConfig {
             music_sources: None,
             music_freq_smoothing: 2,
             music_coarse: false,
+            screen_channels: true,
         }
     }
 }

@@ -44,6 +44,7 @@
 
 pub mod array;
 pub mod audio;
+pub mod channels;
 pub mod config;
 pub mod covariance;
 pub mod deflate;

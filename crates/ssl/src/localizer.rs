@@ -1,11 +1,13 @@
 //! The localizer: from multichannel audio to a pooled angular spectrum and ranked DoAs.
 
 use std::ops::Range;
+use std::sync::{Arc, Mutex};
 
 use realfft::num_complex::Complex32;
 
 use crate::array::MicArray;
 use crate::audio::Audio;
+use crate::channels::{ChannelStats, Fault};
 use crate::config::{Pooling, SslConfig};
 use crate::covariance::SpatialCovariance;
 use crate::error::{ConfigError, Error, Result};
@@ -221,6 +223,17 @@ pub struct Located {
     /// How this recording's blocks were pooled: [`Pooling::Max`] or [`Pooling::Mean`],
     /// the one [`Pooling::Auto`] chose (see [`crate::steady`]) or the one set.
     pub pooling: Pooling,
+    /// The channels found not to hear the room, ascending, each with why
+    /// ([`SslConfig::screen_channels`], [`crate::channels`]); empty for a recording of
+    /// working microphones, or with the screen off.
+    pub faulty_channels: Vec<(usize, Fault)>,
+    /// The microphones the row was localised with: the array's, or fewer when faulty
+    /// channels were left out. They are left out when at least two others remain, the
+    /// array of those is no line unless the whole array is one (its DoAs would be folded
+    /// onto one side of the line, the mapper's rows not), and the settings hold for it;
+    /// otherwise the row is localised with every channel, or (a single working
+    /// microphone) holds no DoA.
+    pub microphones: usize,
 }
 
 impl Located {
@@ -246,6 +259,10 @@ const SUBBAND_MERGE_DEG: f64 = 6.0;
 
 /// Frames of the synthetic plane wave of [`Localizer::plane_wave_profile`] at most.
 const WAVE_MAX_FRAMES: usize = 8;
+
+/// A localizer of some of an array's microphones (the channels it keeps, ascending), or
+/// `None` where they cannot localise by themselves ([`Located::microphones`]).
+type Subset = (Vec<usize>, Option<Arc<Localizer>>);
 
 /// A validated, precomputed SSL front end for one array and sample rate.
 ///
@@ -273,6 +290,11 @@ pub struct Localizer {
     mirror_axis_deg: Option<f64>,
     /// Whether rows are deflated ([`SslConfig::deflates`]).
     deflate: bool,
+    /// Localizers of this one's array without some of its microphones, keyed by the
+    /// channels they keep (ascending), built when a recording first needs one
+    /// ([`SslConfig::screen_channels`]); `None` where those channels cannot localise by
+    /// themselves (see [`Located::microphones`]).
+    subsets: Mutex<Vec<Subset>>,
 }
 
 impl std::fmt::Debug for Localizer {
@@ -395,7 +417,37 @@ impl Localizer {
             subbands,
             mirror_axis_deg: array.mirror_axis_deg(),
             deflate: config.deflates(array, sample_rate),
+            subsets: Mutex::default(),
         })
+    }
+
+    /// The localizer of this one's microphones `keep` (ascending, fewer than all), built
+    /// on first use and kept; `None` when they cannot localise by themselves (see
+    /// [`Located::microphones`]). Its settings are this one's, deflating as this one
+    /// does and without a screen of its own.
+    fn subset(&self, keep: &[usize]) -> Option<Arc<Localizer>> {
+        let mut subsets = self.subsets.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((_, l)) = subsets.iter().find(|(k, _)| k == keep) {
+            return l.clone();
+        }
+        let positions = keep.iter().map(|&i| self.array.positions()[i]).collect();
+        let without: Vec<String> = (0..self.array.len())
+            .filter(|i| !keep.contains(i))
+            .map(|i| i.to_string())
+            .collect();
+        let name = format!("{} without {}", self.array.name(), without.join(", "));
+        let config = SslConfig {
+            deflate: Some(self.deflate),
+            screen_channels: false,
+            ..self.config.clone()
+        };
+        let l = MicArray::new(name, positions)
+            .ok()
+            .filter(|a| a.linear_axis().is_none() || self.array.linear_axis().is_some())
+            .and_then(|a| Localizer::new(&a, self.sample_rate, &config).ok())
+            .map(Arc::new);
+        subsets.push((keep.to_vec(), l.clone()));
+        l
     }
 
     /// For a linear array ([`MicArray::linear_axis`]), the azimuth of its line (degrees,
@@ -474,6 +526,13 @@ impl Localizer {
         scratch: &mut Scratch,
         blocks: Blocks<'_>,
     ) -> Result<AngularSpectrum> {
+        self.analyse(audio, scratch)?;
+        Ok(self.pooled(scratch, blocks))
+    }
+
+    /// Checks that `audio` fits this localizer and writes its STFT (the band's bins) into
+    /// `scratch.spec`.
+    fn analyse(&self, audio: &Audio, scratch: &mut Scratch) -> Result<()> {
         if audio.num_channels() != self.array.len() {
             return Err(Error::ChannelMismatch {
                 expected: self.array.len(),
@@ -486,12 +545,16 @@ impl Localizer {
                 got: audio.sample_rate(),
             });
         }
-        let mut spec = std::mem::take(&mut scratch.spec);
-        let analysed = self.stft.analyze_into(audio, self.bins.clone(), &mut spec);
-        let pooled = analysed.map(|()| {
-            let pooling = self.pooling_of(&spec);
-            self.pool(&spec, scratch, blocks, pooling)
-        });
+        self.stft
+            .analyze_into(audio, self.bins.clone(), &mut scratch.spec)
+    }
+
+    /// The pooled spectrum of the STFT in `scratch.spec` ([`Localizer::analyse`]), the
+    /// block spectra taken from `blocks`.
+    fn pooled(&self, scratch: &mut Scratch, blocks: Blocks<'_>) -> AngularSpectrum {
+        let spec = std::mem::take(&mut scratch.spec);
+        let pooling = self.pooling_of(&spec);
+        let pooled = self.pool(&spec, scratch, blocks, pooling);
         scratch.spec = spec;
         pooled
     }
@@ -728,6 +791,50 @@ impl Localizer {
     /// # Errors
     /// As [`Localizer::spectrum`].
     pub fn locate_row_with_scratch(&self, audio: &Audio, scratch: &mut Scratch) -> Result<Located> {
+        self.analyse(audio, scratch)?;
+        if !self.config.screen_channels {
+            return self.located(scratch);
+        }
+        let faulty = crate::channels::faults(&ChannelStats::of(&scratch.spec));
+        if !faulty.is_empty() {
+            let keep: Vec<usize> = (0..self.array.len())
+                .filter(|i| faulty.iter().all(|(f, _)| f != i))
+                .collect();
+            if keep.len() < 2 {
+                // One microphone hears no direction.
+                return Ok(Located {
+                    doas: Vec::new(),
+                    cut: false,
+                    extra: Vec::new(),
+                    pooling: match self.config.pooling {
+                        Pooling::Auto => Pooling::Max,
+                        p => p,
+                    },
+                    faulty_channels: faulty,
+                    microphones: keep.len(),
+                });
+            }
+            if let Some(sub) = self.subset(&keep) {
+                let part = Audio::new(
+                    audio.sample_rate(),
+                    keep.iter().map(|&i| audio.channels()[i].clone()).collect(),
+                )?;
+                let row = sub.locate_row_with_scratch(&part, scratch)?;
+                return Ok(Located {
+                    faulty_channels: faulty,
+                    ..row
+                });
+            }
+        }
+        Ok(Located {
+            faulty_channels: faulty,
+            ..self.located(scratch)?
+        })
+    }
+
+    /// The row of the recording whose STFT is in `scratch.spec` ([`Localizer::analyse`]),
+    /// localised with every channel.
+    fn located(&self, scratch: &mut Scratch) -> Result<Located> {
         let n = self.config.num_peaks;
         // The N strongest resolved peaks, and the next one: the row is cut when that one
         // passes the thresholds too (the peaks are taken strongest first, so the first N
@@ -737,7 +844,7 @@ impl Localizer {
         } else {
             Blocks::Estimate
         };
-        let spectrum = self.spectrum_from(audio, scratch, source)?;
+        let spectrum = self.pooled(scratch, source);
         let mut peaks =
             spectrum.resolved_peaks(n + 1, self.config.min_sep_deg, self.config.min_prominence);
         let next = (peaks.len() > n).then(|| peaks.remove(n));
@@ -803,6 +910,8 @@ impl Localizer {
             cut,
             extra,
             pooling,
+            faulty_channels: Vec::new(),
+            microphones: self.array.len(),
         })
     }
 
