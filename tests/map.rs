@@ -420,6 +420,65 @@ fn a_dead_microphone_is_named_and_left_out() {
     }
 }
 
+/// Recordings that hold another channel before the microphones' (a ReSpeaker's firmware
+/// records its processed beam first): without `--channels` the run stops with a hint
+/// that names the option; with `--channels 2-7` (or `channels` in the settings file) the
+/// map finds both sources, `iasm watch` too; a channel the files do not have, or one
+/// listed twice, is a clear error.
+#[test]
+fn channels_pick_the_microphones_out_of_a_wider_file() {
+    let dir = tempdir();
+    let root = path(&dir, "ds");
+    audio_dataset(&root, &AUDIO_TRUTH);
+    for k in 1..=20 {
+        rewrite_wav(&root.join(format!("audio/sub{k}.wav")), |c| {
+            // The "beam": the sum of the microphones, as a processed channel would be.
+            let beam: Vec<f64> = (0..c[0].len())
+                .map(|t| c.iter().map(|ch| ch[t]).sum::<f64>() / 6.0)
+                .collect();
+            c.insert(0, beam);
+        });
+    }
+    let base = [
+        "map",
+        "--dataset",
+        arg(&root),
+        "--method",
+        "mvdr",
+        "--num",
+        "2",
+    ];
+    let o = iasm(&base);
+    // The recordings are read in parallel: the first that fails is named, whichever.
+    assert_clear_error(
+        &o,
+        &["audio/sub", "7 channels", "6 microphones", "--channels"],
+    );
+    let v = json(&iasm(
+        &[&base[..], &["--channels", "2-7", "--json"]].concat(),
+    ));
+    assert_eq!(v["sources"].as_array().unwrap().len(), 2, "{v}");
+    assert!(v["ospa"]["total"].as_f64().unwrap() < 0.2, "{v}");
+    let cfg = path(&dir, "c.toml");
+    std::fs::write(&cfg, "channels = [2, 3, 4, 5, 6, 7]\n").unwrap();
+    let w = json(&iasm(
+        &[&base[..], &["--config", arg(&cfg), "--json"]].concat(),
+    ));
+    assert_eq!(w["sources"], v["sources"]);
+    // `iasm watch` picks them too.
+    let watch = ["watch", arg(&root), "--replay", "--num", "2"];
+    let o = iasm(&[&watch[..], &["--channels", "2-7"]].concat());
+    assert!(o.status.success(), "{}", show(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    let last = out.lines().rfind(|l| l.starts_with("stop ")).unwrap();
+    assert!(last.contains(" 2 sources"), "{out}");
+    let o = iasm(&[&base[..], &["--channels", "2-6,9"]].concat());
+    assert_clear_error(&o, &["audio/sub", "channel 9", "7 channels"]);
+    std::fs::write(&cfg, "channels = [2, 3, 3, 5, 6, 7]\n").unwrap();
+    let o = iasm(&[&base[..], &["--config", arg(&cfg)]].concat());
+    assert_clear_error(&o, &["channel 3 twice"]);
+}
+
 #[test]
 fn eval_reports_every_variant() {
     let dir = tempdir();

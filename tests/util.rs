@@ -34,17 +34,22 @@ pub fn write_wav(path: &Path, channels: &[Vec<f64>], fs: u32) {
     w.finalize().unwrap();
 }
 
-/// Rewrites the WAV at `path` with its channel `channel` (from 0) all zeros: a dead
-/// microphone.
-pub fn zero_channel(path: &Path, channel: usize) {
+/// Rewrites the WAV at `path` with its channels (channel-major) changed by `change`.
+pub fn rewrite_wav(path: &Path, change: impl FnOnce(&mut Vec<Vec<f64>>)) {
     let audio = ssl::read_wav(path).unwrap();
     let mut channels: Vec<Vec<f64>> = audio
         .channels()
         .iter()
         .map(|c| c.iter().map(|&v| f64::from(v)).collect())
         .collect();
-    channels[channel].iter_mut().for_each(|v| *v = 0.0);
+    change(&mut channels);
     write_wav(path, &channels, audio.sample_rate());
+}
+
+/// Rewrites the WAV at `path` with its channel `channel` (from 0) all zeros: a dead
+/// microphone.
+pub fn zero_channel(path: &Path, channel: usize) {
+    rewrite_wav(path, |c| c[channel].iter_mut().for_each(|v| *v = 0.0));
 }
 
 /// A 0.5 s recording at the given microphones of noise sources at the given azimuths.

@@ -201,6 +201,12 @@ pub struct SettingsArgs {
     /// file [default: iasm6, or the settings file's].
     #[arg(long)]
     pub array: Option<String>,
+    /// Which channels of each WAV are the array's microphones, in the array's order,
+    /// counted from 1: a list and ranges, `2-5` or `2,3,4,5` (a ReSpeaker 4-mic's
+    /// 6-channel firmware records its microphones on channels 2-5) [default: every
+    /// channel, or the settings file's `channels`].
+    #[arg(long, value_name = "LIST", value_parser = parse_channels)]
+    pub channels: Option<ChannelList>,
     /// Angular-spectrum method: gcc-phat, mvdr, srp-phat, music or normmusic [default:
     /// mvdr, or the settings file's].
     #[arg(long)]
@@ -257,6 +263,9 @@ impl SettingsArgs {
         let mut s = Settings::load_with(self.config.as_deref(), self.profile)?;
         if let Some(a) = &self.array {
             s.array = Some(a.clone());
+        }
+        if let Some(ChannelList(c)) = &self.channels {
+            s.channels = Some(c.clone());
         }
         if let Some(m) = self.method {
             s.ssl.method = m;
@@ -559,4 +568,50 @@ pub struct SslArgs {
     /// Worker threads for --dataset (default: all cores).
     #[arg(long, value_name = "N")]
     pub threads: Option<usize>,
+}
+
+/// The channels of `--channels`, counted from 1.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ChannelList(pub Vec<usize>);
+
+/// A `--channels` list: channels counted from 1, single or as ranges (`2-5`, `1,3-4`).
+fn parse_channels(text: &str) -> Result<ChannelList, String> {
+    let number = |t: &str| {
+        t.trim()
+            .parse::<usize>()
+            .ok()
+            .filter(|&c| c >= 1)
+            .ok_or_else(|| format!("`{t}` is not a channel number (counted from 1)"))
+    };
+    let mut out = Vec::new();
+    for part in text.split(',') {
+        match part.split_once('-') {
+            Some((a, b)) => {
+                let (a, b) = (number(a)?, number(b)?);
+                if a > b {
+                    return Err(format!("`{part}` is an empty range"));
+                }
+                out.extend(a..=b);
+            }
+            None => out.push(number(part)?),
+        }
+    }
+    Ok(ChannelList(out))
+}
+
+#[cfg(test)]
+mod channel_list_tests {
+    use super::*;
+
+    #[test]
+    fn channel_lists_take_numbers_and_ranges_from_1() {
+        assert_eq!(parse_channels("2-5"), Ok(ChannelList(vec![2, 3, 4, 5])));
+        assert_eq!(
+            parse_channels("1, 3-4,6"),
+            Ok(ChannelList(vec![1, 3, 4, 6]))
+        );
+        assert!(parse_channels("0-3").unwrap_err().contains("`0`"));
+        assert!(parse_channels("5-2").unwrap_err().contains("empty range"));
+        assert!(parse_channels("a").is_err());
+    }
 }

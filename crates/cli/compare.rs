@@ -187,7 +187,7 @@ pub fn compare(
         ));
         let mut s = settings.clone();
         s.ssl.method = method;
-        let files = localise_files(&ds.audio, &array, &s.ssl)?;
+        let files = localise_files(&ds.audio, &array, s.channels.as_deref(), &s.ssl)?;
         if Some(&method) == opts.methods.first() {
             crate::pipeline::warn_faulty_channels(&files);
         }
@@ -202,6 +202,7 @@ pub fn compare(
             r.rules = Some(run_census(
                 &ds.audio,
                 &array,
+                s.channels.as_deref(),
                 &s.ssl,
                 &files,
                 &survey.poses,

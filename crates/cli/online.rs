@@ -48,6 +48,9 @@ pub struct StopRecord {
 /// The SSL front end and the online mapper, fed one recording at a time.
 pub struct Session {
     array: MicArray,
+    /// Which channels of each recording are the array's microphones
+    /// ([`Settings::channels`]).
+    channels: Option<Vec<usize>>,
     ssl: SslConfig,
     localizers: Vec<Localizer>,
     scratch: Scratch,
@@ -80,6 +83,7 @@ impl Session {
         };
         Ok(Self {
             array,
+            channels: settings.channels.clone(),
             ssl: settings.ssl.clone(),
             localizers: Vec::new(),
             scratch: Scratch::default(),
@@ -116,8 +120,17 @@ impl Session {
         Ok((row.all().map(|d| d.azimuth_deg).collect(), row.cut))
     }
 
-    /// The SSL's row for `audio`, with a localizer for its sample rate.
+    /// The SSL's row for `audio` (a recording's every channel: the settings' `channels`
+    /// are picked here), with a localizer for its sample rate.
     fn locate(&mut self, audio: &Audio) -> Result<ssl::Located> {
+        let picked;
+        let audio = match &self.channels {
+            None => audio,
+            Some(c) => {
+                picked = crate::pipeline::pick_channels(audio, c)?;
+                &picked
+            }
+        };
         let fs = audio.sample_rate();
         let i = match self.localizers.iter().position(|l| l.sample_rate() == fs) {
             Some(i) => i,

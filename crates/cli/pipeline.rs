@@ -15,7 +15,7 @@
 //! published tables and `iasm ssl` write it), and the true sources when known. The DoA
 //! source (a table or the SSL) does not matter past this point.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
 use anyhow::{Context, Result, bail, ensure};
@@ -184,6 +184,47 @@ pub fn warn_faulty_channels(rows: &[FileDoas]) {
     }
 }
 
+/// Reads the WAV at `path`, keeping its channels `channels` (counted from 1, in that
+/// order: [`Settings::channels`]) when given.
+///
+/// # Errors
+/// An unreadable file, or a channel it does not have; named.
+pub fn read_recording(path: &Path, channels: Option<&[usize]>) -> Result<Audio> {
+    let audio = ssl::read_wav(path)?;
+    match channels {
+        None => Ok(audio),
+        Some(c) => pick_channels(&audio, c).with_context(|| path.display().to_string()),
+    }
+}
+
+/// The channels `channels` of `audio` (counted from 1, in that order:
+/// [`Settings::channels`]).
+///
+/// # Errors
+/// A channel `audio` does not have.
+pub fn pick_channels(audio: &Audio, channels: &[usize]) -> Result<Audio> {
+    let from0: Vec<usize> = channels.iter().map(|&c| c.saturating_sub(1)).collect();
+    audio
+        .select(&from0)
+        .with_context(|| format!("the channels {channels:?}"))
+}
+
+/// `e`, with a hint when the file holds more channels than the array has microphones and
+/// no channels were picked (`--channels`).
+fn with_channel_hint(e: ssl::Error, channels: Option<&[usize]>) -> anyhow::Error {
+    match e {
+        ssl::Error::ChannelMismatch { expected, got } if got > expected && channels.is_none() => {
+            anyhow::anyhow!(
+                "{e}; if the file holds other channels too, `--channels` (or `channels` in \
+                 the settings file) picks the microphones' channels, counted from 1, in the \
+                 array's order (a ReSpeaker 4-mic's 6-channel firmware records them on \
+                 channels 2-5)"
+            )
+        }
+        e => e.into(),
+    }
+}
+
 /// Localises every file with one localizer per sample rate, in parallel, keeping order.
 ///
 /// # Errors
@@ -191,6 +232,7 @@ pub fn warn_faulty_channels(rows: &[FileDoas]) {
 pub fn localise_files(
     files: &[PathBuf],
     array: &MicArray,
+    channels: Option<&[usize]>,
     config: &SslConfig,
 ) -> Result<Vec<FileDoas>> {
     let bar = crate::progress(files.len() as u64, "localising");
@@ -199,7 +241,7 @@ pub fn localise_files(
         .par_iter()
         .map_init(Scratch::default, |scratch, f| {
             let t0 = std::time::Instant::now();
-            let audio = ssl::read_wav(f)?;
+            let audio = read_recording(f, channels)?;
             let loc = {
                 let mut c = cache.lock().expect("no panics while locked");
                 match c.iter().find(|l| l.sample_rate() == audio.sample_rate()) {
@@ -222,6 +264,7 @@ pub fn localise_files(
             };
             let row = loc
                 .locate_row_with_scratch(&audio, scratch)
+                .map_err(|e| with_channel_hint(e, channels))
                 .with_context(|| format!("localising {}", f.display()))?;
             let faulty_channels = FaultyChannel::of(&row, array.len());
             let Located {
@@ -462,7 +505,7 @@ impl Survey {
         let (doas_deg, doa_source) = if let Some(given) = doas {
             given
         } else if let (Some(rec), Some(timed)) = (&inputs.recording, &timed) {
-            let audio = ssl::read_wav(rec)?;
+            let audio = read_recording(rec, settings.channels.as_deref())?;
             let times: Vec<f64> = timed.iter().map(|p| p.0).collect();
             let windows = cut_windows(&audio, &times, inputs.window_s).with_context(|| {
                 format!(
@@ -515,7 +558,12 @@ impl Survey {
                 poses.len(),
                 pose_path.display()
             );
-            let rows = localise_files(&files, &settings.mic_array()?, &settings.ssl)?;
+            let rows = localise_files(
+                &files,
+                &settings.mic_array()?,
+                settings.channels.as_deref(),
+                &settings.ssl,
+            )?;
             warn_faulty_channels(&rows);
             cut = Some(rows.iter().map(|r| r.cut).collect());
             (

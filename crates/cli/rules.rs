@@ -348,6 +348,7 @@ pub fn census(stops: &[Stop], config: &SslConfig, tol_deg: f64) -> RuleCensus {
 pub fn run_census(
     files: &[PathBuf],
     array: &MicArray,
+    channels: Option<&[usize]>,
     config: &SslConfig,
     rows: &[FileDoas],
     poses: &[Pose],
@@ -370,12 +371,12 @@ pub fn run_census(
     let azimuths =
         |r: &FileDoas| -> Vec<f64> { r.doas.iter().map(|d| fold(d.azimuth_deg)).collect() };
     // N raised with every rule on, then each rule off in turn, then all of them off.
-    let wide = localise_files(files, array, &without(config, &[]))?;
+    let wide = localise_files(files, array, channels, &without(config, &[]))?;
     let released = Rule::ALL
         .iter()
-        .map(|&rule| localise_files(files, array, &without(config, &[rule])))
+        .map(|&rule| localise_files(files, array, channels, &without(config, &[rule])))
         .collect::<Result<Vec<_>>>()?;
-    let peaks = localise_files(files, array, &without(config, &Rule::ALL))?;
+    let peaks = localise_files(files, array, channels, &without(config, &Rule::ALL))?;
     let stops: Vec<Stop> = (0..rows.len())
         .map(|k| {
             let pose = &poses[k];

@@ -1,8 +1,9 @@
 //! One settings value for the whole pipeline, read the same way by every command.
 //!
 //! A settings file is TOML with an `[ssl]` table (the fields of [`ssl::SslConfig`]), an
-//! `[iasm]` table (the fields of [`asm::IasmConfig`]) and an optional top-level `array`
-//! (a preset name or an array file); every key is optional and defaults as documented on
+//! `[iasm]` table (the fields of [`asm::IasmConfig`]), an optional top-level `array`
+//! (a preset name or an array file) and `channels` (which channels of each file are the
+//! array's microphones, [`Settings::channels`]); every key is optional and defaults as documented on
 //! those types. Flags given on the command line override the file, and only flags that
 //! were given do: a flag's absence never overwrites a value from the file.
 //!
@@ -46,6 +47,12 @@ pub const DATASET_ARRAY_FILES: [&str; 2] = ["array.toml", "array.json"];
 pub struct Settings {
     /// The microphone array: a preset name or a TOML/JSON array file. Default: `iasm6`.
     pub array: Option<String>,
+    /// The channels of each recording that are the array's microphones, in the array's
+    /// order, counted from 1 as a file's channels are (`channels = [2, 3, 4, 5]`,
+    /// `--channels 2-5`): for files that hold other channels too, as a ReSpeaker's
+    /// firmware records its processed beam and its playback beside the microphones.
+    /// Default: every channel, in the file's order.
+    pub channels: Option<Vec<usize>>,
     /// The SSL front end.
     pub ssl: SslConfig,
     /// The mapper.
@@ -165,6 +172,17 @@ impl Settings {
     /// # Errors
     /// The first value refused.
     pub fn validate(&self) -> Result<()> {
+        if let Some(c) = &self.channels {
+            if c.is_empty() || c.contains(&0) {
+                bail!("channels must list the microphones' channels, counted from 1 (got {c:?})");
+            }
+            if let Some(d) = c
+                .iter()
+                .find(|&&x| c.iter().filter(|&&y| y == x).count() > 1)
+            {
+                bail!("channels lists channel {d} twice: each microphone is one channel");
+            }
+        }
         self.ssl.validate().context("[ssl]")?;
         self.iasm.validate().context("[iasm]")?;
         Ok(())

@@ -57,7 +57,7 @@ pub fn run(args: &SslArgs) -> Result<Outcome> {
         eprintln!("{note}");
     }
     let Some(dir) = &args.dataset else {
-        let rows = localise_files(&args.files, &array, &config)?;
+        let rows = localise_files(&args.files, &array, settings.channels.as_deref(), &config)?;
         crate::pipeline::warn_faulty_channels(&rows);
         print_rows(&rows, &config, &array, args.json)?;
         return Ok(Outcome::Success);
@@ -70,7 +70,7 @@ pub fn run(args: &SslArgs) -> Result<Outcome> {
         dir.join("audio").display()
     );
     let t0 = Instant::now();
-    let rows = localise_files(&ds.audio, &array, &config)?;
+    let rows = localise_files(&ds.audio, &array, settings.channels.as_deref(), &config)?;
     let elapsed = t0.elapsed().as_secs_f64();
     crate::pipeline::warn_faulty_channels(&rows);
     eprintln!(
@@ -139,6 +139,7 @@ pub fn run(args: &SslArgs) -> Result<Outcome> {
         Some(run_census(
             &ds.audio,
             &array,
+            settings.channels.as_deref(),
             &config,
             &rows,
             &poses,

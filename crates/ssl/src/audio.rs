@@ -72,6 +72,30 @@ impl Audio {
     pub fn duration(&self) -> f64 {
         self.num_samples() as f64 / f64::from(self.sample_rate)
     }
+
+    /// The channels `channels` of this audio (indices from 0), in that order: the channels
+    /// of a recording that are an array's microphones, when the file holds others too (a
+    /// ReSpeaker's firmware records its processed beam and the playback beside the
+    /// microphones).
+    ///
+    /// # Errors
+    /// [`Error::NoSuchChannel`] for an index beyond the audio's channels;
+    /// [`Error::RaggedAudio`] for no index at all.
+    pub fn select(&self, channels: &[usize]) -> Result<Audio> {
+        if channels.is_empty() {
+            return Err(Error::RaggedAudio);
+        }
+        if let Some(&c) = channels.iter().find(|&&c| c >= self.num_channels()) {
+            return Err(Error::NoSuchChannel {
+                channel: c + 1,
+                channels: self.num_channels(),
+            });
+        }
+        Ok(Self {
+            sample_rate: self.sample_rate,
+            channels: channels.iter().map(|&c| self.channels[c].clone()).collect(),
+        })
+    }
 }
 
 /// Reads a WAV file: 8/16/24/32-bit integer PCM or 32-bit float, any sample rate, any
@@ -395,5 +419,21 @@ mod tests {
             Err(Error::RaggedAudio)
         ));
         assert!(matches!(Audio::new(8000, vec![]), Err(Error::RaggedAudio)));
+    }
+
+    #[test]
+    fn channels_are_selected_in_the_order_asked() {
+        let a = Audio::new(8000, vec![vec![1.0; 2], vec![2.0; 2], vec![3.0; 2]]).unwrap();
+        let b = a.select(&[2, 0]).unwrap();
+        assert_eq!(b.channels(), &[vec![3.0; 2], vec![1.0; 2]]);
+        assert_eq!(b.sample_rate(), 8000);
+        assert!(matches!(
+            a.select(&[0, 3]),
+            Err(Error::NoSuchChannel {
+                channel: 4,
+                channels: 3
+            })
+        ));
+        assert!(matches!(a.select(&[]), Err(Error::RaggedAudio)));
     }
 }

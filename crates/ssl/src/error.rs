@@ -241,6 +241,14 @@ pub enum Error {
         /// Channels in the audio.
         got: usize,
     },
+    /// A channel asked for ([`crate::Audio::select`]) that the audio does not have.
+    #[error("channel {channel} asked for, but the audio has {channels} channels")]
+    NoSuchChannel {
+        /// The channel asked for (from 1).
+        channel: usize,
+        /// Channels in the audio.
+        channels: usize,
+    },
     /// The audio is shorter than one STFT frame.
     #[error("audio of {samples} samples per channel is shorter than one {frame_len}-sample frame")]
     TooShort {
