@@ -185,29 +185,42 @@ fn a_recording_shorter_than_a_frame_is_a_clear_error() {
     );
 }
 
-#[test]
-fn an_array_file_with_one_microphone_is_a_clear_error() {
+/// `iasm ssl` of a recording with the array file `name` holding `text` fails with a clear
+/// error that names `needles`.
+fn assert_array_file_refused(name: &str, text: &str, needles: &[&str]) {
     let dir = tempdir();
     let wav = path(&dir, "x.wav");
     write_wav(&wav, &plane_wave_recording(&iasm6(), &[10.0], SEED), FS);
-    let arr = path(&dir, "mono.toml");
-    std::fs::write(&arr, "positions = [[0.0, 0.0, 0.0]]\n").unwrap();
-    assert_clear_error(
-        &iasm(&["ssl", arg(&wav), "--array", arg(&arr)]),
+    let arr = path(&dir, name);
+    std::fs::write(&arr, text).unwrap();
+    assert_clear_error(&iasm(&["ssl", arg(&wav), "--array", arg(&arr)]), needles);
+}
+
+#[test]
+fn an_array_file_with_one_microphone_is_a_clear_error() {
+    assert_array_file_refused(
+        "mono.toml",
+        "positions = [[0.0, 0.0, 0.0]]\n",
         &["mono.toml", "at least two microphones"],
     );
 }
 
 #[test]
 fn an_array_file_with_duplicate_positions_is_a_clear_error() {
-    let dir = tempdir();
-    let wav = path(&dir, "x.wav");
-    write_wav(&wav, &plane_wave_recording(&iasm6(), &[10.0], SEED), FS);
-    let arr = path(&dir, "dup.json");
-    std::fs::write(&arr, r#"{"positions": [[0,0,0],[0.1,0,0],[0.1,0,0]]}"#).unwrap();
-    assert_clear_error(
-        &iasm(&["ssl", arg(&wav), "--array", arg(&arr)]),
+    assert_array_file_refused(
+        "dup.json",
+        r#"{"positions": [[0,0,0],[0.1,0,0],[0.1,0,0]]}"#,
         &["dup.json", "microphones 1 and 2"],
+    );
+}
+
+/// The ReSpeaker 4-mic's positions written in millimetres: 64 m across, refused by name.
+#[test]
+fn an_array_file_in_millimetres_is_a_clear_error() {
+    assert_array_file_refused(
+        "mm.toml",
+        "positions = [[-32.0, 0.0, 0.0], [0.0, -32.0, 0.0], [32.0, 0.0, 0.0], [0.0, 32.0, 0.0]]\n",
+        &["mm.toml", "64.000 m", "millimetres"],
     );
 }
 

@@ -34,6 +34,14 @@ const LINEAR_TOL: f64 = 0.01;
 /// aperture hears no azimuth (a vertical line, or a stack): refused.
 const MIN_HORIZONTAL_SPAN: f64 = 0.1;
 
+/// An array wider than this (m) is refused. Why: the localizer models each source as one
+/// plane wave across the array, which holds for sources beyond the far-field distance
+/// `2 D² f / c` (2.6 m for the paper's 0.235-m array at 8 kHz); a 2-m array's is 190 m,
+/// beyond any room. The arrays robots carry are a few centimetres to a few decimetres
+/// across, and a file of positions in millimetres or centimetres read as metres (a
+/// 6.4-cm ReSpeaker 64 or 6.4 m wide) gave DoAs of nothing, silently.
+pub const MAX_APERTURE_M: f64 = 2.0;
+
 /// A microphone array: its name and the microphone positions (m) in the array frame.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct MicArray {
@@ -53,8 +61,10 @@ impl MicArray {
     ///
     /// # Errors
     /// [`ArrayError`] if there are fewer than two microphones, a coordinate is not finite,
-    /// two microphones are within 0.1 mm of each other, or the microphones, seen from
-    /// above, span less than a tenth of the aperture (a vertical line hears no azimuth).
+    /// two microphones are within 0.1 mm of each other, the array is wider than
+    /// [`MAX_APERTURE_M`] (positions in millimetres or centimetres read as metres), or the
+    /// microphones, seen from above, span less than a tenth of the aperture (a vertical
+    /// line hears no azimuth).
     pub fn new(name: impl Into<String>, positions: Vec<[f64; 3]>) -> Result<Self, ArrayError> {
         if positions.len() < 2 {
             return Err(ArrayError::TooFewMics(positions.len()));
@@ -76,9 +86,14 @@ impl MicArray {
             name: name.into(),
             positions,
         };
+        let aperture = array.aperture();
+        if aperture > MAX_APERTURE_M {
+            return Err(ArrayError::TooLarge {
+                aperture_m: aperture,
+            });
+        }
         let flat: Vec<[f64; 3]> = array.positions.iter().map(|p| [p[0], p[1], 0.0]).collect();
         let horizontal = span(&flat);
-        let aperture = array.aperture();
         if horizontal < MIN_HORIZONTAL_SPAN * aperture {
             return Err(ArrayError::NoAzimuth {
                 horizontal_m: horizontal,
@@ -317,6 +332,30 @@ mod tests {
         assert_eq!(a.len(), 6);
         assert_eq!(a.pairs().len(), 15);
         assert!((a.aperture() - 0.2113).abs() < 1e-3, "{}", a.aperture());
+    }
+
+    #[test]
+    fn an_array_in_millimetres_read_as_metres_is_refused() {
+        // The ReSpeaker 4-mic's positions in millimetres: 64 m across.
+        let mm = vec![
+            [-32.0, 0.0, 0.0],
+            [0.0, -32.0, 0.0],
+            [32.0, 0.0, 0.0],
+            [0.0, 32.0, 0.0],
+        ];
+        let e = MicArray::new("mm", mm).unwrap_err();
+        assert!(
+            matches!(e, ArrayError::TooLarge { aperture_m } if (aperture_m - 64.0).abs() < 1e-9)
+        );
+        assert!(e.to_string().contains("millimetres"), "{e}");
+        // A large robot's array, 1.9 m across, is taken.
+        assert!(
+            MicArray::new(
+                "wide",
+                vec![[0.0, 0.0, 0.0], [1.9, 0.0, 0.0], [0.0, 0.5, 0.0]]
+            )
+            .is_ok()
+        );
     }
 
     #[test]

@@ -127,6 +127,15 @@ pub enum ArrayError {
         /// Zero-based index of the second.
         b: usize,
     },
+    /// The array is wider than [`crate::array::MAX_APERTURE_M`].
+    #[error(
+        "the microphones span {aperture_m:.3} m: positions are in metres, and the arrays a robot carries are centimetres to decimetres across (positions in millimetres or centimetres read as metres make a 6.4-cm array 64 or 6.4 m wide); DoAs from one plane wave per source need an array of at most {max} m",
+        max = crate::array::MAX_APERTURE_M
+    )]
+    TooLarge {
+        /// The largest distance between two microphones (m).
+        aperture_m: f64,
+    },
     /// Seen from above, the microphones span too little of the aperture to hear azimuth
     /// (a vertical line or stack).
     #[error(

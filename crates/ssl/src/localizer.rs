@@ -433,9 +433,13 @@ impl Localizer {
         let positions = keep.iter().map(|&i| self.array.positions()[i]).collect();
         let without: Vec<String> = (0..self.array.len())
             .filter(|i| !keep.contains(i))
-            .map(|i| i.to_string())
+            .map(|i| (i + 1).to_string())
             .collect();
-        let name = format!("{} without {}", self.array.name(), without.join(", "));
+        let name = format!(
+            "{} without channel {}",
+            self.array.name(),
+            without.join(", ")
+        );
         let config = SslConfig {
             deflate: Some(self.deflate),
             screen_channels: false,
