@@ -5,12 +5,13 @@
 //!
 //! A [`Localizer`] is built once per array, sample rate and [`SslConfig`]: it plans the STFT
 //! ([`stft`]), the direction grid and every microphone pair's delay tables ([`grid`]).
-//! [`Localizer::locate`] then transforms the audio, computes one angular spectrum per block
-//! of frames with the chosen [`Method`] (see [`method`]), pools the blocks (by their mean
-//! where the recording's sound is steady and noise-like, by their max elsewhere:
-//! [`steady`], [`Pooling::Auto`]), and returns the strongest peaks of the pooled spectrum
-//! as [`Doa`]s, each max-pooled one placed where the mean of the blocks that heard it best
-//! peaks ([`SslConfig::placement_share`]). On a compact array
+//! [`Localizer::locate`] then transforms the audio, leaves out any channel that does not
+//! hear the room (a dead or disconnected microphone: [`channels`]), computes one angular
+//! spectrum per block of frames with the chosen [`Method`] (see [`method`]), pools the
+//! blocks (by their mean where the recording's sound is steady and noise-like, by their
+//! max elsewhere: [`steady`], [`Pooling::Auto`]), and returns the strongest peaks of the
+//! pooled spectrum as [`Doa`]s, each max-pooled one placed where the mean of the blocks
+//! that heard it best peaks ([`SslConfig::placement_share`]). On a compact array
 //! (a ReSpeaker), each weaker DoA of a row is then refined with the stronger ones
 //! projected out ([`deflate`], [`SslConfig::deflates`]).
 //!

@@ -503,7 +503,9 @@ impl Localizer {
         &*self.estimator
     }
 
-    /// The pooled angular spectrum of `audio`.
+    /// The pooled angular spectrum of `audio`, from every channel: the screen of faulty
+    /// channels ([`SslConfig::screen_channels`]) is [`Localizer::locate`]'s; a caller can
+    /// run [`crate::channels::faults`] on the STFT and [`Audio::select`] the others.
     ///
     /// # Errors
     /// [`Error::ChannelMismatch`], [`Error::SampleRateMismatch`] or [`Error::TooShort`].
