@@ -194,7 +194,7 @@ pub struct CompareArgs {
 #[derive(Debug, Clone, Default, Args)]
 pub struct SettingsArgs {
     /// A settings file (TOML): `[ssl]` (the `ssl::SslConfig` fields), `[iasm]` (the
-    /// `asm::IasmConfig` fields) and `array`. Flags given here override it.
+    /// `asm::IasmConfig` fields), `array` and `channels`. Flags given here override it.
     #[arg(long, value_name = "FILE")]
     pub config: Option<PathBuf>,
     /// Microphone array: a preset (iasm6, respeaker4, respeaker6, uma8) or a TOML/JSON
