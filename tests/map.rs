@@ -467,6 +467,7 @@ fn channels_pick_the_microphones_out_of_a_wider_file() {
     assert_eq!(w["sources"], v["sources"]);
     // `iasm watch` picks them too.
     let watch = ["watch", arg(&root), "--replay", "--num", "2"];
+    assert_clear_error(&iasm(&watch), &["sub1.wav", "7 channels", "--channels"]);
     let o = iasm(&[&watch[..], &["--channels", "2-7"]].concat());
     assert!(o.status.success(), "{}", show(&o));
     let out = String::from_utf8_lossy(&o.stdout);
@@ -846,22 +847,32 @@ fn a_continuous_recording_cut_at_the_pose_times_maps_like_one_file_per_stop() {
         "2",
         "--json",
     ]));
-    let o = iasm(&[
+    let room = root.join("map/room.yaml");
+    let from_recording = [
         "map",
         "--map",
-        arg(&root.join("map/room.yaml")),
+        arg(&room),
         "--poses",
         arg(&timed),
-        "--truth",
-        arg(&root.join("src_gt.txt")),
         "--recording",
         arg(&long),
-        "--window",
-        &window,
-        "--num",
-        "2",
-        "--json",
-    ]);
+    ];
+    let truth = root.join("src_gt.txt");
+    let o = iasm(
+        &[
+            &from_recording[..],
+            &[
+                "--truth",
+                arg(&truth),
+                "--window",
+                &window,
+                "--num",
+                "2",
+                "--json",
+            ],
+        ]
+        .concat(),
+    );
     let continuous = json(&o);
     assert_eq!(
         continuous["sources"].as_array().unwrap().len(),
@@ -872,18 +883,14 @@ fn a_continuous_recording_cut_at_the_pose_times_maps_like_one_file_per_stop() {
     // A pose whose time lies past the recording's end is named.
     let late = std::fs::read_to_string(&timed).unwrap() + "999,1,0,0\n";
     std::fs::write(&timed, late).unwrap();
-    let o = iasm(&[
-        "map",
-        "--map",
-        arg(&root.join("map/room.yaml")),
-        "--poses",
-        arg(&timed),
-        "--recording",
-        arg(&long),
-        "--num",
-        "2",
-    ]);
+    let o = iasm(&[&from_recording[..], &["--num", "2"]].concat());
     assert_clear_error(&o, &["long.wav", "pose 21", "999 s"]);
+    // Six channels for a four-microphone array: refused with the hint to pick them.
+    let o = iasm(&[&from_recording[..], &["--array", "respeaker4"]].concat());
+    assert_clear_error(
+        &o,
+        &["long.wav", "6 channels", "4 microphones", "--channels"],
+    );
 }
 
 /// Where nothing sounds, the map is empty. Every recording of a drive holds independent

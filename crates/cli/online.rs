@@ -142,7 +142,9 @@ impl Session {
                 self.localizers.len() - 1
             }
         };
-        Ok(self.localizers[i].locate_row_with_scratch(audio, &mut self.scratch)?)
+        self.localizers[i]
+            .locate_row_with_scratch(audio, &mut self.scratch)
+            .map_err(|e| crate::pipeline::with_channel_hint(e, self.channels.as_deref()))
     }
 
     /// Localises `audio` (the recording `name`, heard at `pose`) and adds it as the next

@@ -211,7 +211,7 @@ pub fn pick_channels(audio: &Audio, channels: &[usize]) -> Result<Audio> {
 
 /// `e`, with a hint when the file holds more channels than the array has microphones and
 /// no channels were picked (`--channels`).
-fn with_channel_hint(e: ssl::Error, channels: Option<&[usize]>) -> anyhow::Error {
+pub(crate) fn with_channel_hint(e: ssl::Error, channels: Option<&[usize]>) -> anyhow::Error {
     match e {
         ssl::Error::ChannelMismatch { expected, got } if got > expected && channels.is_none() => {
             anyhow::anyhow!(
@@ -506,6 +506,15 @@ impl Survey {
             given
         } else if let (Some(rec), Some(timed)) = (&inputs.recording, &timed) {
             let audio = read_recording(rec, settings.channels.as_deref())?;
+            let array = settings.mic_array()?;
+            if audio.num_channels() != array.len() {
+                let e = ssl::Error::ChannelMismatch {
+                    expected: array.len(),
+                    got: audio.num_channels(),
+                };
+                return Err(with_channel_hint(e, settings.channels.as_deref()))
+                    .with_context(|| format!("localising {}", rec.display()));
+            }
             let times: Vec<f64> = timed.iter().map(|p| p.0).collect();
             let windows = cut_windows(&audio, &times, inputs.window_s).with_context(|| {
                 format!(
@@ -514,7 +523,6 @@ impl Survey {
                     pose_path.display()
                 )
             })?;
-            let array = settings.mic_array()?;
             let rows = localise_audio(&windows, &array, &settings.ssl)
                 .with_context(|| format!("localising {}", rec.display()))?;
             let names: Vec<String> = (1..=rows.len()).map(|k| format!("window {k}")).collect();
