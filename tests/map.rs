@@ -404,6 +404,15 @@ fn a_dead_microphone_is_named_and_left_out() {
     let v = json(&out);
     assert_eq!(v["sources"].as_array().unwrap().len(), 2, "{v}");
     assert!(v["ospa"]["total"].as_f64().unwrap() < 0.2, "{v}");
+    // The table marks the rows localised without it.
+    let table = iasm(&["ssl", "--dataset", arg(&root), "--num", "2"]);
+    let table = String::from_utf8_lossy(&table.stdout);
+    let marked: Vec<&str> = table
+        .lines()
+        .filter(|l| l.ends_with("(channel 4 left out)"))
+        .collect();
+    assert_eq!(marked.len(), 5, "{table}");
+    assert!(marked[0].contains("sub1.wav"), "{table}");
     let rows = json(&mvdr_n2(&root, "ssl"));
     let files = rows["files"].as_array().unwrap();
     for (k, f) in files.iter().enumerate() {

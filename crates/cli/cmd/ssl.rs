@@ -380,7 +380,8 @@ fn print_rows(rows: &[FileDoas], config: &SslConfig, array: &MicArray, json: boo
         writeln!(out, "{}", serde_json::to_string_pretty(&r)?)?;
         return Ok(());
     }
-    // The extra DoAs of a cut row (`ssl::Located::extra`) follow its N, marked `+`.
+    // The extra DoAs of a cut row (`ssl::Located::extra`) follow its N, marked `+`; a row
+    // localised without a faulty channel says so at its end.
     for r in rows {
         let cell = |mark: &str, d: &ssl::Doa| {
             let az = format!("{mark}{:.1}", d.azimuth_deg);
@@ -389,7 +390,20 @@ fn print_rows(rows: &[FileDoas], config: &SslConfig, array: &MicArray, json: boo
         let cells: Vec<String> = (r.doas.iter().map(|d| cell("", d)))
             .chain(r.extra.iter().map(|d| cell("+", d)))
             .collect();
-        writeln!(out, "{}\t{}", r.file.display(), cells.join("  "))?;
+        let faulty: Vec<String> = r
+            .faulty_channels
+            .iter()
+            .map(|f| {
+                let how = if f.left_out { "left out" } else { "kept" };
+                format!("channel {} {how}", f.channel)
+            })
+            .collect();
+        let note = if faulty.is_empty() {
+            String::new()
+        } else {
+            format!("  ({})", faulty.join(", "))
+        };
+        writeln!(out, "{}\t{}{note}", r.file.display(), cells.join("  "))?;
     }
     Ok(())
 }
