@@ -889,17 +889,17 @@ fn a_continuous_recording_cut_at_the_pose_times_maps_like_one_file_per_stop() {
         "{continuous}"
     );
     assert_eq!(continuous["sources"], per_stop["sources"]);
-    // A pose whose time lies past the recording's end is named.
-    let late = std::fs::read_to_string(&timed).unwrap() + "999,1,0,0\n";
-    std::fs::write(&timed, late).unwrap();
-    let o = iasm(&[&from_recording[..], &["--num", "2"]].concat());
-    assert_clear_error(&o, &["long.wav", "pose 21", "999 s"]);
     // Six channels for a four-microphone array: refused with the hint to pick them.
     let o = iasm(&[&from_recording[..], &["--array", "respeaker4"]].concat());
     assert_clear_error(
         &o,
         &["long.wav", "6 channels", "4 microphones", "--channels"],
     );
+    // A pose whose time lies past the recording's end is named.
+    let late = std::fs::read_to_string(&timed).unwrap() + "999,1,0,0\n";
+    std::fs::write(&timed, late).unwrap();
+    let o = iasm(&[&from_recording[..], &["--num", "2"]].concat());
+    assert_clear_error(&o, &["long.wav", "pose 21", "999 s"]);
 }
 
 /// Where nothing sounds, the map is empty. Every recording of a drive holds independent

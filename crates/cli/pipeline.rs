@@ -330,13 +330,16 @@ pub fn cut_windows(audio: &Audio, times: &[f64], window_s: f64) -> Result<Vec<Au
         .collect()
 }
 
-/// The DoAs of each of `windows` (in order, in parallel), with one localizer.
+/// The DoAs of each of `windows` (in order, in parallel), with one localizer; `channels`
+/// are the ones picked from the recording (`None`: every channel), for the hint that a
+/// channel count the array does not match gets, as in [`localise_files`].
 ///
 /// # Errors
 /// A window the array or the SSL settings cannot take.
 pub fn localise_audio(
     windows: &[Audio],
     array: &MicArray,
+    channels: Option<&[usize]>,
     config: &SslConfig,
 ) -> Result<Vec<Located>> {
     let Some(first) = windows.first() else {
@@ -349,6 +352,7 @@ pub fn localise_audio(
         .enumerate()
         .map_init(Scratch::default, |scratch, (k, w)| {
             loc.locate_row_with_scratch(w, scratch)
+                .map_err(|e| with_channel_hint(e, channels))
                 .with_context(|| format!("window {}", k + 1))
         })
         .collect()
@@ -507,14 +511,6 @@ impl Survey {
         } else if let (Some(rec), Some(timed)) = (&inputs.recording, &timed) {
             let audio = read_recording(rec, settings.channels.as_deref())?;
             let array = settings.mic_array()?;
-            if audio.num_channels() != array.len() {
-                let e = ssl::Error::ChannelMismatch {
-                    expected: array.len(),
-                    got: audio.num_channels(),
-                };
-                return Err(with_channel_hint(e, settings.channels.as_deref()))
-                    .with_context(|| format!("localising {}", rec.display()));
-            }
             let times: Vec<f64> = timed.iter().map(|p| p.0).collect();
             let windows = cut_windows(&audio, &times, inputs.window_s).with_context(|| {
                 format!(
@@ -523,8 +519,13 @@ impl Survey {
                     pose_path.display()
                 )
             })?;
-            let rows = localise_audio(&windows, &array, &settings.ssl)
-                .with_context(|| format!("localising {}", rec.display()))?;
+            let rows = localise_audio(
+                &windows,
+                &array,
+                settings.channels.as_deref(),
+                &settings.ssl,
+            )
+            .with_context(|| format!("localising {}", rec.display()))?;
             let names: Vec<String> = (1..=rows.len()).map(|k| format!("window {k}")).collect();
             let faults: Vec<Vec<FaultyChannel>> = rows
                 .iter()
