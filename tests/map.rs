@@ -706,12 +706,7 @@ fn a_doa_table_wider_than_n_maps_its_first_n_columns() {
         show(&o)
     );
     let v = json(&o);
-    let found: Vec<[f64; 2]> = v["sources"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|s| [s["x"].as_f64().unwrap(), s["y"].as_f64().unwrap()])
-        .collect();
+    let found = sources_of(&v);
     assert_eq!(found.len(), 2, "{v}");
     for t in &TRUTH[..2] {
         assert!(

@@ -1,5 +1,6 @@
 //! The application's integration tests: one binary (ripgrep's layout).
 
+mod bag;
 mod cli;
 mod compare;
 mod map;

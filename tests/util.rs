@@ -92,6 +92,16 @@ pub fn show(o: &Output) -> String {
     )
 }
 
+/// The positions of the sources a map's JSON (`iasm map --json`) holds.
+pub fn sources_of(map: &serde_json::Value) -> Vec<[f64; 2]> {
+    map["sources"]
+        .as_array()
+        .expect("a sources array")
+        .iter()
+        .map(|s| [s["x"].as_f64().unwrap(), s["y"].as_f64().unwrap()])
+        .collect()
+}
+
 /// The JSON a successful command printed.
 pub fn json(o: &Output) -> serde_json::Value {
     assert!(o.status.success(), "{}", show(o));

@@ -85,6 +85,79 @@ pub enum Command {
     /// appear, localise each new recording and update the map stop by stop; or replay a
     /// finished data set as if recorded live (--replay) and write the OSPA-per-stop curve.
     Watch(WatchArgs),
+    /// A robot run recorded in a ROS 1 bag made a data set: the stops at which it stood
+    /// still, one WAV and one pose each, in the published layout for ssl, map and eval;
+    /// without --out, what the bag holds and the stops it finds.
+    Bag(BagArgs),
+}
+
+/// `iasm bag`.
+#[derive(Debug, Clone, Args)]
+pub struct BagArgs {
+    /// The bag (ROS 1, format 2.0; chunks uncompressed, bz2 or lz4).
+    pub bag: PathBuf,
+    /// The data set folder to write: audio/ (a WAV per stop), pose/poses.csv, stops.csv
+    /// (each stop's times in the bag), array.toml (with --array). Without it, nothing is
+    /// written.
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Replace the --out folder even if it is not empty and not an earlier output of iasm.
+    #[arg(long)]
+    pub force: bool,
+    /// The audio topic (audio_common_msgs/AudioData or AudioDataStamped) [default: the
+    /// bag's one audio topic].
+    #[arg(long, value_name = "TOPIC")]
+    pub audio_topic: Option<String>,
+    /// The topic of the poses to map in (nav_msgs/Odometry, geometry_msgs/PoseStamped,
+    /// PoseWithCovarianceStamped or Pose2D) [default: the bag's one pose topic, or, beside
+    /// odometry, the one other: a localiser's, in the map's frame].
+    #[arg(long, value_name = "TOPIC")]
+    pub pose_topic: Option<String>,
+    /// The odometry topic to find the stops by, when the pose topic is a localiser's that
+    /// publishes only as the robot moves [default: the bag's one nav_msgs/Odometry topic
+    /// beside a pose topic of another type]; "none" finds them by the pose topic.
+    #[arg(long, value_name = "TOPIC")]
+    pub odom_topic: Option<String>,
+    /// The audio's channels, when the bag has no audio_common_msgs/AudioInfo (give
+    /// --sample-rate too).
+    #[arg(long, value_name = "C", requires = "sample_rate")]
+    pub audio_channels: Option<u16>,
+    /// The audio's sample rate (Hz), when the bag has no AudioInfo (give --audio-channels
+    /// too).
+    #[arg(long, value_name = "HZ", requires = "audio_channels")]
+    pub sample_rate: Option<u32>,
+    /// The audio's sample format with --audio-channels: U8, S16LE, S24LE, S32LE, F32LE or
+    /// F64LE.
+    #[arg(
+        long,
+        value_name = "FORMAT",
+        default_value = "S16LE",
+        requires = "audio_channels"
+    )]
+    pub sample_format: String,
+    /// The microphones that recorded the audio (a preset or an array file), written to
+    /// array.toml so that every command on the data set uses them.
+    #[arg(long)]
+    pub array: Option<String>,
+    /// Which channels of the audio are the array's microphones, in its order, counted from
+    /// 1 (`2-5`); the WAVs hold those [default: every channel].
+    #[arg(long, value_name = "LIST", value_parser = parse_channels)]
+    pub channels: Option<ChannelList>,
+    /// How far the robot may move within a stop (m).
+    #[arg(long, value_name = "M", default_value_t = bag::StopOptions::default().radius_m)]
+    pub still_radius: f64,
+    /// How far it may turn within a stop (degrees).
+    #[arg(long, value_name = "DEG", default_value_t = bag::StopOptions::default().turn_deg)]
+    pub still_turn: f64,
+    /// Left out at the start of each stop, as the robot settles (s).
+    #[arg(long, value_name = "S", default_value_t = bag::StopOptions::default().settle_s)]
+    pub settle: f64,
+    /// Left out at the end of each stop, as the motors start (s).
+    #[arg(long, value_name = "S", default_value_t = bag::StopOptions::default().end_margin_s)]
+    pub end_margin: f64,
+    /// The shortest stop kept (s of audio after the margins).
+    #[arg(long, value_name = "S", default_value_t = bag::StopOptions::default().min_listen_s)]
+    pub min_listen: f64,
 }
 
 /// `iasm watch`.

@@ -626,6 +626,24 @@ impl Dataset {
     }
 }
 
+/// An array file (`ssl::MicArray::from_file`) for a data set's `array.toml`: the array's
+/// name and its microphones' positions in channel order, serialised by `toml` (which quotes
+/// the name and writes each coordinate so that it reads back exactly).
+///
+/// # Errors
+/// If `toml` cannot serialise them.
+pub fn array_file_toml(name: &str, positions: &[[f64; 3]]) -> Result<String> {
+    #[derive(serde::Serialize)]
+    struct ArrayFile<'a> {
+        name: &'a str,
+        positions: &'a [[f64; 3]],
+    }
+    Ok(format!(
+        "# The microphones that recorded audio/ (m, array frame: x the robot's heading, z up),\n# channel order. iasm reads this file when no --array or settings file names an array.\n{}",
+        toml::to_string(&ArrayFile { name, positions }).context("writing array.toml")?
+    ))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -23,6 +23,7 @@
 //! each; none imports another.
 
 pub mod args;
+pub mod bagset;
 pub mod cmd;
 pub mod compare;
 pub mod dataset;
@@ -89,6 +90,7 @@ pub fn run(cli: &args::Cli) -> anyhow::Result<Outcome> {
             cmd::compare::run(a)
         }
         args::Command::Watch(a) => cmd::watch::run(a),
+        args::Command::Bag(a) => cmd::bag::run(a),
     }
 }
 

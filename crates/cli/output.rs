@@ -7,7 +7,8 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 
-/// The file that marks a folder as written by `iasm simulate` (and so safe to replace).
+/// The file that marks a folder as written by `iasm simulate` or `iasm bag` (and so safe to
+/// replace).
 pub const SIMULATE_MARKER: &str = ".iasm-simulate";
 
 /// `path`'s sibling `.NAME.TAG-PID`.
@@ -71,7 +72,7 @@ pub fn replace_dir(out: &Path, force: bool, fill: impl FnOnce(&Path) -> Result<(
             .is_none();
         if !empty && !out.join(SIMULATE_MARKER).exists() && !force {
             bail!(
-                "{} is not empty and is not an earlier output of iasm simulate: give another \
+                "{} is not empty and is not an earlier output of iasm (simulate, bag): give another \
                  folder, or --force to replace it whole",
                 out.display()
             );
@@ -83,7 +84,7 @@ pub fn replace_dir(out: &Path, force: bool, fill: impl FnOnce(&Path) -> Result<(
     }
     std::fs::create_dir_all(&tmp).with_context(|| format!("creating {}", tmp.display()))?;
     let built = fill(&tmp).and_then(|()| {
-        std::fs::write(tmp.join(SIMULATE_MARKER), "written by iasm simulate\n")
+        std::fs::write(tmp.join(SIMULATE_MARKER), "written by iasm\n")
             .with_context(|| format!("writing {}", tmp.join(SIMULATE_MARKER).display()))
     });
     if let Err(e) = built {

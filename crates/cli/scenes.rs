@@ -126,7 +126,9 @@ pub fn write_dataset(scene: &PreparedScene, out: &Path) -> Result<()> {
         gt.push_str(&format!("{},{},{}\n", s.pos[0], s.pos[1], s.pos[2]));
     }
     write(&out.join("src_gt.csv"), gt.as_bytes())?;
-    write(&out.join("array.toml"), array_toml(scene)?.as_bytes())?;
+    let name = scene.scene.array.preset.as_deref().unwrap_or("scene-array");
+    let array = crate::dataset::array_file_toml(name, &scene.mics)?;
+    write(&out.join("array.toml"), array.as_bytes())?;
     let pgm = map_image(scene);
     write(&out.join("map/map.pgm"), &pgm)?;
     let yaml = format!(
@@ -134,25 +136,6 @@ pub fn write_dataset(scene: &PreparedScene, out: &Path) -> Result<()> {
         -MAP_MARGIN, -MAP_MARGIN
     );
     write(&out.join("map/map.yaml"), yaml.as_bytes())
-}
-
-/// The scene's microphones as an array file (`ssl::MicArray::from_file`), named after its
-/// preset when it has one, serialised by `toml` (which quotes the name and writes each
-/// coordinate so that it reads back exactly).
-fn array_toml(scene: &PreparedScene) -> Result<String> {
-    #[derive(serde::Serialize)]
-    struct ArrayFile<'a> {
-        name: &'a str,
-        positions: &'a [[f64; 3]],
-    }
-    let file = ArrayFile {
-        name: scene.scene.array.preset.as_deref().unwrap_or("scene-array"),
-        positions: &scene.mics,
-    };
-    Ok(format!(
-        "# The microphones that recorded audio/ (m, array frame: x the robot's heading, z up),\n# channel order. iasm reads this file when no --array or settings file names an array.\n{}",
-        toml::to_string(&file).context("writing array.toml")?
-    ))
 }
 
 fn write(path: &Path, bytes: &[u8]) -> Result<()> {

@@ -3,6 +3,7 @@
 //! [`crate::score`], [`crate::compare`], [`crate::figure`]) that parses nothing and prints its report. No
 //! command imports another.
 
+pub mod bag;
 pub mod compare;
 pub mod demo;
 pub mod eval;

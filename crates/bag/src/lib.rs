@@ -1,0 +1,32 @@
+//! A robot run out of a ROS 1 bag: its multichannel audio, its poses, and the stops at
+//! which it listened.
+//!
+//! Robots record what they hear and where they are with `rosbag record`: the audio as
+//! `audio_common_msgs/AudioData` messages (ROS's `audio_capture`), the poses as odometry
+//! and a localiser's estimates. I-ASM wants one recording and one pose per stop. This crate
+//! reads the bag once, front to back ([`mod@format`]), keeps only the messages it can use
+//! ([`msg`]), puts audio and poses on one clock ([`run`]), and finds the stretches where
+//! the robot stood still, each with its pose and its audio ([`stops`]).
+//!
+//! ```no_run
+//! let run = bag::read_file("run.bag".as_ref(), &bag::ReadOptions::default())?;
+//! for stop in run.stops(&bag::StopOptions::default())? {
+//!     println!("{:.1}-{:.1} s at ({:.2}, {:.2})", stop.listen_s.0, stop.listen_s.1, stop.pose.x, stop.pose.y);
+//! }
+//! # Ok::<(), bag::Error>(())
+//! ```
+//!
+//! ROS 2 bags (SQLite or MCAP) are not read; `rosbags-convert` turns one into a ROS 1 bag.
+
+pub mod error;
+pub mod format;
+pub mod msg;
+pub mod run;
+pub mod stops;
+
+pub use error::{Error, Result};
+pub use run::{
+    AudioFormat, AudioSegment, ReadOptions, Run, SampleFormat, TimedPose, TopicInfo, read,
+    read_file,
+};
+pub use stops::{Stop, StopOptions};

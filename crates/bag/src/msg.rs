@@ -1,0 +1,362 @@
+//! The message types a robot run's audio and poses come in, decoded from their ROS 1
+//! serialisation (little-endian; a string or a variable array is a `u32` length and its
+//! elements; a fixed array is its elements; a time is `u32` seconds and `u32` nanoseconds).
+//!
+//! Audio: `audio_common_msgs/AudioData` (`uint8[] data`: interleaved frames, as ROS's
+//! `audio_capture` publishes them), `audio_common_msgs/AudioDataStamped` (a header and
+//! one), and `audio_common_msgs/AudioInfo`, which says their channels, rate and sample
+//! format. Poses: `nav_msgs/Odometry`, `geometry_msgs/PoseStamped`,
+//! `geometry_msgs/PoseWithCovarianceStamped` (AMCL's `/amcl_pose`) and
+//! `geometry_msgs/Pose2D`. Each message must decode to its last byte, so that a type of
+//! the same name but another definition is an error, not numbers read from the wrong place.
+
+use geom::Pose;
+
+/// A message type this crate reads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    /// `audio_common_msgs/AudioData`.
+    AudioData,
+    /// `audio_common_msgs/AudioDataStamped`.
+    AudioDataStamped,
+    /// `audio_common_msgs/AudioInfo`.
+    AudioInfo,
+    /// `nav_msgs/Odometry`.
+    Odometry,
+    /// `geometry_msgs/PoseStamped`.
+    PoseStamped,
+    /// `geometry_msgs/PoseWithCovarianceStamped`.
+    PoseWithCovarianceStamped,
+    /// `geometry_msgs/Pose2D`.
+    Pose2D,
+}
+
+impl Kind {
+    /// The kind of a type name as a bag gives it (`nav_msgs/Odometry`; ROS 2's
+    /// `nav_msgs/msg/Odometry` is taken too); `None` for a type this crate does not read.
+    pub fn of(msg_type: &str) -> Option<Self> {
+        let name = msg_type.replacen("/msg/", "/", 1);
+        Some(match name.as_str() {
+            "audio_common_msgs/AudioData" => Self::AudioData,
+            "audio_common_msgs/AudioDataStamped" => Self::AudioDataStamped,
+            "audio_common_msgs/AudioInfo" => Self::AudioInfo,
+            "nav_msgs/Odometry" => Self::Odometry,
+            "geometry_msgs/PoseStamped" => Self::PoseStamped,
+            "geometry_msgs/PoseWithCovarianceStamped" => Self::PoseWithCovarianceStamped,
+            "geometry_msgs/Pose2D" => Self::Pose2D,
+            _ => return None,
+        })
+    }
+
+    /// Whether its messages are audio samples.
+    pub fn is_audio(self) -> bool {
+        matches!(self, Self::AudioData | Self::AudioDataStamped)
+    }
+
+    /// Whether its messages are poses.
+    pub fn is_pose(self) -> bool {
+        matches!(
+            self,
+            Self::Odometry | Self::PoseStamped | Self::PoseWithCovarianceStamped | Self::Pose2D
+        )
+    }
+}
+
+/// `audio_common_msgs/AudioInfo`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct AudioInfo {
+    /// Channels per frame.
+    pub channels: u8,
+    /// Frames per second.
+    pub sample_rate: u32,
+    /// The sample format (GStreamer's names: `S16LE`, `S24LE`, `S32LE`, `F32LE`, ...).
+    pub sample_format: String,
+    /// Bits per second.
+    pub bitrate: u32,
+    /// `wave` for raw PCM, or a compressed coding (`mp3`).
+    pub coding_format: String,
+}
+
+/// A pose message: the robot's pose and the time its header gives.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StampedPose {
+    /// The header's stamp (ns since the epoch); `None` for a type without a header or a
+    /// stamp of zero (a publisher that does not stamp).
+    pub stamp_ns: Option<i64>,
+    /// The pose in the plane: position, and heading as the yaw of the orientation.
+    pub pose: Pose,
+}
+
+/// Reads ROS 1 serialised fields from a message's bytes.
+struct Cursor<'a> {
+    bytes: &'a [u8],
+    at: usize,
+}
+
+impl<'a> Cursor<'a> {
+    fn new(bytes: &'a [u8]) -> Self {
+        Self { bytes, at: 0 }
+    }
+
+    fn take(&mut self, n: usize) -> Result<&'a [u8], String> {
+        let rest = self.bytes.len() - self.at;
+        if n > rest {
+            return Err(format!(
+                "ends at byte {} where {n} more bytes were to follow",
+                self.bytes.len()
+            ));
+        }
+        let out = &self.bytes[self.at..self.at + n];
+        self.at += n;
+        Ok(out)
+    }
+
+    fn u8(&mut self) -> Result<u8, String> {
+        Ok(self.take(1)?[0])
+    }
+
+    fn u32(&mut self) -> Result<u32, String> {
+        Ok(u32::from_le_bytes(
+            self.take(4)?.try_into().expect("4 bytes"),
+        ))
+    }
+
+    fn f64(&mut self) -> Result<f64, String> {
+        Ok(f64::from_le_bytes(
+            self.take(8)?.try_into().expect("8 bytes"),
+        ))
+    }
+
+    fn bytes(&mut self) -> Result<&'a [u8], String> {
+        let n = self.u32()? as usize;
+        self.take(n)
+    }
+
+    fn string(&mut self) -> Result<String, String> {
+        Ok(String::from_utf8_lossy(self.bytes()?).into_owned())
+    }
+
+    /// A `std_msgs/Header`'s stamp (seq and frame id passed over); `None` when zero.
+    fn header(&mut self) -> Result<Option<i64>, String> {
+        self.u32()?;
+        let sec = self.u32()?;
+        let nsec = self.u32()?;
+        self.bytes()?;
+        let ns = i64::from(sec) * 1_000_000_000 + i64::from(nsec);
+        Ok((ns != 0).then_some(ns))
+    }
+
+    /// A `geometry_msgs/Pose` in the plane: x, y and the orientation's yaw.
+    fn pose(&mut self) -> Result<Pose, String> {
+        let x = self.f64()?;
+        let y = self.f64()?;
+        self.f64()?;
+        let [qx, qy, qz, qw] = [self.f64()?, self.f64()?, self.f64()?, self.f64()?];
+        let norm = (qx * qx + qy * qy + qz * qz + qw * qw).sqrt();
+        if !(norm > 0.5 && norm < 1.5) {
+            return Err(format!(
+                "an orientation quaternion of norm {norm:.3} (x {qx}, y {qy}, z {qz}, w {qw}), not a rotation"
+            ));
+        }
+        let yaw = (2.0 * (qw * qz + qx * qy)).atan2(1.0 - 2.0 * (qy * qy + qz * qz));
+        Ok(Pose::new(x, y, yaw))
+    }
+
+    fn skip_f64s(&mut self, n: usize) -> Result<(), String> {
+        self.take(8 * n).map(|_| ())
+    }
+
+    fn done(self) -> Result<(), String> {
+        match self.bytes.len() - self.at {
+            0 => Ok(()),
+            n => Err(format!(
+                "{n} bytes left over after its last field: not the message definition this \
+                 type has in ROS"
+            )),
+        }
+    }
+}
+
+/// An audio message's stamp (`None` for `AudioData`, which has none, or a zero stamp) and
+/// its sample bytes.
+///
+/// # Errors
+/// Bytes that are not a message of `kind` (a text saying why).
+pub fn audio(kind: Kind, bytes: &[u8]) -> Result<(Option<i64>, &[u8]), String> {
+    let mut c = Cursor::new(bytes);
+    let stamp = match kind {
+        Kind::AudioData => None,
+        Kind::AudioDataStamped => c.header()?,
+        other => return Err(format!("{other:?} is not an audio message")),
+    };
+    let data = c.bytes()?;
+    c.done()?;
+    Ok((stamp, data))
+}
+
+/// An `AudioInfo` message.
+///
+/// # Errors
+/// Bytes that are not one.
+pub fn audio_info(bytes: &[u8]) -> Result<AudioInfo, String> {
+    let mut c = Cursor::new(bytes);
+    let info = AudioInfo {
+        channels: c.u8()?,
+        sample_rate: c.u32()?,
+        sample_format: c.string()?,
+        bitrate: c.u32()?,
+        coding_format: c.string()?,
+    };
+    c.done()?;
+    Ok(info)
+}
+
+/// A pose message of `kind`.
+///
+/// # Errors
+/// Bytes that are not a message of `kind`, or an orientation that is not a rotation.
+pub fn pose(kind: Kind, bytes: &[u8]) -> Result<StampedPose, String> {
+    let mut c = Cursor::new(bytes);
+    let (stamp_ns, pose) = match kind {
+        Kind::Odometry => {
+            let stamp = c.header()?;
+            c.bytes()?; // child_frame_id
+            let pose = c.pose()?;
+            c.skip_f64s(36 + 6 + 36)?; // covariance, twist, its covariance
+            (stamp, pose)
+        }
+        Kind::PoseStamped => {
+            let stamp = c.header()?;
+            (stamp, c.pose()?)
+        }
+        Kind::PoseWithCovarianceStamped => {
+            let stamp = c.header()?;
+            let pose = c.pose()?;
+            c.skip_f64s(36)?;
+            (stamp, pose)
+        }
+        Kind::Pose2D => {
+            let (x, y, theta) = (c.f64()?, c.f64()?, c.f64()?);
+            (None, Pose::new(x, y, theta))
+        }
+        other => return Err(format!("{other:?} is not a pose message")),
+    };
+    c.done()?;
+    if !stamp_pose_finite(&pose) {
+        return Err(format!(
+            "a pose that is not finite ({}, {}, {})",
+            pose.x, pose.y, pose.theta
+        ));
+    }
+    Ok(StampedPose { stamp_ns, pose })
+}
+
+fn stamp_pose_finite(p: &Pose) -> bool {
+    p.x.is_finite() && p.y.is_finite() && p.theta.is_finite()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn header(sec: u32, nsec: u32, frame: &str) -> Vec<u8> {
+        let mut b = 7u32.to_le_bytes().to_vec();
+        b.extend(sec.to_le_bytes());
+        b.extend(nsec.to_le_bytes());
+        b.extend((frame.len() as u32).to_le_bytes());
+        b.extend(frame.as_bytes());
+        b
+    }
+
+    fn pose_bytes(x: f64, y: f64, yaw: f64) -> Vec<u8> {
+        let q = [0.0, 0.0, (yaw / 2.0).sin(), (yaw / 2.0).cos()];
+        [x, y, 0.5]
+            .iter()
+            .chain(&q)
+            .flat_map(|v| v.to_le_bytes())
+            .collect()
+    }
+
+    #[test]
+    fn a_pose_stamped_gives_its_yaw_and_stamp() {
+        let mut b = header(12, 500_000_000, "map");
+        b.extend(pose_bytes(1.5, -2.0, 2.5));
+        let p = pose(Kind::PoseStamped, &b).unwrap();
+        assert_eq!(p.stamp_ns, Some(12_500_000_000));
+        assert_eq!((p.pose.x, p.pose.y), (1.5, -2.0));
+        approx::assert_abs_diff_eq!(p.pose.theta, 2.5, epsilon = 1e-12);
+    }
+
+    #[test]
+    fn a_yaw_beyond_pi_comes_back_wrapped() {
+        let mut b = header(1, 0, "map");
+        b.extend(pose_bytes(0.0, 0.0, 3.5));
+        let p = pose(Kind::PoseStamped, &b).unwrap();
+        approx::assert_abs_diff_eq!(
+            p.pose.theta,
+            3.5 - 2.0 * std::f64::consts::PI,
+            epsilon = 1e-12
+        );
+    }
+
+    #[test]
+    fn a_message_of_another_definition_is_refused() {
+        let mut b = header(1, 0, "map");
+        b.extend(pose_bytes(0.0, 0.0, 0.0));
+        // A PoseStamped read as a PoseWithCovarianceStamped runs out of bytes.
+        let e = pose(Kind::PoseWithCovarianceStamped, &b).unwrap_err();
+        assert!(e.contains("more bytes"), "{e}");
+        // Extra bytes after the last field are refused too.
+        b.extend([0u8; 3]);
+        let e = pose(Kind::PoseStamped, &b).unwrap_err();
+        assert!(e.contains("3 bytes left over"), "{e}");
+    }
+
+    #[test]
+    fn an_orientation_of_zeros_is_not_a_heading() {
+        let mut b = header(1, 0, "map");
+        b.extend([0.0f64; 7].iter().flat_map(|v| v.to_le_bytes()));
+        assert!(
+            pose(Kind::PoseStamped, &b)
+                .unwrap_err()
+                .contains("not a rotation")
+        );
+    }
+
+    #[test]
+    fn audio_data_and_info_decode() {
+        let mut b = 5u32.to_le_bytes().to_vec();
+        b.extend([1, 2, 3, 4, 5]);
+        assert_eq!(
+            audio(Kind::AudioData, &b).unwrap(),
+            (None, &[1u8, 2, 3, 4, 5][..])
+        );
+        let mut s = header(0, 0, "");
+        s.extend(&b);
+        assert_eq!(
+            audio(Kind::AudioDataStamped, &s).unwrap().0,
+            None,
+            "a zero stamp is none"
+        );
+        let mut i = vec![6u8];
+        i.extend(16000u32.to_le_bytes());
+        i.extend(5u32.to_le_bytes());
+        i.extend(b"S16LE");
+        i.extend(1_536_000u32.to_le_bytes());
+        i.extend(4u32.to_le_bytes());
+        i.extend(b"wave");
+        let info = audio_info(&i).unwrap();
+        assert_eq!((info.channels, info.sample_rate), (6, 16000));
+        assert_eq!(
+            (info.sample_format.as_str(), info.coding_format.as_str()),
+            ("S16LE", "wave")
+        );
+    }
+
+    #[test]
+    fn type_names_of_ros_1_and_ros_2_are_both_known() {
+        assert_eq!(Kind::of("nav_msgs/Odometry"), Some(Kind::Odometry));
+        assert_eq!(Kind::of("nav_msgs/msg/Odometry"), Some(Kind::Odometry));
+        assert_eq!(Kind::of("sensor_msgs/Image"), None);
+    }
+}

@@ -1,0 +1,699 @@
+//! A robot run out of a bag: which topics hold its audio and poses, the audio as
+//! continuous multichannel segments on the run's clock, and the poses.
+//!
+//! **Topics.** A bag holds many topics; the run needs one audio topic, its format, and a
+//! pose topic, and may use an odometry topic beside it. Each is taken from the options when
+//! named there, else chosen by type when the choice is unambiguous: the one audio topic;
+//! the `AudioInfo` topic beside it; the one pose topic, or, when odometry and one other pose
+//! topic are recorded (a localiser's `/amcl_pose` in the map's frame), that other one, with
+//! the odometry kept to find the stops ([`crate::stops`]). Anything else is an error that
+//! lists the candidates and names the option to choose with.
+//!
+//! **Time.** A message's time is its header's stamp where it has one, else the time the
+//! recorder received it. An audio message is taken to end at its time (a capture node
+//! publishes a buffer when it is full), so the stream's start is the earliest of `time -
+//! samples so far / rate` over its messages: the message that arrived with the least delay
+//! says it best. Where that start jumps by more than [`GAP_S`] (dropped messages, a paused
+//! recorder) the audio is cut into another segment, so that no sample is placed on the
+//! clock by more than that. When a topic's stamps and its receipt times disagree by more
+//! than [`CLOCK_MISMATCH_S`] (a bag recorded under simulated time, a device that stamps on
+//! its own clock), the stamps of no topic are used and [`Run::notes`] says so: audio and
+//! poses are then on one clock.
+
+use std::collections::HashMap;
+use std::io::Read;
+use std::str::FromStr;
+
+use geom::Pose;
+
+use crate::error::{Error, Result};
+use crate::format::{self, Summary};
+use crate::msg::{self, AudioInfo, Kind};
+
+/// Where an audio stream's start jumps by more than this (s), a new segment begins.
+pub const GAP_S: f64 = 0.2;
+
+/// Stamps that differ from the receipt times by more than this (s, median over a topic)
+/// are on another clock, and receipt times are used for every topic.
+pub const CLOCK_MISMATCH_S: f64 = 5.0;
+
+/// A sample format, by GStreamer's names as `audio_capture` takes them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SampleFormat {
+    /// Unsigned 8-bit.
+    U8,
+    /// Signed 16-bit little-endian.
+    S16LE,
+    /// Signed 24-bit little-endian, packed in 3 bytes.
+    S24LE,
+    /// Signed 32-bit little-endian.
+    S32LE,
+    /// 32-bit float little-endian.
+    F32LE,
+    /// 64-bit float little-endian.
+    F64LE,
+}
+
+impl SampleFormat {
+    /// Bytes per sample.
+    pub fn bytes(self) -> usize {
+        match self {
+            Self::U8 => 1,
+            Self::S16LE => 2,
+            Self::S24LE => 3,
+            Self::S32LE | Self::F32LE => 4,
+            Self::F64LE => 8,
+        }
+    }
+
+    /// One sample from its bytes, full scale at 1.
+    fn decode(self, b: &[u8]) -> f32 {
+        match self {
+            Self::U8 => (f32::from(b[0]) - 128.0) / 128.0,
+            Self::S16LE => f32::from(i16::from_le_bytes([b[0], b[1]])) / 32768.0,
+            Self::S24LE => (i32::from_le_bytes([0, b[0], b[1], b[2]]) >> 8) as f32 / 8_388_608.0,
+            Self::S32LE => i32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f32 / 2_147_483_648.0,
+            Self::F32LE => f32::from_le_bytes([b[0], b[1], b[2], b[3]]),
+            Self::F64LE => f64::from_le_bytes(b[..8].try_into().expect("8 bytes")) as f32,
+        }
+    }
+}
+
+impl FromStr for SampleFormat {
+    type Err = Error;
+
+    fn from_str(s: &str) -> Result<Self> {
+        Ok(match s.to_ascii_uppercase().as_str() {
+            "U8" => Self::U8,
+            "S16LE" => Self::S16LE,
+            "S24LE" => Self::S24LE,
+            "S32LE" => Self::S32LE,
+            "F32LE" => Self::F32LE,
+            "F64LE" => Self::F64LE,
+            _ => {
+                return Err(Error::Audio(format!(
+                    "sample format {s:?} is not one of U8, S16LE, S24LE, S32LE, F32LE, F64LE"
+                )));
+            }
+        })
+    }
+}
+
+/// How the audio topic's bytes are laid out.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct AudioFormat {
+    /// Channels per frame (interleaved).
+    pub channels: u16,
+    /// Frames per second.
+    pub sample_rate: u32,
+    /// The sample format.
+    pub sample: SampleFormat,
+}
+
+/// Which topics to read and how; `None` fields are chosen from the bag (module docs).
+#[derive(Clone, Debug, Default)]
+pub struct ReadOptions {
+    /// The audio topic.
+    pub audio_topic: Option<String>,
+    /// The topic of the poses the map is made in.
+    pub pose_topic: Option<String>,
+    /// An odometry (or any pose) topic to find the stops by, beside the pose topic; `Some("")`
+    /// for none (the stops are found from the pose topic).
+    pub odom_topic: Option<String>,
+    /// The audio's format, instead of the bag's `AudioInfo`.
+    pub format: Option<AudioFormat>,
+}
+
+/// A topic of the bag.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TopicInfo {
+    /// Its name.
+    pub topic: String,
+    /// Its type.
+    pub msg_type: String,
+    /// Its number of messages.
+    pub messages: usize,
+    /// Its first and last receipt time (s from the run's start).
+    pub span_s: (f64, f64),
+}
+
+/// A pose at a time (s from the run's start).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TimedPose {
+    /// Time (s).
+    pub t: f64,
+    /// Pose.
+    pub pose: Pose,
+}
+
+/// Continuous audio from one time on: a stretch of [`Run`]'s audio bytes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AudioSegment {
+    /// The time of its first sample (s from the run's start).
+    pub start_s: f64,
+    /// Where its first frame starts in the run's audio bytes.
+    pub offset: usize,
+    /// Its length in frames.
+    pub frames: usize,
+}
+
+/// What a bag holds of a robot run.
+#[derive(Clone)]
+pub struct Run {
+    /// Every topic of the bag.
+    pub topics: Vec<TopicInfo>,
+    /// The run's time origin: the first message's receipt time (ns since the epoch).
+    pub start_ns: i64,
+    /// The audio topic.
+    pub audio_topic: String,
+    /// The audio's format.
+    pub format: AudioFormat,
+    /// The audio, in segments of continuous samples, in time order.
+    pub segments: Vec<AudioSegment>,
+    /// The audio topic's samples as recorded (interleaved frames, [`Run::format`]),
+    /// decoded only when asked for ([`Run::samples`]): a run's audio is kept at its
+    /// recorded size, not as floats of twice or four times it.
+    pub audio: Vec<u8>,
+    /// The pose topic.
+    pub pose_topic: String,
+    /// Its poses, in time order.
+    pub poses: Vec<TimedPose>,
+    /// The odometry topic the stops are found by, when it is not the pose topic.
+    pub odom_topic: Option<String>,
+    /// Its poses, in time order (empty without one).
+    pub odometry: Vec<TimedPose>,
+    /// `Some(byte)` when the bag ends inside a record, where the last whole one ended.
+    pub truncated: Option<u64>,
+    /// What the reader decided that the user should know (a clock, a topic chosen).
+    pub notes: Vec<String>,
+}
+
+/// Messages of one topic as read: (receipt time ns, bytes).
+type Raw = Vec<(i64, Vec<u8>)>;
+
+/// An audio topic as read: each message's receipt time, stamp and length in bytes, and
+/// their samples end to end.
+#[derive(Default)]
+struct AudioRaw {
+    msgs: Vec<(i64, Option<i64>, usize)>,
+    bytes: Vec<u8>,
+}
+
+impl std::fmt::Debug for Run {
+    /// Every field but the audio's bytes, of which it gives the count.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Run")
+            .field("topics", &self.topics)
+            .field("start_ns", &self.start_ns)
+            .field("audio_topic", &self.audio_topic)
+            .field("format", &self.format)
+            .field("segments", &self.segments)
+            .field("audio", &format_args!("[{} bytes]", self.audio.len()))
+            .field("pose_topic", &self.pose_topic)
+            .field("poses", &self.poses.len())
+            .field("odom_topic", &self.odom_topic)
+            .field("odometry", &self.odometry.len())
+            .field("truncated", &self.truncated)
+            .field("notes", &self.notes)
+            .finish()
+    }
+}
+
+impl Run {
+    /// The samples of frames `frames` of segment `segment`, one vector per channel, full
+    /// scale at 1.
+    ///
+    /// # Panics
+    /// If `segment` is not a segment of the run or `frames` reaches beyond its end.
+    pub fn samples(&self, segment: usize, frames: std::ops::Range<usize>) -> Vec<Vec<f32>> {
+        let seg = &self.segments[segment];
+        assert!(
+            frames.end <= seg.frames,
+            "frames {frames:?} beyond a segment of {}",
+            seg.frames
+        );
+        let ch = usize::from(self.format.channels);
+        let width = self.format.sample.bytes();
+        let frame_bytes = ch * width;
+        let bytes = &self.audio
+            [seg.offset + frames.start * frame_bytes..seg.offset + frames.end * frame_bytes];
+        let mut out = vec![Vec::with_capacity(frames.len()); ch];
+        for f in bytes.chunks_exact(frame_bytes) {
+            for (c, s) in out.iter_mut().zip(f.chunks_exact(width)) {
+                c.push(self.format.sample.decode(s));
+            }
+        }
+        out
+    }
+}
+
+/// Reads the run out of a bag's bytes ([`format::scan`]): only the topics of the types
+/// [`msg`] reads are kept in memory.
+///
+/// # Errors
+/// What [`format::scan`] refuses; no audio or pose topic, or more than one where none was
+/// named; a named topic that is not in the bag or not of a fitting type; audio of no known
+/// format, not raw PCM, or whose bytes are not whole frames; a message that does not
+/// decode.
+pub fn read<R: Read>(r: R, options: &ReadOptions) -> Result<Run> {
+    let mut kept: HashMap<String, Raw> = HashMap::new();
+    let mut audio: HashMap<String, AudioRaw> = HashMap::new();
+    let summary = format::scan(r, |m| {
+        let topic = &m.connection.topic;
+        match Kind::of(&m.connection.msg_type) {
+            Some(kind)
+                if kind.is_audio() && options.audio_topic.as_ref().is_none_or(|t| t == topic) =>
+            {
+                let raw = audio.entry(topic.clone()).or_default();
+                let (stamp, data) = msg::audio(kind, m.data).map_err(|what| Error::Message {
+                    topic: topic.clone(),
+                    msg_type: m.connection.msg_type.clone(),
+                    index: raw.msgs.len() + 1,
+                    what,
+                })?;
+                raw.msgs.push((m.time_ns, stamp, data.len()));
+                raw.bytes.extend_from_slice(data);
+            }
+            // Another audio topic than the one named: not kept.
+            Some(kind) if kind.is_audio() => {}
+            Some(_) => kept
+                .entry(topic.clone())
+                .or_default()
+                .push((m.time_ns, m.data.to_vec())),
+            None => {}
+        }
+        Ok(())
+    })?;
+    assemble(&summary, kept, audio, options)
+}
+
+/// Reads the run out of the bag at `path`, through a buffer.
+///
+/// # Errors
+/// The file cannot be opened, or what [`read`] refuses.
+pub fn read_file(path: &std::path::Path, options: &ReadOptions) -> Result<Run> {
+    let file = std::fs::File::open(path)?;
+    read(std::io::BufReader::with_capacity(1 << 20, file), options)
+}
+
+fn assemble(
+    summary: &Summary,
+    mut kept: HashMap<String, Raw>,
+    mut audio_raw: HashMap<String, AudioRaw>,
+    options: &ReadOptions,
+) -> Result<Run> {
+    let start_ns = summary.spans.values().map(|s| s.0).min().unwrap_or(0);
+    let rel = |ns: i64| (ns - start_ns) as f64 * 1e-9;
+    let topics: Vec<TopicInfo> =
+        summary
+            .connections
+            .iter()
+            .fold(Vec::<TopicInfo>::new(), |mut acc, c| {
+                let n = summary.counts.get(&c.id).copied().unwrap_or(0);
+                let span = summary
+                    .spans
+                    .get(&c.id)
+                    .map_or((0.0, 0.0), |s| (rel(s.0), rel(s.1)));
+                match acc.iter_mut().find(|t| t.topic == c.topic) {
+                    Some(t) => {
+                        t.messages += n;
+                        t.span_s = (t.span_s.0.min(span.0), t.span_s.1.max(span.1));
+                    }
+                    None => acc.push(TopicInfo {
+                        topic: c.topic.clone(),
+                        msg_type: c.msg_type.clone(),
+                        messages: n,
+                        span_s: span,
+                    }),
+                }
+                acc
+            });
+    let kind = |t: &TopicInfo| Kind::of(&t.msg_type);
+    let mut notes = Vec::new();
+
+    let audio = choose(
+        &topics,
+        options.audio_topic.as_deref(),
+        "audio",
+        "--audio-topic",
+        |k| k.is_audio(),
+    )?;
+    let pose_candidates: Vec<&TopicInfo> = topics
+        .iter()
+        .filter(|t| kind(t).is_some_and(Kind::is_pose))
+        .collect();
+    let pose = match &options.pose_topic {
+        Some(_) => choose(
+            &topics,
+            options.pose_topic.as_deref(),
+            "pose",
+            "--pose-topic",
+            Kind::is_pose,
+        )?,
+        None => {
+            let others: Vec<&&TopicInfo> = pose_candidates
+                .iter()
+                .filter(|t| kind(t) != Some(Kind::Odometry))
+                .collect();
+            if pose_candidates.len() > 1 && others.len() == 1 {
+                notes.push(format!(
+                    "poses from {} ({}), stops found by odometry",
+                    others[0].topic, others[0].msg_type
+                ));
+                (*others[0]).clone()
+            } else {
+                choose(&topics, None, "pose", "--pose-topic", Kind::is_pose)?
+            }
+        }
+    };
+    let odom = match options.odom_topic.as_deref() {
+        Some("") => None,
+        Some(name) => {
+            let t = choose(
+                &topics,
+                Some(name),
+                "odometry",
+                "--odom-topic",
+                Kind::is_pose,
+            )?;
+            (t.topic != pose.topic).then_some(t)
+        }
+        None if kind(&pose) != Some(Kind::Odometry) => {
+            let odoms: Vec<&&TopicInfo> = pose_candidates
+                .iter()
+                .filter(|t| kind(t) == Some(Kind::Odometry))
+                .collect();
+            (odoms.len() == 1).then(|| (*odoms[0]).clone())
+        }
+        None => None,
+    };
+
+    let format = match options.format {
+        Some(f) => f,
+        None => format_from_info(&topics, &audio.topic, &mut kept)?,
+    };
+    if format.channels == 0 || format.sample_rate == 0 {
+        return Err(Error::Audio(format!(
+            "audio of {} channels at {} Hz",
+            format.channels, format.sample_rate
+        )));
+    }
+
+    let AudioRaw {
+        msgs: audio_msgs,
+        bytes: audio_bytes,
+    } = audio_raw.remove(&audio.topic).unwrap_or_default();
+    drop(audio_raw);
+    let decode_poses = |topic: &TopicInfo, raw: &Raw| -> Result<Vec<(i64, Option<i64>, Pose)>> {
+        let k = kind(topic).expect("a pose topic");
+        raw.iter()
+            .enumerate()
+            .map(|(i, (t, bytes))| {
+                let p = msg::pose(k, bytes).map_err(|what| message_error(topic, i, what))?;
+                Ok((*t, p.stamp_ns, p.pose))
+            })
+            .collect()
+    };
+    let pose_msgs = decode_poses(&pose, kept.get(&pose.topic).unwrap_or(&Vec::new()))?;
+    let odom_msgs = match &odom {
+        Some(o) => decode_poses(o, kept.get(&o.topic).unwrap_or(&Vec::new()))?,
+        None => Vec::new(),
+    };
+
+    // One clock for all: the stamps, unless a topic's disagree with its receipt times.
+    let offsets = [
+        (
+            audio.topic.as_str(),
+            audio_msgs.iter().map(|m| (m.0, m.1)).collect::<Vec<_>>(),
+        ),
+        (
+            pose.topic.as_str(),
+            pose_msgs.iter().map(|m| (m.0, m.1)).collect(),
+        ),
+        (
+            odom.as_ref().map_or("", |o| o.topic.as_str()),
+            odom_msgs.iter().map(|m| (m.0, m.1)).collect(),
+        ),
+    ];
+    let mismatch = offsets.iter().find_map(|(topic, times)| {
+        let mut d: Vec<f64> = times
+            .iter()
+            .filter_map(|(t, s)| s.map(|s| (t - s) as f64 * 1e-9))
+            .collect();
+        if d.is_empty() {
+            return None;
+        }
+        d.sort_by(f64::total_cmp);
+        let median = d[d.len() / 2];
+        (median.abs() > CLOCK_MISMATCH_S).then(|| (topic.to_string(), median))
+    });
+    let use_stamps = mismatch.is_none();
+    if let Some((topic, median)) = mismatch {
+        notes.push(format!(
+            "the stamps of {topic} lie {median:.1} s from the times they were recorded (another \
+             clock): every topic is timed by when it was recorded"
+        ));
+    }
+    let time = |t: i64, s: Option<i64>| rel(if use_stamps { s.unwrap_or(t) } else { t });
+
+    let segments = segments(&audio_msgs, format, &time)
+        .map_err(|what| Error::Audio(format!("topic {}: {what}", audio.topic)))?;
+    let timed = |m: &[(i64, Option<i64>, Pose)]| {
+        let mut v: Vec<TimedPose> = m
+            .iter()
+            .map(|&(t, s, pose)| TimedPose {
+                t: time(t, s),
+                pose,
+            })
+            .collect();
+        v.sort_by(|a, b| a.t.total_cmp(&b.t));
+        v
+    };
+    Ok(Run {
+        start_ns,
+        audio_topic: audio.topic.clone(),
+        format,
+        segments,
+        audio: audio_bytes,
+        pose_topic: pose.topic.clone(),
+        poses: timed(&pose_msgs),
+        odom_topic: odom.as_ref().map(|o| o.topic.clone()),
+        odometry: timed(&odom_msgs),
+        truncated: summary.truncated,
+        notes,
+        topics,
+    })
+}
+
+fn message_error(topic: &TopicInfo, i: usize, what: String) -> Error {
+    Error::Message {
+        topic: topic.topic.clone(),
+        msg_type: topic.msg_type.clone(),
+        index: i + 1,
+        what,
+    }
+}
+
+/// The topic for `role`: the one named (which must exist and fit), else the only one that
+/// fits.
+fn choose(
+    topics: &[TopicInfo],
+    named: Option<&str>,
+    role: &str,
+    option: &str,
+    fits: impl Fn(Kind) -> bool,
+) -> Result<TopicInfo> {
+    let fitting: Vec<&TopicInfo> = topics
+        .iter()
+        .filter(|t| Kind::of(&t.msg_type).is_some_and(&fits))
+        .collect();
+    let list = |ts: &[&TopicInfo]| {
+        ts.iter()
+            .map(|t| format!("{} ({}, {} messages)", t.topic, t.msg_type, t.messages))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    if let Some(name) = named {
+        return match topics.iter().find(|t| t.topic == name) {
+            Some(t) if Kind::of(&t.msg_type).is_some_and(&fits) => Ok(t.clone()),
+            Some(t) => Err(Error::Topic(format!(
+                "{option} {name}: its type {} is not a {role} message{}",
+                t.msg_type,
+                if fitting.is_empty() {
+                    String::new()
+                } else {
+                    format!("; {role} topics: {}", list(&fitting))
+                }
+            ))),
+            None => Err(Error::Topic(format!(
+                "{option} {name}: no such topic in the bag{}",
+                if fitting.is_empty() {
+                    String::new()
+                } else {
+                    format!("; {role} topics: {}", list(&fitting))
+                }
+            ))),
+        };
+    }
+    match fitting.as_slice() {
+        [one] => Ok((*one).clone()),
+        [] => Err(Error::Topic(format!(
+            "no {role} topic in the bag (it reads {}); its topics: {}",
+            match role {
+                "audio" => "audio_common_msgs/AudioData and AudioDataStamped",
+                _ =>
+                    "nav_msgs/Odometry, geometry_msgs/PoseStamped, PoseWithCovarianceStamped and Pose2D",
+            },
+            if topics.is_empty() {
+                "none".to_string()
+            } else {
+                list(&topics.iter().collect::<Vec<_>>())
+            }
+        ))),
+        many => Err(Error::Topic(format!(
+            "{} {role} topics: {}; name one with {option}",
+            many.len(),
+            list(many)
+        ))),
+    }
+}
+
+/// The audio's format from the `AudioInfo` topic beside `audio` (the one in the same
+/// namespace, else the only one).
+fn format_from_info(
+    topics: &[TopicInfo],
+    audio: &str,
+    kept: &mut HashMap<String, Raw>,
+) -> Result<AudioFormat> {
+    let infos: Vec<&TopicInfo> = topics
+        .iter()
+        .filter(|t| Kind::of(&t.msg_type) == Some(Kind::AudioInfo))
+        .collect();
+    let parent = |t: &str| {
+        t.rsplit_once('/')
+            .map_or(String::new(), |(p, _)| p.to_string())
+    };
+    let beside: Vec<&&TopicInfo> = infos
+        .iter()
+        .filter(|t| parent(&t.topic) == parent(audio))
+        .collect();
+    let info_topic = match (beside.as_slice(), infos.as_slice()) {
+        ([one], _) => *one,
+        (_, [one]) => one,
+        _ => {
+            return Err(Error::Audio(format!(
+                "{} says nothing of its format ({}): give the channels, the sample rate and the \
+                 sample format",
+                audio,
+                if infos.is_empty() {
+                    "no audio_common_msgs/AudioInfo in the bag".to_string()
+                } else {
+                    format!("{} AudioInfo topics, none beside it", infos.len())
+                }
+            )));
+        }
+    };
+    let raw = kept
+        .get(&info_topic.topic)
+        .and_then(|r| r.last())
+        .ok_or_else(|| Error::Audio(format!("{}: no AudioInfo message", info_topic.topic)))?;
+    let info: AudioInfo =
+        msg::audio_info(&raw.1).map_err(|what| message_error(info_topic, 0, what))?;
+    if !info.coding_format.is_empty() && !info.coding_format.eq_ignore_ascii_case("wave") {
+        return Err(Error::Audio(format!(
+            "{} is coded as {} ({}): localisation needs the raw samples of every channel; \
+             record with audio_capture's format:=wave",
+            audio, info.coding_format, info_topic.topic
+        )));
+    }
+    Ok(AudioFormat {
+        channels: u16::from(info.channels),
+        sample_rate: info.sample_rate,
+        sample: info.sample_format.parse().map_err(|e| match e {
+            Error::Audio(m) => Error::Audio(format!("{}: {m}", info_topic.topic)),
+            e => e,
+        })?,
+    })
+}
+
+/// Cuts the audio messages (receipt time, stamp, length in bytes), whose samples lie end
+/// to end, into continuous segments (module docs); a frame split across two messages is
+/// joined.
+fn segments(
+    msgs: &[(i64, Option<i64>, usize)],
+    format: AudioFormat,
+    time: &impl Fn(i64, Option<i64>) -> f64,
+) -> std::result::Result<Vec<AudioSegment>, String> {
+    let frame_bytes = usize::from(format.channels) * format.sample.bytes();
+    let fs = f64::from(format.sample_rate);
+    let not_whole = |bytes: usize| {
+        format!(
+            "{bytes} bytes of audio are not whole frames of {frame_bytes} bytes ({} channels of \
+             {:?}): the format is not the one given",
+            format.channels, format.sample
+        )
+    };
+    let mut out: Vec<AudioSegment> = Vec::new();
+    // The current segment: its first byte, its bytes so far, its start (s).
+    let (mut offset, mut len, mut start) = (0usize, 0usize, f64::INFINITY);
+    for &(t, stamp, n) in msgs {
+        let implied = time(t, stamp) - (len + n) as f64 / frame_bytes as f64 / fs;
+        if start.is_finite() && implied > start + GAP_S {
+            if !len.is_multiple_of(frame_bytes) {
+                return Err(not_whole(len));
+            }
+            out.push(AudioSegment {
+                start_s: start,
+                offset,
+                frames: len / frame_bytes,
+            });
+            offset += len;
+            len = 0;
+            start = time(t, stamp) - n as f64 / frame_bytes as f64 / fs;
+        } else {
+            start = start.min(implied);
+        }
+        len += n;
+    }
+    if !len.is_multiple_of(frame_bytes) {
+        return Err(not_whole(len));
+    }
+    if len > 0 {
+        out.push(AudioSegment {
+            start_s: start,
+            offset,
+            frames: len / frame_bytes,
+        });
+    }
+    // The samples must last as long as the messages span: a wrong channel count, sample
+    // format or rate whose frames still divide the bytes shows here.
+    if let (Some(first), Some(last)) = (msgs.first(), msgs.last()) {
+        let total: usize = out.iter().map(|s| s.frames).sum();
+        let heard = total as f64 / fs;
+        let first_len = first.2 as f64 / frame_bytes as f64 / fs;
+        let span = time(last.0, last.1) - time(first.0, first.1) + first_len;
+        if span > 1.0 && !(MIN_AUDIO_SHARE..=MAX_AUDIO_SHARE).contains(&(heard / span)) {
+            return Err(format!(
+                "its samples would last {heard:.2} s ({} channels of {:?} at {} Hz) but its \
+                 messages span {span:.2} s: the format is not the one given{}",
+                format.channels,
+                format.sample,
+                format.sample_rate,
+                if heard < span {
+                    ", or much of the audio was lost"
+                } else {
+                    ""
+                }
+            ));
+        }
+    }
+    Ok(out)
+}
+
+/// The least share of the audio topic's time span its samples may fill: below, too much
+/// was lost (or the format is wrong) to trust where the rest lies in time.
+const MIN_AUDIO_SHARE: f64 = 0.75;
+
+/// The most: more samples than time (beyond a capture clock's drift and the receipt
+/// times' jitter) is a wrong format.
+const MAX_AUDIO_SHARE: f64 = 1.05;

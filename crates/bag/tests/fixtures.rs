@@ -1,0 +1,245 @@
+//! The bags of `fixtures/bags`, written by rosbags (`scripts/make_bag_fixtures.py`), an
+//! implementation of the format independent of ours. Every expected number below follows
+//! from the script's definition of the run: still at (1.0, 2.0), heading 0, until 1.2 s;
+//! driving to (1.15, 2.0), heading 30 degrees, until 1.8 s; still until 3.0 s; 4 channels
+//! at 8 kHz whose frame i, channel c holds (37 i + 1000 c) mod 4096 - 2048.
+
+use std::path::PathBuf;
+
+use approx::assert_abs_diff_eq;
+use bag::{Error, ReadOptions, SampleFormat, StopOptions, TimedPose};
+use geom::Pose;
+
+fn fixture(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../fixtures/bags")
+        .join(name)
+}
+
+fn pattern(i: usize, c: usize) -> f32 {
+    ((37 * i + 1000 * c) % 4096) as f32 - 2048.0
+}
+
+#[test]
+fn the_lz4_bag_gives_every_sample_and_both_stops() {
+    let run = bag::read_file(&fixture("run_lz4.bag"), &ReadOptions::default()).unwrap();
+    assert_eq!(run.audio_topic, "/audio");
+    assert_eq!(run.pose_topic, "/odom");
+    assert_eq!(run.odom_topic, None);
+    assert_eq!((run.format.channels, run.format.sample_rate), (4, 8000));
+    assert_eq!(run.format.sample, SampleFormat::S16LE);
+    assert_eq!(run.truncated, None);
+    let counts: Vec<(&str, usize)> = run
+        .topics
+        .iter()
+        .map(|t| (t.topic.as_str(), t.messages))
+        .collect();
+    assert_eq!(
+        counts,
+        vec![("/audio_info", 1), ("/audio", 30), ("/odom", 61)]
+    );
+
+    // One continuous segment from the run's start (the stamps end each 0.1-s buffer).
+    assert_eq!(run.segments.len(), 1);
+    let seg = &run.segments[0];
+    assert_abs_diff_eq!(seg.start_s, 0.0, epsilon = 1e-9);
+    assert_eq!(seg.frames, 24_000);
+    for (c, channel) in run.samples(0, 0..24_000).iter().enumerate() {
+        for i in (0..24_000).step_by(997) {
+            assert_eq!(channel[i], pattern(i, c) / 32768.0, "frame {i} channel {c}");
+        }
+    }
+
+    let stops = run.stops(&StopOptions::default()).unwrap();
+    assert_eq!(stops.len(), 2);
+    let expected = [
+        ((0.0, 1.2), (0.3, 1.0), (1.0, 2.0, 0.0)),
+        ((1.8, 3.0), (2.1, 2.8), (1.15, 2.0, 30.0)),
+    ];
+    for (s, (still, listen, (x, y, deg))) in stops.iter().zip(expected) {
+        assert_abs_diff_eq!(s.still_s.0, still.0, epsilon = 1e-6);
+        assert_abs_diff_eq!(s.still_s.1, still.1, epsilon = 1e-6);
+        assert_abs_diff_eq!(s.listen_s.0, listen.0, epsilon = 1e-6);
+        assert_abs_diff_eq!(s.listen_s.1, listen.1, epsilon = 1e-6);
+        assert_abs_diff_eq!(s.pose.x, x, epsilon = 1e-9);
+        assert_abs_diff_eq!(s.pose.y, y, epsilon = 1e-9);
+        assert_abs_diff_eq!(s.pose.theta_deg(), deg, epsilon = 1e-9);
+        // The window's samples are the run's at those times.
+        let first = (listen.0 * 8000.0_f64).round() as usize;
+        let audio = run.stop_audio(s);
+        assert_eq!(audio.len(), 4);
+        assert_eq!(
+            audio[0].len(),
+            ((listen.1 - listen.0) * 8000.0_f64).round() as usize
+        );
+        assert_eq!(audio[2][0], pattern(first, 2) / 32768.0);
+    }
+}
+
+#[test]
+fn the_bz2_bag_takes_the_map_frame_poses_and_finds_stops_by_odometry() {
+    let run = bag::read_file(&fixture("run_bz2.bag"), &ReadOptions::default()).unwrap();
+    assert_eq!(run.audio_topic, "/mic/audio");
+    assert_eq!(run.format.sample, SampleFormat::S32LE);
+    assert_eq!(
+        run.pose_topic, "/robot_pose",
+        "the one pose topic that is not odometry"
+    );
+    assert_eq!(run.odom_topic.as_deref(), Some("/odom"));
+    assert!(
+        run.notes.iter().any(|n| n.contains("/robot_pose")),
+        "{:?}",
+        run.notes
+    );
+    // Unstamped audio: timed by receipt, 3 ms after each buffer ends.
+    assert_abs_diff_eq!(run.segments[0].start_s, 0.003, epsilon = 1e-9);
+    assert_eq!(run.samples(0, 1234..1235)[3][0], pattern(1234, 3) / 32768.0);
+    let stops = run.stops(&StopOptions::default()).unwrap();
+    assert_eq!(stops.len(), 2);
+    // The poses are /robot_pose's: 10 m further along x than the odometry's.
+    assert_abs_diff_eq!(stops[0].pose.x, 11.0, epsilon = 1e-9);
+    assert_abs_diff_eq!(stops[1].pose.x, 11.15, epsilon = 1e-9);
+    assert_abs_diff_eq!(stops[1].pose.theta_deg(), 30.0, epsilon = 1e-9);
+
+    // Named: the odometry as the poses.
+    let opts = ReadOptions {
+        pose_topic: Some("/odom".into()),
+        ..Default::default()
+    };
+    let run = bag::read_file(&fixture("run_bz2.bag"), &opts).unwrap();
+    assert_eq!(run.odom_topic, None);
+    assert_abs_diff_eq!(
+        run.stops(&StopOptions::default()).unwrap()[1].pose.x,
+        1.15,
+        epsilon = 1e-9
+    );
+}
+
+#[test]
+fn a_pose_from_before_the_stop_is_carried_to_it_by_the_odometry() {
+    // The localiser's last estimate came at 1.5 s, mid-drive, in a frame turned by 90
+    // degrees and shifted from the odometry's; the robot then drove on to its stop.
+    let mut run = bag::read_file(&fixture("run_bz2.bag"), &ReadOptions::default()).unwrap();
+    let odom_mid = run
+        .odometry
+        .iter()
+        .find(|p| (p.t - 1.5).abs() < 1e-6)
+        .unwrap()
+        .pose;
+    let map_from_odom = |p: Pose| {
+        let (x, y) = (-p.y + 5.0, p.x - 1.0);
+        Pose::new(x, y, p.theta + std::f64::consts::FRAC_PI_2)
+    };
+    run.poses = vec![TimedPose {
+        t: 1.5,
+        pose: map_from_odom(odom_mid),
+    }];
+    let stops = run.stops(&StopOptions::default()).unwrap();
+    // The second stop, in the map's frame: the odometry's (1.15, 2.0, 30 deg) mapped.
+    let want = map_from_odom(Pose::from_degrees(1.15, 2.0, 30.0));
+    assert_abs_diff_eq!(stops[1].pose.x, want.x, epsilon = 1e-9);
+    assert_abs_diff_eq!(stops[1].pose.y, want.y, epsilon = 1e-9);
+    assert_abs_diff_eq!(stops[1].pose.theta, want.theta, epsilon = 1e-9);
+}
+
+#[test]
+fn a_topic_that_is_not_there_or_not_a_pose_names_the_candidates() {
+    let e = bag::read_file(
+        &fixture("run_bz2.bag"),
+        &ReadOptions {
+            pose_topic: Some("/amcl_pose".into()),
+            ..Default::default()
+        },
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("--pose-topic /amcl_pose: no such topic"), "{e}");
+    assert!(
+        e.contains("/odom (nav_msgs/Odometry, 61 messages)") && e.contains("/robot_pose"),
+        "{e}"
+    );
+    let e = bag::read_file(
+        &fixture("run_bz2.bag"),
+        &ReadOptions {
+            pose_topic: Some("/mic/audio".into()),
+            ..Default::default()
+        },
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("is not a pose message"), "{e}");
+}
+
+#[test]
+fn a_format_given_by_hand_that_does_not_fit_is_an_error() {
+    // The bag's frames are 4 channels of 32 bits (16 bytes; 384 000 bytes in 3 s at 8 kHz).
+    let read = |channels, sample_rate, sample| {
+        let format = bag::AudioFormat {
+            channels,
+            sample_rate,
+            sample,
+        };
+        let opts = ReadOptions {
+            format: Some(format),
+            ..Default::default()
+        };
+        bag::read_file(&fixture("run_bz2.bag"), &opts)
+            .map(|_| ())
+            .map_err(|e| e.to_string())
+    };
+    // 7 x 2 bytes do not divide the bytes.
+    let e = read(7, 8000, SampleFormat::S16LE).unwrap_err();
+    assert!(
+        e.contains("not whole frames") && e.contains("/mic/audio"),
+        "{e}"
+    );
+    // 6 x 2 bytes do, but make 4 s of the 3 s the messages span (the span counts the
+    // first message as long as the format given makes it); 4 x 2 bytes at 8 kHz
+    // make 6 s, and the right frames at 16 kHz 1.5 s.
+    for (ch, fs, sample, heard) in [
+        (6, 8000, SampleFormat::S16LE, "4.00 s"),
+        (4, 8000, SampleFormat::S16LE, "6.00 s"),
+        (4, 16000, SampleFormat::S32LE, "1.50 s"),
+    ] {
+        let e = read(ch, fs, sample).unwrap_err();
+        assert!(
+            e.contains(&format!("would last {heard}")) && e.contains("messages span"),
+            "{e}"
+        );
+    }
+    assert!(read(4, 8000, SampleFormat::S32LE).is_ok());
+}
+
+#[test]
+fn a_bag_cut_off_anywhere_reads_up_to_its_last_whole_record_or_says_why_not() {
+    let bytes = std::fs::read(fixture("run_lz4.bag")).unwrap();
+    let whole = bag::read(bytes.as_slice(), &ReadOptions::default()).unwrap();
+    let mut read_some = 0;
+    for cut in (0..bytes.len()).step_by(211) {
+        match bag::read(&bytes[..cut], &ReadOptions::default()) {
+            Ok(run) => {
+                assert!(run.truncated.is_some() || cut == bytes.len());
+                let frames: usize = run.segments.iter().map(|s| s.frames).sum();
+                assert!(frames <= whole.segments[0].frames);
+                read_some += 1;
+            }
+            Err(Error::NotABag { .. } | Error::Topic(_) | Error::Audio(_)) => {}
+            Err(e) => panic!("cut at {cut}: {e}"),
+        }
+    }
+    assert!(read_some > 0, "some cut-off bag still holds a run");
+}
+
+#[test]
+fn files_that_are_not_ros_1_bags_say_what_they_are() {
+    let e = |b: &[u8]| {
+        bag::read(b, &ReadOptions::default())
+            .unwrap_err()
+            .to_string()
+    };
+    assert!(e(b"SQLite format 3\0....").contains("rosbags-convert"));
+    assert!(e(b"\x89MCAP0\r\n").contains("MCAP"));
+    assert!(e(b"#ROSBAG V1.2\n").contains("format 1.2"));
+    assert!(e(b"RIFF....WAVEfmt ").contains("not #ROSBAG V2.0"));
+    assert!(e(b"").contains("empty"));
+}

@@ -1,0 +1,153 @@
+//! A robot run recorded in a ROS 1 bag, written as a data set in the published layout.
+//!
+//! The `bag` crate finds the stops at which the robot stood still, each with its pose and
+//! its audio. Written as a data set (a WAV per stop, a pose table), every command runs on
+//! the run as on the authors' recordings: `iasm ssl`, `map`, `eval`, `compare`, `watch
+//! --replay`. The WAVs hold 32-bit float samples, which keep every source format (16, 24
+//! or 32-bit integers, floats) exactly enough; `stops.csv` says where in the bag each
+//! stop's audio was taken, so that a map can be traced back to the recording.
+
+use std::path::Path;
+
+use anyhow::{Context, Result, bail, ensure};
+use rayon::prelude::*;
+use ssl::MicArray;
+
+/// A run read out of a bag, and its stops.
+#[derive(Clone, Debug)]
+pub struct BagRun {
+    /// The run.
+    pub run: bag::Run,
+    /// Its stops, in time order.
+    pub stops: Vec<bag::Stop>,
+}
+
+/// Reads the run in the bag at `path` and finds its stops.
+///
+/// # Errors
+/// What [`bag::read_file`] or [`bag::Run::stops`] refuses, named by the file.
+pub fn read_bag(path: &Path, read: &bag::ReadOptions, stops: &bag::StopOptions) -> Result<BagRun> {
+    let ctx = || format!("reading the bag {}", path.display());
+    let run = bag::read_file(path, read).with_context(ctx)?;
+    let stops = run.stops(stops).with_context(ctx)?;
+    Ok(BagRun { run, stops })
+}
+
+/// Checks `channels` (counted from 1) against the run's audio and `array`, and returns them
+/// counted from 0 (every channel when `None`).
+///
+/// # Errors
+/// A channel the audio does not have, or a count of channels that is not the array's.
+pub fn picked_channels(
+    run: &bag::Run,
+    channels: Option<&[usize]>,
+    array: Option<&MicArray>,
+) -> Result<Vec<usize>> {
+    let have = usize::from(run.format.channels);
+    let picked: Vec<usize> = match channels {
+        Some(c) => {
+            if let Some(&bad) = c.iter().find(|&&c| c == 0 || c > have) {
+                bail!(
+                    "--channels names channel {bad}, but the audio of {} has channels 1 to {have}",
+                    run.audio_topic
+                );
+            }
+            c.iter().map(|c| c - 1).collect()
+        }
+        None => (0..have).collect(),
+    };
+    if let Some(a) = array {
+        ensure!(
+            picked.len() == a.len(),
+            "the array {} has {} microphones but the audio of {} gives {} channels{}",
+            a.name(),
+            a.len(),
+            run.audio_topic,
+            picked.len(),
+            if channels.is_none() && have > a.len() {
+                ": name the microphones' channels with --channels (counted from 1)"
+            } else {
+                ""
+            }
+        );
+    }
+    Ok(picked)
+}
+
+/// Writes the stops of `run` into the folder `out` (which must exist): `audio/stopNN.wav`
+/// (the channels `picked`, counted from 0), `pose/poses.csv` (x, y, theta in degrees),
+/// `stops.csv`, and `array.toml` when `array` is given.
+///
+/// # Errors
+/// A file that cannot be written.
+pub fn write_dataset(
+    run: &BagRun,
+    picked: &[usize],
+    array: Option<&MicArray>,
+    out: &Path,
+) -> Result<()> {
+    for d in ["audio", "pose"] {
+        std::fs::create_dir_all(out.join(d))
+            .with_context(|| format!("creating {}", out.join(d).display()))?;
+    }
+    let width = run.stops.len().to_string().len().max(2);
+    let fs = run.run.format.sample_rate;
+    let mut poses = String::from("x,y,theta_deg\n");
+    let mut table = String::from(
+        "stop,file,listen_start_s,listen_end_s,still_start_s,still_end_s,x,y,theta_deg\n",
+    );
+    // One stop decoded at a time per worker: the run's audio stays as recorded.
+    run.stops.par_iter().enumerate().try_for_each(|(i, s)| {
+        let audio = run.run.stop_audio(s);
+        let channels: Vec<&[f32]> = picked.iter().map(|&c| audio[c].as_slice()).collect();
+        write_wav(&out.join("audio").join(stop_file(i, width)), &channels, fs)
+    })?;
+    for (i, s) in run.stops.iter().enumerate() {
+        let name = stop_file(i, width);
+        poses.push_str(&format!(
+            "{:.4},{:.4},{:.4}\n",
+            s.pose.x,
+            s.pose.y,
+            s.pose.theta_deg()
+        ));
+        table.push_str(&format!(
+            "{},{name},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4}\n",
+            i + 1,
+            s.listen_s.0,
+            s.listen_s.1,
+            s.still_s.0,
+            s.still_s.1,
+            s.pose.x,
+            s.pose.y,
+            s.pose.theta_deg()
+        ));
+    }
+    crate::output::write_atomic(&out.join("pose/poses.csv"), poses.as_bytes())?;
+    crate::output::write_atomic(&out.join("stops.csv"), table.as_bytes())?;
+    if let Some(a) = array {
+        let text = crate::dataset::array_file_toml(a.name(), a.positions())?;
+        crate::output::write_atomic(&out.join("array.toml"), text.as_bytes())?;
+    }
+    Ok(())
+}
+
+fn stop_file(i: usize, width: usize) -> String {
+    format!("stop{:0width$}.wav", i + 1)
+}
+
+fn write_wav(path: &Path, channels: &[&[f32]], fs: u32) -> Result<()> {
+    let spec = hound::WavSpec {
+        channels: u16::try_from(channels.len()).context("more than 65535 channels")?,
+        sample_rate: fs,
+        bits_per_sample: 32,
+        sample_format: hound::SampleFormat::Float,
+    };
+    let ctx = || format!("writing {}", path.display());
+    let mut w = hound::WavWriter::create(path, spec).with_context(ctx)?;
+    for t in 0..channels.first().map_or(0, |c| c.len()) {
+        for ch in channels {
+            w.write_sample(ch[t]).with_context(ctx)?;
+        }
+    }
+    w.finalize().with_context(ctx)
+}

@@ -1,0 +1,152 @@
+//! `iasm bag`: a robot run recorded in a ROS 1 bag, made a data set.
+
+use anyhow::{Context, Result, bail};
+
+use crate::Outcome;
+use crate::args::BagArgs;
+use crate::bagset::{picked_channels, read_bag, write_dataset};
+use crate::output::replace_dir;
+
+/// Runs `iasm bag`.
+///
+/// # Errors
+/// A bag that cannot be read, options refused, no stop found with `--out`, or an output
+/// folder that is refused or cannot be written.
+pub fn run(a: &BagArgs) -> Result<Outcome> {
+    let format = match (a.audio_channels, a.sample_rate) {
+        (Some(channels), Some(sample_rate)) => Some(bag::AudioFormat {
+            channels,
+            sample_rate,
+            sample: a.sample_format.parse().context("--sample-format")?,
+        }),
+        _ => None,
+    };
+    let read = bag::ReadOptions {
+        audio_topic: a.audio_topic.clone(),
+        pose_topic: a.pose_topic.clone(),
+        odom_topic: a.odom_topic.as_ref().map(|t| {
+            if t == "none" {
+                String::new()
+            } else {
+                t.clone()
+            }
+        }),
+        format,
+    };
+    let stops = bag::StopOptions {
+        radius_m: a.still_radius,
+        turn_deg: a.still_turn,
+        settle_s: a.settle,
+        end_margin_s: a.end_margin,
+        min_listen_s: a.min_listen,
+    };
+    stops.validate().context("stop options")?;
+    let array = a
+        .array
+        .as_deref()
+        .map(ssl::MicArray::from_spec)
+        .transpose()
+        .context("--array")?;
+    let got = read_bag(&a.bag, &read, &stops)?;
+    let picked = picked_channels(
+        &got.run,
+        a.channels.as_ref().map(|c| c.0.as_slice()),
+        array.as_ref(),
+    )
+    .with_context(|| format!("the bag {}", a.bag.display()))?;
+    let run = &got.run;
+
+    let duration = run.topics.iter().map(|t| t.span_s.1).fold(0.0, f64::max);
+    println!(
+        "{}: {:.1} s, {} topics{}",
+        a.bag.display(),
+        duration,
+        run.topics.len(),
+        match run.truncated {
+            Some(at) => format!(" (cut off: read up to byte {at}, its last whole record)"),
+            None => String::new(),
+        }
+    );
+    if a.out.is_none() {
+        for t in &run.topics {
+            println!(
+                "  {:<32} {:<44} {:>7} messages",
+                t.topic, t.msg_type, t.messages
+            );
+        }
+    }
+    let heard: f64 = run
+        .segments
+        .iter()
+        .map(|s| s.frames as f64 / f64::from(run.format.sample_rate))
+        .sum();
+    println!(
+        "audio: {} ({} channels, {} Hz, {:?}; {:.1} s in {} continuous segment{})",
+        run.audio_topic,
+        run.format.channels,
+        run.format.sample_rate,
+        run.format.sample,
+        heard,
+        run.segments.len(),
+        if run.segments.len() == 1 { "" } else { "s" }
+    );
+    println!(
+        "poses: {} ({} messages){}",
+        run.pose_topic,
+        run.poses.len(),
+        match &run.odom_topic {
+            Some(o) => format!("; stops found by {o} ({} messages)", run.odometry.len()),
+            None => String::new(),
+        }
+    );
+    for n in &run.notes {
+        println!("note: {n}");
+    }
+    println!("stop  listen (s in the bag)  pose (x m, y m, theta deg)");
+    for (i, s) in got.stops.iter().enumerate() {
+        println!(
+            "{:>4}  {:>7.2} - {:<7.2}         ({:.3}, {:.3}, {:.1})",
+            i + 1,
+            s.listen_s.0,
+            s.listen_s.1,
+            s.pose.x,
+            s.pose.y,
+            s.pose.theta_deg()
+        );
+    }
+    let listened: f64 = got.stops.iter().map(|s| s.listen_s.1 - s.listen_s.0).sum();
+    println!("{} stops, {listened:.1} s of audio", got.stops.len());
+    let too_few = format!(
+        "the robot stood still (within {} m and {} degrees) long enough to listen for {} s after \
+         --settle {} s and before --end-margin {} s at {} place{}; a source needs three stops",
+        a.still_radius,
+        a.still_turn,
+        a.min_listen,
+        a.settle,
+        a.end_margin,
+        got.stops.len(),
+        if got.stops.len() == 1 { "" } else { "s" }
+    );
+    let Some(out) = &a.out else {
+        if got.stops.len() < 3 {
+            eprintln!("warning: {too_few}");
+        }
+        return Ok(Outcome::Success);
+    };
+    if got.stops.is_empty() {
+        bail!("nothing written to {}: {too_few}", out.display());
+    }
+    if got.stops.len() < 3 {
+        eprintln!("warning: {too_few}");
+    }
+    replace_dir(out, a.force, |dir| {
+        write_dataset(&got, &picked, array.as_ref(), dir)
+    })?;
+    println!(
+        "written to {} (audio/, pose/poses.csv, stops.csv{}); next: iasm map --dataset {} --png map.png",
+        out.display(),
+        if array.is_some() { ", array.toml" } else { "" },
+        out.display()
+    );
+    Ok(Outcome::Success)
+}

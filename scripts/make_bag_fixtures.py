@@ -1,0 +1,151 @@
+#!/usr/bin/env python3
+"""Writes the ROS 1 bags of fixtures/bags/ with rosbags (an implementation of the format
+independent of ours), so that the `bag` crate's reader is tested against bags it did not
+write.
+
+    pip install rosbags==0.11.9
+    python3 scripts/make_bag_fixtures.py fixtures/bags
+
+Both bags record the same robot run of 3.0 s: still at (1.0, 2.0), heading 0, until
+1.2 s; driving along x at 0.25 m/s while turning to 30 degrees until 1.8 s; still at
+(1.15, 2.0), heading 30 degrees, until 3.0 s. Times are counted from T0 (a real ROS
+epoch). The audio is 4 channels at 8 kHz in messages of 800 frames, published when a
+buffer fills (stamp = time of its last sample + 1/fs, received 3 ms later); channel c of
+frame i holds the integer pattern (37 i + 1000 c) mod 4096 - 2048, so that every sample
+can be checked.
+
+- `run_lz4.bag`: LZ4 chunks; audio_common_msgs/AudioDataStamped on /audio (S16LE),
+  AudioInfo on /audio_info, nav_msgs/Odometry on /odom at 20 Hz.
+- `run_bz2.bag`: BZ2 chunks; unstamped audio_common_msgs/AudioData on /mic/audio (S32LE,
+  the pattern times 65536), AudioInfo on /mic/audio_info, Odometry on /odom at 20 Hz and
+  geometry_msgs/PoseStamped on /robot_pose at 5 Hz (the same poses, shifted by +10 m in
+  x: another frame), so that a reader has two pose topics to choose from.
+"""
+
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+from rosbags.rosbag1 import Writer
+from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+T0 = 1_700_000_000_000_000_000  # ns
+FS = 8000
+CH = 4
+FRAMES = 800
+DURATION = 3.0
+
+AUDIO_MSGS = {
+    "audio_common_msgs/msg/AudioData": "uint8[] data\n",
+    "audio_common_msgs/msg/AudioDataStamped": "std_msgs/Header header\naudio_common_msgs/AudioData audio\n",
+    "audio_common_msgs/msg/AudioInfo": "uint8 channels\nuint32 sample_rate\nstring sample_format\nuint32 bitrate\nstring coding_format\n",
+}
+
+
+def typestore():
+    ts = get_typestore(Stores.ROS1_NOETIC)
+    types = {}
+    for name, text in AUDIO_MSGS.items():
+        types.update(get_types_from_msg(text, name))
+    ts.register(types)
+    return ts
+
+
+def pose_at(t):
+    """(x, y, yaw) of the robot at t s."""
+    if t <= 1.2:
+        return 1.0, 2.0, 0.0
+    if t >= 1.8:
+        return 1.15, 2.0, math.radians(30.0)
+    s = (t - 1.2) / 0.6
+    return 1.0 + 0.15 * s, 2.0, math.radians(30.0) * s
+
+
+def pattern():
+    i = np.arange(int(FS * DURATION))[:, None]
+    c = np.arange(CH)[None, :]
+    return ((37 * i + 1000 * c) % 4096 - 2048).astype(np.int64)
+
+
+def stamp(ts, ns):
+    return ts.types["builtin_interfaces/msg/Time"](sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000)
+
+
+def header(ts, ns, frame):
+    return ts.types["std_msgs/msg/Header"](seq=0, stamp=stamp(ts, ns), frame_id=frame)
+
+
+def quat(ts, yaw):
+    Q = ts.types["geometry_msgs/msg/Quaternion"]
+    return Q(x=0.0, y=0.0, z=math.sin(yaw / 2), w=math.cos(yaw / 2))
+
+
+def pose_msg(ts, t, dx=0.0):
+    x, y, yaw = pose_at(t)
+    P = ts.types["geometry_msgs/msg/Pose"]
+    Pt = ts.types["geometry_msgs/msg/Point"]
+    return P(position=Pt(x=x + dx, y=y, z=0.0), orientation=quat(ts, yaw))
+
+
+def odometry(ts, t):
+    ns = T0 + round(t * 1e9)
+    T = ts.types
+    pwc = T["geometry_msgs/msg/PoseWithCovariance"](pose=pose_msg(ts, t), covariance=np.zeros(36))
+    V = T["geometry_msgs/msg/Vector3"]
+    tw = T["geometry_msgs/msg/Twist"](linear=V(x=0.0, y=0.0, z=0.0), angular=V(x=0.0, y=0.0, z=0.0))
+    twc = T["geometry_msgs/msg/TwistWithCovariance"](twist=tw, covariance=np.zeros(36))
+    return ns, T["nav_msgs/msg/Odometry"](header=header(ts, ns, "odom"), child_frame_id="base_link", pose=pwc, twist=twc)
+
+
+def write(path, compression, stamped, fmt, topic, info_topic, pose_stamped):
+    ts = typestore()
+    T = ts.types
+    path.unlink(missing_ok=True)
+    samples = pattern()
+    if fmt == "S32LE":
+        samples = samples * 65536
+    dtype = {"S16LE": "<i2", "S32LE": "<i4"}[fmt]
+    w = Writer(path)
+    w.set_compression(compression)
+    with w:
+        audio_type = "audio_common_msgs/msg/AudioDataStamped" if stamped else "audio_common_msgs/msg/AudioData"
+        c_info = w.add_connection(info_topic, "audio_common_msgs/msg/AudioInfo", typestore=ts, latching=1)
+        c_audio = w.add_connection(topic, audio_type, typestore=ts)
+        c_odom = w.add_connection("/odom", "nav_msgs/msg/Odometry", typestore=ts)
+        c_pose = w.add_connection("/robot_pose", "geometry_msgs/msg/PoseStamped", typestore=ts) if pose_stamped else None
+        bits = 8 * np.dtype(dtype).itemsize
+        info = T["audio_common_msgs/msg/AudioInfo"](
+            channels=CH, sample_rate=FS, sample_format=fmt, bitrate=FS * CH * bits, coding_format="wave")
+        w.write(c_info, T0, ts.serialize_ros1(info, "audio_common_msgs/msg/AudioInfo"))
+        events = []
+        for k in range(int(FS * DURATION) // FRAMES):
+            block = samples[k * FRAMES:(k + 1) * FRAMES].astype(dtype).tobytes()
+            ns = T0 + round((k + 1) * FRAMES / FS * 1e9)
+            data = T["audio_common_msgs/msg/AudioData"](data=np.frombuffer(block, dtype=np.uint8))
+            msg = T[audio_type](header=header(ts, ns, "mic"), audio=data) if stamped else data
+            events.append((ns + 3_000_000, c_audio, ts.serialize_ros1(msg, audio_type)))
+        for k in range(int(DURATION * 20) + 1):
+            ns, msg = odometry(ts, k / 20)
+            events.append((ns + 1_000_000, c_odom, ts.serialize_ros1(msg, "nav_msgs/msg/Odometry")))
+        if c_pose is not None:
+            for k in range(int(DURATION * 5) + 1):
+                t = k / 5
+                ns = T0 + round(t * 1e9)
+                msg = T["geometry_msgs/msg/PoseStamped"](header=header(ts, ns, "map"), pose=pose_msg(ts, t, dx=10.0))
+                events.append((ns + 2_000_000, c_pose, ts.serialize_ros1(msg, "geometry_msgs/msg/PoseStamped")))
+        for ns, conn, data in sorted(events, key=lambda e: e[0]):
+            w.write(conn, ns, data)
+
+
+def main():
+    out = Path(sys.argv[1] if len(sys.argv) > 1 else "fixtures/bags")
+    out.mkdir(parents=True, exist_ok=True)
+    write(out / "run_lz4.bag", Writer.CompressionFormat.LZ4, True, "S16LE", "/audio", "/audio_info", False)
+    write(out / "run_bz2.bag", Writer.CompressionFormat.BZ2, False, "S32LE", "/mic/audio", "/mic/audio_info", True)
+    for p in sorted(out.glob("*.bag")):
+        print(p, p.stat().st_size, "bytes")
+
+
+if __name__ == "__main__":
+    main()

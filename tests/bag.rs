@@ -1,0 +1,368 @@
+//! `iasm bag`: a robot run recorded in a ROS 1 bag, made a data set and mapped.
+//!
+//! The run is a simulated room (`sim`): at each of the scene's stops the robot stands
+//! 1.4 s while the array hears the two talkers, and between stops it drives 0.6 s. It is
+//! written as `rosbag record` writes a run (the format of <http://wiki.ros.org/Bags/Format/2.0>,
+//! one uncompressed chunk per second): 16-bit audio in 0.1-s `AudioDataStamped` buffers
+//! stamped when full, `AudioInfo`, and `nav_msgs/Odometry` at 20 Hz. The reader itself is
+//! checked against bags that rosbags wrote (`crates/bag/tests`); this writer only has to
+//! follow the same format.
+
+use std::path::Path;
+
+use crate::util::{arg, iasm, json, show, sources_of};
+
+/// The scene: two talkers beside a straight drive (the suite's `two_talkers`, with clips
+/// long enough for a stop's settling and margins).
+const SCENE: &str = r#"
+name = "two_talkers_bag"
+seed = 7
+fs = 16000
+clip_s = 1.4
+snr_db = 30.0
+[room]
+dims = [6.0, 5.0, 3.0]
+rt60 = 0.3
+[array]
+preset = "iasm6"
+height = 0.8
+[[sources]]
+pos = [2.0, 4.0, 0.9]
+signal = "speech_shaped"
+level_db = 65.0
+[[sources]]
+pos = [4.5, 1.0, 0.9]
+signal = "speech_shaped"
+level_db = 65.0
+[trajectory]
+waypoints = [[0.8, 2.5], [5.2, 2.5]]
+spacing = 0.4
+"#;
+
+const T0: i64 = 1_700_000_000_000_000_000;
+const STILL_S: f64 = 1.4;
+const DRIVE_S: f64 = 0.6;
+
+/// Header fields: each a length, then `name=value`.
+fn fields(f: &[(&str, &[u8])]) -> Vec<u8> {
+    let mut out = Vec::new();
+    for (k, v) in f {
+        out.extend(((k.len() + 1 + v.len()) as u32).to_le_bytes());
+        out.extend(k.as_bytes());
+        out.push(b'=');
+        out.extend(*v);
+    }
+    out
+}
+
+/// One record: its header's fields and its data, each with its length.
+fn record(out: &mut Vec<u8>, f: &[(&str, &[u8])], data: &[u8]) {
+    let header = fields(f);
+    out.extend((header.len() as u32).to_le_bytes());
+    out.extend(header);
+    out.extend((data.len() as u32).to_le_bytes());
+    out.extend(data);
+}
+
+fn time(ns: i64) -> Vec<u8> {
+    let mut b = ((ns / 1_000_000_000) as u32).to_le_bytes().to_vec();
+    b.extend(((ns % 1_000_000_000) as u32).to_le_bytes());
+    b
+}
+
+fn header_msg(ns: i64, frame: &str) -> Vec<u8> {
+    let mut b = 0u32.to_le_bytes().to_vec();
+    b.extend(time(ns));
+    b.extend((frame.len() as u32).to_le_bytes());
+    b.extend(frame.as_bytes());
+    b
+}
+
+fn odometry(ns: i64, x: f64, y: f64, yaw: f64) -> Vec<u8> {
+    let mut b = header_msg(ns, "odom");
+    b.extend(9u32.to_le_bytes());
+    b.extend(b"base_link");
+    let pose = [x, y, 0.0, 0.0, 0.0, (yaw / 2.0).sin(), (yaw / 2.0).cos()];
+    let rest = pose
+        .iter()
+        .copied()
+        .chain(std::iter::repeat_n(0.0, 36 + 6 + 36));
+    b.extend(rest.flat_map(f64::to_le_bytes));
+    b
+}
+
+/// A bag of the run: (receipt time, connection, message) sorted by time, in chunks.
+fn write_bag(path: &Path, messages: &mut [(i64, u32, Vec<u8>)], connections: &[(&str, &str)]) {
+    messages.sort_by_key(|m| m.0);
+    let mut body = Vec::new();
+    let mut chunk = Vec::new();
+    let conn_record = |out: &mut Vec<u8>, id: u32| {
+        let (topic, ty) = connections[id as usize];
+        // A connection's data is the fields of the connection header its publisher sent.
+        let data = fields(&[
+            ("topic", topic.as_bytes()),
+            ("type", ty.as_bytes()),
+            ("md5sum", b"*"),
+        ]);
+        record(
+            out,
+            &[
+                ("op", &[0x07]),
+                ("conn", &id.to_le_bytes()),
+                ("topic", topic.as_bytes()),
+            ],
+            &data,
+        );
+    };
+    let mut chunks = 0;
+    let flush = |chunk: &mut Vec<u8>, body: &mut Vec<u8>| {
+        let size = (chunk.len() as u32).to_le_bytes();
+        record(
+            body,
+            &[("op", &[0x05]), ("compression", b"none"), ("size", &size)],
+            chunk,
+        );
+        chunk.clear();
+    };
+    let mut seen = vec![false; connections.len()];
+    let mut chunk_start = messages[0].0;
+    for (t, conn, data) in messages.iter() {
+        if !seen[*conn as usize] {
+            conn_record(&mut chunk, *conn);
+            seen[*conn as usize] = true;
+        }
+        record(
+            &mut chunk,
+            &[
+                ("op", &[0x02]),
+                ("conn", &conn.to_le_bytes()),
+                ("time", &time(*t)),
+            ],
+            data,
+        );
+        if t - chunk_start > 1_000_000_000 {
+            flush(&mut chunk, &mut body);
+            chunks += 1;
+            chunk_start = *t;
+        }
+    }
+    flush(&mut chunk, &mut body);
+    chunks += 1;
+    // The bag header record, padded with spaces to 4096 bytes; the index (which this
+    // writer leaves out, as a recorder that was stopped does) would follow the chunks.
+    let mut out = b"#ROSBAG V2.0\n".to_vec();
+    let index_pos = (out.len() + 4096 + body.len()) as u64;
+    let count = (connections.len() as u32).to_le_bytes();
+    let chunk_count = (chunks as u32).to_le_bytes();
+    let header = fields(&[
+        ("op", &[0x03]),
+        ("index_pos", &index_pos.to_le_bytes()),
+        ("conn_count", &count),
+        ("chunk_count", &chunk_count),
+    ]);
+    let pad = 4096 - 8 - header.len();
+    out.extend((header.len() as u32).to_le_bytes());
+    out.extend(header);
+    out.extend((pad as u32).to_le_bytes());
+    out.extend(vec![b' '; pad]);
+    out.extend(body);
+    std::fs::write(path, out).unwrap();
+}
+
+#[test]
+fn a_run_recorded_in_a_bag_is_mapped_from_the_stops_it_finds() {
+    let (scene, _) = iasm::scenes::parse_scene(SCENE).unwrap();
+    let scene = iasm::scenes::prepare(scene).unwrap();
+    let fs = 16_000usize;
+    let clips: Vec<Vec<Vec<f64>>> = (0..scene.stops.len())
+        .map(|i| scene.render_stop(i))
+        .collect();
+    let peak = clips
+        .iter()
+        .flatten()
+        .flatten()
+        .fold(0.0f64, |m, v| m.max(v.abs()));
+    let gain = 0.5 / peak;
+
+    // The run: stop k's clip from k * (STILL + DRIVE) s, silence while driving; it ends
+    // with the last stop.
+    let period = STILL_S + DRIVE_S;
+    let total = (scene.stops.len() - 1) as f64 * period + STILL_S;
+    let frames = (total * fs as f64).round() as usize;
+    let mut pcm = vec![0i16; frames * 6];
+    for (k, clip) in clips.iter().enumerate() {
+        let at = (k as f64 * period * fs as f64).round() as usize;
+        for (c, ch) in clip.iter().enumerate() {
+            for (i, v) in ch.iter().enumerate() {
+                pcm[(at + i) * 6 + c] = (v * gain * 32767.0).round() as i16;
+            }
+        }
+    }
+    let mut messages = Vec::new();
+    let mut info = vec![6u8];
+    info.extend(16_000u32.to_le_bytes());
+    info.extend(5u32.to_le_bytes());
+    info.extend(b"S16LE");
+    info.extend((16_000u32 * 6 * 16).to_le_bytes());
+    info.extend(4u32.to_le_bytes());
+    info.extend(b"wave");
+    messages.push((T0, 0u32, info));
+    for (k, buf) in pcm.chunks(1600 * 6).enumerate() {
+        let end = T0 + ((k * 1600 + buf.len() / 6) as f64 / fs as f64 * 1e9).round() as i64;
+        let mut m = header_msg(end, "mic");
+        m.extend(((buf.len() * 2) as u32).to_le_bytes());
+        m.extend(buf.iter().flat_map(|v| v.to_le_bytes()));
+        messages.push((end + 2_000_000, 1, m));
+    }
+    for j in 0..=(total * 20.0) as usize {
+        let t = j as f64 / 20.0;
+        let k = ((t / period) as usize).min(scene.stops.len() - 1);
+        let u = ((t - k as f64 * period - STILL_S) / DRIVE_S).clamp(0.0, 1.0);
+        let (a, b) = (
+            scene.stops[k],
+            scene.stops[(k + 1).min(scene.stops.len() - 1)],
+        );
+        let ns = T0 + (t * 1e9).round() as i64;
+        let pose = odometry(ns, a.x + u * (b.x - a.x), a.y + u * (b.y - a.y), a.theta);
+        messages.push((ns + 1_000_000, 2, pose));
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let bag = dir.path().join("run.bag");
+    write_bag(
+        &bag,
+        &mut messages,
+        &[
+            ("/audio_info", "audio_common_msgs/AudioInfo"),
+            ("/audio", "audio_common_msgs/AudioDataStamped"),
+            ("/odom", "nav_msgs/Odometry"),
+        ],
+    );
+
+    let data = dir.path().join("run");
+    let out = iasm(&["bag", arg(&bag), "--out", arg(&data), "--array", "iasm6"]);
+    assert!(out.status.success(), "{}", show(&out));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let n = scene.stops.len();
+    assert!(stdout.contains(&format!("{n} stops")), "{stdout}");
+
+    // Each stop's WAV is its clip from 0.3 s (the settling left out) for 0.9 s, and its pose
+    // the scene's.
+    let poses = iasm::dataset::read_poses(&data.join("pose/poses.csv"), false).unwrap();
+    for (k, p) in poses.iter().enumerate() {
+        assert!(
+            (p.x - scene.stops[k].x).abs() < 1e-4 && (p.y - scene.stops[k].y).abs() < 1e-4,
+            "stop {k}: {p:?}"
+        );
+        let wav = ssl::read_wav(&data.join(format!("audio/stop{:02}.wav", k + 1))).unwrap();
+        assert_eq!(wav.num_channels(), 6);
+        assert_eq!(
+            wav.num_samples(),
+            (0.9 * fs as f64).round() as usize,
+            "stop {k}"
+        );
+        let first = (0.3 * fs as f64).round() as usize;
+        for i in [0, 1000, 9000, wav.num_samples() - 1] {
+            let want = (clips[k][3][first + i] * gain * 32767.0).round() / 32768.0;
+            assert!(
+                (f64::from(wav.channels()[3][i]) - want).abs() < 1e-6,
+                "stop {k} sample {i}"
+            );
+        }
+    }
+
+    // And the data set maps the two talkers.
+    let map = iasm(&[
+        "map",
+        "--dataset",
+        arg(&data),
+        "--method",
+        "mvdr",
+        "--num",
+        "3",
+        "--json",
+    ]);
+    let v = json(&map);
+    let found = sources_of(&v);
+    assert_eq!(found.len(), 2, "{found:?}");
+    for truth in [[2.0, 4.0], [4.5, 1.0]] {
+        let d = found
+            .iter()
+            .map(|f| (f[0] - truth[0]).hypot(f[1] - truth[1]))
+            .fold(f64::INFINITY, f64::min);
+        assert!(
+            d < 0.1,
+            "talker at {truth:?}: nearest source {d:.3} m away ({found:?})"
+        );
+    }
+}
+
+#[test]
+fn a_bag_without_stops_or_with_a_missing_topic_is_a_clear_error() {
+    let fixtures = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/bags");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("d");
+    // The fixture's stops are 0.7 s long: none is when 1 s of audio is asked for.
+    let r = iasm(&[
+        "bag",
+        arg(&fixtures.join("run_lz4.bag")),
+        "--out",
+        arg(&out),
+        "--min-listen",
+        "1",
+    ]);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("nothing written") && err.contains("at 0 places"),
+        "{err}"
+    );
+    assert!(!out.exists());
+    let r = iasm(&[
+        "bag",
+        arg(&fixtures.join("run_lz4.bag")),
+        "--pose-topic",
+        "/amcl_pose",
+    ]);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("run_lz4.bag") && err.contains("--pose-topic /amcl_pose: no such topic"),
+        "{err}"
+    );
+    // More channels than the array has microphones: the hint names --channels.
+    let r = iasm(&[
+        "bag",
+        arg(&fixtures.join("run_lz4.bag")),
+        "--array",
+        "iasm6",
+        "--out",
+        arg(&out),
+    ]);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(
+        err.contains("6 microphones") && err.contains("gives 4 channels"),
+        "{err}"
+    );
+    let r = iasm(&[
+        "bag",
+        arg(&fixtures.join("run_lz4.bag")),
+        "--array",
+        "respeaker4",
+        "--channels",
+        "1-5",
+    ]);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(
+        err.contains("channel 5") && err.contains("channels 1 to 4"),
+        "{err}"
+    );
+    // Not a bag at all.
+    let wav = dir.path().join("x.wav");
+    std::fs::write(&wav, b"RIFF\x24\0\0\0WAVEfmt ").unwrap();
+    let r = iasm(&["bag", arg(&wav)]);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(
+        err.contains("x.wav") && err.contains("not a ROS 1 bag"),
+        "{err}"
+    );
+}
