@@ -20,6 +20,11 @@ can be checked.
   the pattern times 65536), AudioInfo on /mic/audio_info, Odometry on /odom at 20 Hz and
   geometry_msgs/PoseStamped on /robot_pose at 5 Hz (the same poses, shifted by +10 m in
   x: another frame), so that a reader has two pose topics to choose from.
+
+Both also hold a nav_msgs/OccupancyGrid on /map (latched, frame "map"): 40 x 30 cells of
+0.1 m from (-1.0, -0.5); the border cells occupied (100), the 5 x 4 cells from cell
+(10, 10) unknown (-1), cell (20, 15) at 50 (neither), the rest free (0). The lz4 bag's
+poses are odometry (frame "odom"), the bz2 bag's /robot_pose is in "map".
 """
 
 import math
@@ -114,10 +119,12 @@ def write(path, compression, stamped, fmt, topic, info_topic, pose_stamped):
         c_audio = w.add_connection(topic, audio_type, typestore=ts)
         c_odom = w.add_connection("/odom", "nav_msgs/msg/Odometry", typestore=ts)
         c_pose = w.add_connection("/robot_pose", "geometry_msgs/msg/PoseStamped", typestore=ts) if pose_stamped else None
+        c_map = w.add_connection("/map", "nav_msgs/msg/OccupancyGrid", typestore=ts, latching=1)
         bits = 8 * np.dtype(dtype).itemsize
         info = T["audio_common_msgs/msg/AudioInfo"](
             channels=CH, sample_rate=FS, sample_format=fmt, bitrate=FS * CH * bits, coding_format="wave")
         w.write(c_info, T0, ts.serialize_ros1(info, "audio_common_msgs/msg/AudioInfo"))
+        w.write(c_map, T0, ts.serialize_ros1(grid(ts, T0), "nav_msgs/msg/OccupancyGrid"))
         events = []
         for k in range(int(FS * DURATION) // FRAMES):
             block = samples[k * FRAMES:(k + 1) * FRAMES].astype(dtype).tobytes()
@@ -136,6 +143,21 @@ def write(path, compression, stamped, fmt, topic, info_topic, pose_stamped):
                 events.append((ns + 2_000_000, c_pose, ts.serialize_ros1(msg, "geometry_msgs/msg/PoseStamped")))
         for ns, conn, data in sorted(events, key=lambda e: e[0]):
             w.write(conn, ns, data)
+
+
+def grid(ts, ns):
+    T = ts.types
+    w, h = 40, 30
+    data = np.zeros((h, w), dtype=np.int8)
+    data[0, :] = data[-1, :] = data[:, 0] = data[:, -1] = 100
+    data[10:14, 10:15] = -1
+    data[15, 20] = 50
+    P = T["geometry_msgs/msg/Pose"]
+    Pt = T["geometry_msgs/msg/Point"]
+    info = T["nav_msgs/msg/MapMetaData"](
+        map_load_time=stamp(ts, ns), resolution=0.1, width=w, height=h,
+        origin=P(position=Pt(x=-1.0, y=-0.5, z=0.0), orientation=quat(ts, 0.0)))
+    return T["nav_msgs/msg/OccupancyGrid"](header=header(ts, ns, "map"), info=info, data=data.reshape(-1))
 
 
 def main():

@@ -366,3 +366,51 @@ fn a_bag_without_stops_or_with_a_missing_topic_is_a_clear_error() {
         "{err}"
     );
 }
+
+#[test]
+fn the_robots_map_is_written_as_a_ros_map_file_and_reads_back() {
+    let fixtures = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/bags");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("d");
+    let r = iasm(&[
+        "bag",
+        arg(&fixtures.join("run_bz2.bag")),
+        "--out",
+        arg(&out),
+    ]);
+    assert!(r.status.success(), "{}", show(&r));
+    assert!(String::from_utf8_lossy(&r.stdout).contains("map: /map (40 x 30 cells of 0.1 m"));
+    let yaml = std::fs::read_to_string(out.join("map/map.yaml")).unwrap();
+    assert!(
+        yaml.contains("resolution: 0.1\n") && yaml.contains("origin: [-1, -0.5, 0.0]"),
+        "{yaml}"
+    );
+    // The grid (scripts/make_bag_fixtures.py): its border occupied, the 5 x 4 cells from
+    // (10, 10) unknown, cell (20, 15) at 50 % unknown, the rest free; row 0 at the origin.
+    let map = iasm::dataset::load_map(&out.join("map/map.yaml")).unwrap();
+    assert_eq!((map.width(), map.height()), (40, 30));
+    let cell = |x: f64, y: f64| {
+        let (i, j) = map.world_to_cell([x, y]).unwrap();
+        map.cell(i, j)
+    };
+    use asm::map::Cell;
+    // Cell (i, k) of the grid has its centre at (-1 + 0.1 (i + 0.5), -0.5 + 0.1 (k + 0.5)).
+    let c = |i: f64, k: f64| cell(-1.0 + 0.1 * (i + 0.5), -0.5 + 0.1 * (k + 0.5));
+    assert_eq!(c(0.0, 0.0), Cell::Occupied);
+    assert_eq!(c(39.0, 29.0), Cell::Occupied);
+    assert_eq!(c(10.0, 10.0), Cell::Unknown);
+    assert_eq!(c(14.0, 13.0), Cell::Unknown);
+    assert_eq!(c(20.0, 15.0), Cell::Unknown);
+    assert_eq!(c(5.0, 5.0), Cell::Free);
+    assert_eq!(c(15.0, 13.0), Cell::Free);
+    // The odometry bag's map is in another frame than its poses: none is written.
+    let r = iasm(&[
+        "bag",
+        arg(&fixtures.join("run_lz4.bag")),
+        "--out",
+        arg(&out),
+    ]);
+    assert!(r.status.success(), "{}", show(&r));
+    assert!(String::from_utf8_lossy(&r.stdout).contains("the map is left out"));
+    assert!(!out.join("map").exists());
+}

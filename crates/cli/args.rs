@@ -97,8 +97,8 @@ pub struct BagArgs {
     /// The bag (ROS 1, format 2.0; chunks uncompressed, bz2 or lz4).
     pub bag: PathBuf,
     /// The data set folder to write: audio/ (a WAV per stop), pose/poses.csv, stops.csv
-    /// (each stop's times in the bag), array.toml (with --array). Without it, nothing is
-    /// written.
+    /// (each stop's times in the bag), map/ (the robot's map, when the bag holds one in the
+    /// poses' frame), array.toml (with --array). Without it, nothing is written.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
     /// Replace the --out folder even if it is not empty and not an earlier output of iasm.
@@ -118,6 +118,10 @@ pub struct BagArgs {
     /// beside a pose topic of another type]; "none" finds them by the pose topic.
     #[arg(long, value_name = "TOPIC")]
     pub odom_topic: Option<String>,
+    /// The robot's map (nav_msgs/OccupancyGrid), written to map/ when it is in the poses'
+    /// frame [default: the bag's one grid topic, or /map]; "none" for no map.
+    #[arg(long, value_name = "TOPIC")]
+    pub map_topic: Option<String>,
     /// The audio's channels, when the bag has no audio_common_msgs/AudioInfo (give
     /// --sample-rate too).
     #[arg(long, value_name = "C", requires = "sample_rate")]

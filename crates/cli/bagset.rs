@@ -76,7 +76,8 @@ pub fn picked_channels(
 
 /// Writes the stops of `run` into the folder `out` (which must exist): `audio/stopNN.wav`
 /// (the channels `picked`, counted from 0), `pose/poses.csv` (x, y, theta in degrees),
-/// `stops.csv`, and `array.toml` when `array` is given.
+/// `stops.csv`, `map/map.pgm` and `map/map.yaml` when the bag holds the robot's map in the
+/// poses' frame ([`bag::Run::map`]), and `array.toml` when `array` is given.
 ///
 /// # Errors
 /// A file that cannot be written.
@@ -124,11 +125,40 @@ pub fn write_dataset(
     }
     crate::output::write_atomic(&out.join("pose/poses.csv"), poses.as_bytes())?;
     crate::output::write_atomic(&out.join("stops.csv"), table.as_bytes())?;
+    if let Some(grid) = &run.run.map {
+        std::fs::create_dir_all(out.join("map"))
+            .with_context(|| format!("creating {}", out.join("map").display()))?;
+        crate::output::write_atomic(&out.join("map/map.pgm"), &grid_pgm(grid))?;
+        let yaml = format!(
+            "image: map.pgm\nresolution: {}\norigin: [{}, {}, 0.0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n",
+            // The message's f32, written as its shortest decimal (0.05, not 0.0500000007).
+            grid.resolution,
+            grid.origin.x,
+            grid.origin.y
+        );
+        crate::output::write_atomic(&out.join("map/map.yaml"), yaml.as_bytes())?;
+    }
     if let Some(a) = array {
         let text = crate::dataset::array_file_toml(a.name(), a.positions())?;
         crate::output::write_atomic(&out.join("array.toml"), text.as_bytes())?;
     }
     Ok(())
+}
+
+/// An occupancy grid as ROS's `map_saver` writes it: a binary PGM, its first row the grid's
+/// last (the image's top is the map's far side), free cells (0 to 25 %) 254, occupied ones
+/// (65 % and more) 0, the rest and the unknown 205; with the thresholds of the YAML beside
+/// it, read back as free, occupied and unknown.
+fn grid_pgm(grid: &bag::msg::Grid) -> Vec<u8> {
+    let mut out = format!("P5\n{} {}\n255\n", grid.width, grid.height).into_bytes();
+    for row in grid.data.chunks_exact(grid.width).rev() {
+        out.extend(row.iter().map(|&v| match v {
+            0..=25 => 254u8,
+            65.. => 0,
+            _ => 205,
+        }));
+    }
+    out
 }
 
 fn stop_file(i: usize, width: usize) -> String {

@@ -7,8 +7,9 @@
 //! one), and `audio_common_msgs/AudioInfo`, which says their channels, rate and sample
 //! format. Poses: `nav_msgs/Odometry`, `geometry_msgs/PoseStamped`,
 //! `geometry_msgs/PoseWithCovarianceStamped` (AMCL's `/amcl_pose`) and
-//! `geometry_msgs/Pose2D`. Each message must decode to its last byte, so that a type of
-//! the same name but another definition is an error, not numbers read from the wrong place.
+//! `geometry_msgs/Pose2D`. The robot's own map: `nav_msgs/OccupancyGrid`. Each message
+//! must decode to its last byte, so that a type of the same name but another definition is
+//! an error, not numbers read from the wrong place.
 
 use geom::Pose;
 
@@ -29,6 +30,8 @@ pub enum Kind {
     PoseWithCovarianceStamped,
     /// `geometry_msgs/Pose2D`.
     Pose2D,
+    /// `nav_msgs/OccupancyGrid`.
+    OccupancyGrid,
 }
 
 impl Kind {
@@ -44,6 +47,7 @@ impl Kind {
             "geometry_msgs/PoseStamped" => Self::PoseStamped,
             "geometry_msgs/PoseWithCovarianceStamped" => Self::PoseWithCovarianceStamped,
             "geometry_msgs/Pose2D" => Self::Pose2D,
+            "nav_msgs/OccupancyGrid" => Self::OccupancyGrid,
             _ => return None,
         })
     }
@@ -77,14 +81,33 @@ pub struct AudioInfo {
     pub coding_format: String,
 }
 
-/// A pose message: the robot's pose and the time its header gives.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// A pose message: the robot's pose and the time and frame its header gives.
+#[derive(Clone, Debug, PartialEq)]
 pub struct StampedPose {
     /// The header's stamp (ns since the epoch); `None` for a type without a header or a
     /// stamp of zero (a publisher that does not stamp).
     pub stamp_ns: Option<i64>,
+    /// The header's frame (`map`, `odom`); `None` for a type without a header.
+    pub frame_id: Option<String>,
     /// The pose in the plane: position, and heading as the yaw of the orientation.
     pub pose: Pose,
+}
+
+/// `nav_msgs/OccupancyGrid`: a robot's map of its surroundings.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Grid {
+    /// The frame it is given in (`map`).
+    pub frame_id: String,
+    /// The side of a cell (m), as the message gives it (`float32`).
+    pub resolution: f32,
+    /// Cells per row.
+    pub width: usize,
+    /// Rows.
+    pub height: usize,
+    /// The pose of cell (0, 0)'s outer corner in the frame.
+    pub origin: Pose,
+    /// Row-major from the origin's row: -1 unknown, else the occupancy in percent.
+    pub data: Vec<i8>,
 }
 
 /// Reads ROS 1 serialised fields from a message's bytes.
@@ -136,14 +159,14 @@ impl<'a> Cursor<'a> {
         Ok(String::from_utf8_lossy(self.bytes()?).into_owned())
     }
 
-    /// A `std_msgs/Header`'s stamp (seq and frame id passed over); `None` when zero.
-    fn header(&mut self) -> Result<Option<i64>, String> {
+    /// A `std_msgs/Header`'s stamp (`None` when zero) and frame (seq passed over).
+    fn header(&mut self) -> Result<(Option<i64>, String), String> {
         self.u32()?;
         let sec = self.u32()?;
         let nsec = self.u32()?;
-        self.bytes()?;
+        let frame = self.string()?;
         let ns = i64::from(sec) * 1_000_000_000 + i64::from(nsec);
-        Ok((ns != 0).then_some(ns))
+        Ok(((ns != 0).then_some(ns), frame))
     }
 
     /// A `geometry_msgs/Pose` in the plane: x, y and the orientation's yaw.
@@ -186,7 +209,7 @@ pub fn audio(kind: Kind, bytes: &[u8]) -> Result<(Option<i64>, &[u8]), String> {
     let mut c = Cursor::new(bytes);
     let stamp = match kind {
         Kind::AudioData => None,
-        Kind::AudioDataStamped => c.header()?,
+        Kind::AudioDataStamped => c.header()?.0,
         other => return Err(format!("{other:?} is not an audio message")),
     };
     let data = c.bytes()?;
@@ -217,27 +240,27 @@ pub fn audio_info(bytes: &[u8]) -> Result<AudioInfo, String> {
 /// Bytes that are not a message of `kind`, or an orientation that is not a rotation.
 pub fn pose(kind: Kind, bytes: &[u8]) -> Result<StampedPose, String> {
     let mut c = Cursor::new(bytes);
-    let (stamp_ns, pose) = match kind {
+    let ((stamp_ns, frame_id), pose) = match kind {
         Kind::Odometry => {
-            let stamp = c.header()?;
+            let (stamp, frame) = c.header()?;
             c.bytes()?; // child_frame_id
             let pose = c.pose()?;
             c.skip_f64s(36 + 6 + 36)?; // covariance, twist, its covariance
-            (stamp, pose)
+            ((stamp, Some(frame)), pose)
         }
         Kind::PoseStamped => {
-            let stamp = c.header()?;
-            (stamp, c.pose()?)
+            let (stamp, frame) = c.header()?;
+            ((stamp, Some(frame)), c.pose()?)
         }
         Kind::PoseWithCovarianceStamped => {
-            let stamp = c.header()?;
+            let (stamp, frame) = c.header()?;
             let pose = c.pose()?;
             c.skip_f64s(36)?;
-            (stamp, pose)
+            ((stamp, Some(frame)), pose)
         }
         Kind::Pose2D => {
             let (x, y, theta) = (c.f64()?, c.f64()?, c.f64()?);
-            (None, Pose::new(x, y, theta))
+            ((None, None), Pose::new(x, y, theta))
         }
         other => return Err(format!("{other:?} is not a pose message")),
     };
@@ -248,7 +271,46 @@ pub fn pose(kind: Kind, bytes: &[u8]) -> Result<StampedPose, String> {
             pose.x, pose.y, pose.theta
         ));
     }
-    Ok(StampedPose { stamp_ns, pose })
+    Ok(StampedPose {
+        stamp_ns,
+        frame_id,
+        pose,
+    })
+}
+
+/// An `OccupancyGrid` message.
+///
+/// # Errors
+/// Bytes that are not one, a grid whose cells are not `width * height`, or a cell size
+/// that is not positive.
+pub fn grid(bytes: &[u8]) -> Result<Grid, String> {
+    let mut c = Cursor::new(bytes);
+    let (_, frame_id) = c.header()?;
+    c.u32()?; // map_load_time
+    c.u32()?;
+    let resolution = f32::from_le_bytes(c.take(4)?.try_into().expect("4 bytes"));
+    let width = c.u32()? as usize;
+    let height = c.u32()? as usize;
+    let origin = c.pose()?;
+    let data: Vec<i8> = c.bytes()?.iter().map(|&b| b as i8).collect();
+    c.done()?;
+    if width.checked_mul(height) != Some(data.len()) {
+        return Err(format!(
+            "{} cells for a grid of {width} x {height}",
+            data.len()
+        ));
+    }
+    if !(resolution.is_finite() && resolution > 0.0) {
+        return Err(format!("a cell size of {resolution} m"));
+    }
+    Ok(Grid {
+        frame_id,
+        resolution,
+        width,
+        height,
+        origin,
+        data,
+    })
 }
 
 fn stamp_pose_finite(p: &Pose) -> bool {

@@ -19,6 +19,13 @@
 //! than [`CLOCK_MISMATCH_S`] (a bag recorded under simulated time, a device that stamps on
 //! its own clock), the stamps of no topic are used and [`Run::notes`] says so: audio and
 //! poses are then on one clock.
+//!
+//! **The robot's map.** A bag often holds the occupancy grid the robot localised in
+//! (`nav_msgs/OccupancyGrid` on `/map`, latched). It is taken (its last message: a mapper's
+//! grid grows) only where it can stand beside the poses: in their frame (its header's and
+//! theirs agree: odometry is in `odom`, a map in `map`) and with an origin that is not
+//! turned (a ROS map file's turned origin is one that most readers, ours among them,
+//! refuse). Otherwise a note says why it was left out.
 
 use std::collections::HashMap;
 use std::io::Read;
@@ -28,7 +35,7 @@ use geom::Pose;
 
 use crate::error::{Error, Result};
 use crate::format::{self, Summary};
-use crate::msg::{self, AudioInfo, Kind};
+use crate::msg::{self, AudioInfo, Grid, Kind};
 
 /// Where an audio stream's start jumps by more than this (s), a new segment begins.
 pub const GAP_S: f64 = 0.2;
@@ -122,6 +129,8 @@ pub struct ReadOptions {
     pub odom_topic: Option<String>,
     /// The audio's format, instead of the bag's `AudioInfo`.
     pub format: Option<AudioFormat>,
+    /// The occupancy grid topic; `Some("")` for none.
+    pub map_topic: Option<String>,
 }
 
 /// A topic of the bag.
@@ -182,6 +191,13 @@ pub struct Run {
     pub odom_topic: Option<String>,
     /// Its poses, in time order (empty without one).
     pub odometry: Vec<TimedPose>,
+    /// The frame the poses are given in (their headers' `frame_id`; `None` for `Pose2D`).
+    pub pose_frame: Option<String>,
+    /// The occupancy grid topic taken.
+    pub map_topic: Option<String>,
+    /// Its last message (a mapper's map grows; the last is the whole), when it is in the
+    /// poses' frame and square to it (module docs).
+    pub map: Option<Grid>,
     /// `Some(byte)` when the bag ends inside a record, where the last whole one ended.
     pub truncated: Option<u64>,
     /// What the reader decided that the user should know (a clock, a topic chosen).
@@ -213,6 +229,12 @@ impl std::fmt::Debug for Run {
             .field("poses", &self.poses.len())
             .field("odom_topic", &self.odom_topic)
             .field("odometry", &self.odometry.len())
+            .field("pose_frame", &self.pose_frame)
+            .field("map_topic", &self.map_topic)
+            .field(
+                "map",
+                &self.map.as_ref().map(|g| (g.width, g.height, g.resolution)),
+            )
             .field("truncated", &self.truncated)
             .field("notes", &self.notes)
             .finish()
@@ -276,6 +298,10 @@ pub fn read<R: Read>(r: R, options: &ReadOptions) -> Result<Run> {
             }
             // Another audio topic than the one named: not kept.
             Some(kind) if kind.is_audio() => {}
+            // A map is republished as it grows: only the last is kept.
+            Some(Kind::OccupancyGrid) => {
+                kept.insert(topic.clone(), vec![(m.time_ns, m.data.to_vec())]);
+            }
             Some(_) => kept
                 .entry(topic.clone())
                 .or_default()
@@ -404,21 +430,33 @@ fn assemble(
         bytes: audio_bytes,
     } = audio_raw.remove(&audio.topic).unwrap_or_default();
     drop(audio_raw);
-    let decode_poses = |topic: &TopicInfo, raw: &Raw| -> Result<Vec<(i64, Option<i64>, Pose)>> {
+    // Each pose topic's poses, and the frame its first message gives.
+    let decode_poses = |topic: &TopicInfo, raw: &Raw| {
         let k = kind(topic).expect("a pose topic");
-        raw.iter()
-            .enumerate()
-            .map(|(i, (t, bytes))| {
-                let p = msg::pose(k, bytes).map_err(|what| message_error(topic, i, what))?;
-                Ok((*t, p.stamp_ns, p.pose))
-            })
-            .collect()
+        let mut out = Vec::with_capacity(raw.len());
+        let mut frame = None;
+        for (i, (t, bytes)) in raw.iter().enumerate() {
+            let p = msg::pose(k, bytes).map_err(|what| message_error(topic, i, what))?;
+            if i == 0 {
+                frame = p.frame_id;
+            }
+            out.push((*t, p.stamp_ns, p.pose));
+        }
+        Result::Ok((out, frame))
     };
-    let pose_msgs = decode_poses(&pose, kept.get(&pose.topic).unwrap_or(&Vec::new()))?;
+    let (pose_msgs, pose_frame) =
+        decode_poses(&pose, kept.get(&pose.topic).unwrap_or(&Vec::new()))?;
     let odom_msgs = match &odom {
-        Some(o) => decode_poses(o, kept.get(&o.topic).unwrap_or(&Vec::new()))?,
+        Some(o) => decode_poses(o, kept.get(&o.topic).unwrap_or(&Vec::new()))?.0,
         None => Vec::new(),
     };
+    let (map_topic, map) = robot_map(
+        &topics,
+        options.map_topic.as_deref(),
+        &kept,
+        pose_frame.as_deref(),
+        &mut notes,
+    )?;
 
     // One clock for all: the stamps, unless a topic's disagree with its receipt times.
     let offsets = [
@@ -479,10 +517,74 @@ fn assemble(
         poses: timed(&pose_msgs),
         odom_topic: odom.as_ref().map(|o| o.topic.clone()),
         odometry: timed(&odom_msgs),
+        pose_frame,
+        map_topic,
+        map,
         truncated: summary.truncated,
         notes,
         topics,
     })
+}
+
+/// The occupancy grid topic (the one named, else the bag's only one, else `/map`) and its
+/// last message when it can stand beside the poses: in their frame and square to it (a
+/// map file's origin has no turn that every reader heeds); a note says why not otherwise.
+fn robot_map(
+    topics: &[TopicInfo],
+    named: Option<&str>,
+    kept: &HashMap<String, Raw>,
+    pose_frame: Option<&str>,
+    notes: &mut Vec<String>,
+) -> Result<(Option<String>, Option<Grid>)> {
+    let grids: Vec<&TopicInfo> = topics
+        .iter()
+        .filter(|t| Kind::of(&t.msg_type) == Some(Kind::OccupancyGrid))
+        .collect();
+    let topic = match named {
+        Some("") => return Ok((None, None)),
+        Some(name) => choose(topics, Some(name), "occupancy grid", "--map-topic", |k| {
+            k == Kind::OccupancyGrid
+        })?,
+        None => match grids.as_slice() {
+            [] => return Ok((None, None)),
+            [one] => (*one).clone(),
+            many => match many.iter().find(|t| t.topic == "/map") {
+                Some(t) => (*t).clone(),
+                None => {
+                    notes.push(format!(
+                        "{} occupancy grid topics and none is /map: no map taken (--map-topic names one)",
+                        many.len()
+                    ));
+                    return Ok((None, None));
+                }
+            },
+        },
+    };
+    let Some((_, bytes)) = kept.get(&topic.topic).and_then(|r| r.last()) else {
+        return Ok((Some(topic.topic), None));
+    };
+    let grid = msg::grid(bytes)
+        .map_err(|what| message_error(&topic, topic.messages.saturating_sub(1), what))?;
+    let bare = |f: &str| f.trim_start_matches('/').to_string();
+    let refused = match pose_frame {
+        Some(f) if bare(f) != bare(&grid.frame_id) => Some(format!(
+            "the map {} is in the frame {:?} and the poses in {:?}: the map is left out (name a \
+             pose topic in {:?} with --pose-topic, a localiser's)",
+            topic.topic, grid.frame_id, f, grid.frame_id
+        )),
+        _ if grid.origin.theta.abs() > 1e-9 => Some(format!(
+            "the map {}'s origin is turned by {:.2} degrees, which a ROS map file does not \
+             carry: the map is left out",
+            topic.topic,
+            grid.origin.theta.to_degrees()
+        )),
+        _ => None,
+    };
+    if let Some(why) = refused {
+        notes.push(why);
+        return Ok((Some(topic.topic), None));
+    }
+    Ok((Some(topic.topic), Some(grid)))
 }
 
 fn message_error(topic: &TopicInfo, i: usize, what: String) -> Error {

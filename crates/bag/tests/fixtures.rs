@@ -36,7 +36,21 @@ fn the_lz4_bag_gives_every_sample_and_both_stops() {
         .collect();
     assert_eq!(
         counts,
-        vec![("/audio_info", 1), ("/audio", 30), ("/odom", 61)]
+        vec![
+            ("/audio_info", 1),
+            ("/audio", 30),
+            ("/odom", 61),
+            ("/map", 1)
+        ]
+    );
+    // The robot's map is in the frame "map", the odometry in "odom": not taken.
+    assert_eq!(run.pose_frame.as_deref(), Some("odom"));
+    assert_eq!(run.map_topic.as_deref(), Some("/map"));
+    assert!(run.map.is_none());
+    assert!(
+        run.notes.iter().any(|n| n.contains("the map is left out")),
+        "{:?}",
+        run.notes
     );
 
     // One continuous segment from the run's start (the stamps end each 0.1-s buffer).
@@ -242,4 +256,34 @@ fn files_that_are_not_ros_1_bags_say_what_they_are() {
     assert!(e(b"#ROSBAG V1.2\n").contains("format 1.2"));
     assert!(e(b"RIFF....WAVEfmt ").contains("not #ROSBAG V2.0"));
     assert!(e(b"").contains("empty"));
+}
+
+#[test]
+fn the_robots_map_in_the_poses_frame_is_read_cell_for_cell() {
+    let run = bag::read_file(&fixture("run_bz2.bag"), &ReadOptions::default()).unwrap();
+    assert_eq!(run.pose_frame.as_deref(), Some("map"));
+    let g = run.map.expect("the map, in the poses' frame");
+    assert_eq!((g.width, g.height, g.frame_id.as_str()), (40, 30, "map"));
+    assert_eq!(g.resolution, 0.1);
+    assert_eq!((g.origin.x, g.origin.y, g.origin.theta), (-1.0, -0.5, 0.0));
+    let at = |i: usize, j: usize| g.data[j * g.width + i];
+    assert_eq!(
+        (at(0, 0), at(39, 29), at(5, 0), at(0, 7)),
+        (100, 100, 100, 100)
+    );
+    assert_eq!(
+        (at(10, 10), at(14, 13), at(15, 13), at(20, 15), at(5, 5)),
+        (-1, -1, 0, 50, 0)
+    );
+    // Asked for none, none is taken.
+    let opts = ReadOptions {
+        map_topic: Some(String::new()),
+        ..Default::default()
+    };
+    assert!(
+        bag::read_file(&fixture("run_bz2.bag"), &opts)
+            .unwrap()
+            .map
+            .is_none()
+    );
 }

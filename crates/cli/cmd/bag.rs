@@ -24,13 +24,8 @@ pub fn run(a: &BagArgs) -> Result<Outcome> {
     let read = bag::ReadOptions {
         audio_topic: a.audio_topic.clone(),
         pose_topic: a.pose_topic.clone(),
-        odom_topic: a.odom_topic.as_ref().map(|t| {
-            if t == "none" {
-                String::new()
-            } else {
-                t.clone()
-            }
-        }),
+        odom_topic: a.odom_topic.as_deref().map(none_is_empty),
+        map_topic: a.map_topic.as_deref().map(none_is_empty),
         format,
     };
     let stops = bag::StopOptions {
@@ -99,6 +94,18 @@ pub fn run(a: &BagArgs) -> Result<Outcome> {
             None => String::new(),
         }
     );
+    if let Some(g) = &run.map {
+        println!(
+            "map: {} ({} x {} cells of {} m from ({}, {}), frame {})",
+            run.map_topic.as_deref().unwrap_or("?"),
+            g.width,
+            g.height,
+            g.resolution,
+            g.origin.x,
+            g.origin.y,
+            g.frame_id
+        );
+    }
     for n in &run.notes {
         println!("note: {n}");
     }
@@ -145,8 +152,22 @@ pub fn run(a: &BagArgs) -> Result<Outcome> {
     println!(
         "written to {} (audio/, pose/poses.csv, stops.csv{}); next: iasm map --dataset {} --png map.png",
         out.display(),
-        if array.is_some() { ", array.toml" } else { "" },
+        match (run.map.is_some(), array.is_some()) {
+            (true, true) => ", map/, array.toml",
+            (true, false) => ", map/",
+            (false, true) => ", array.toml",
+            (false, false) => "",
+        },
         out.display()
     );
     Ok(Outcome::Success)
+}
+
+/// A topic option: "none" is the empty name, which asks for no topic.
+fn none_is_empty(t: &str) -> String {
+    if t == "none" {
+        String::new()
+    } else {
+        t.to_owned()
+    }
 }
