@@ -357,13 +357,16 @@ fn assemble(
     let kind = |t: &TopicInfo| Kind::of(&t.msg_type);
     let mut notes = Vec::new();
 
-    let audio = choose(
-        &topics,
-        options.audio_topic.as_deref(),
-        "audio",
-        "--audio-topic",
-        |k| k.is_audio(),
-    )?;
+    let audio = match (options.audio_topic.as_deref(), same_stream_twice(&topics)) {
+        (None, Some(stamped)) => {
+            notes.push(format!(
+                "audio from {}, the stamped copy of the stream beside it",
+                stamped.topic
+            ));
+            stamped
+        }
+        (named, _) => choose(&topics, named, "audio", "--audio-topic", |k| k.is_audio())?,
+    };
     let pose_candidates: Vec<&TopicInfo> = topics
         .iter()
         .filter(|t| kind(t).is_some_and(Kind::is_pose))
@@ -596,6 +599,30 @@ fn message_error(topic: &TopicInfo, i: usize, what: String) -> Error {
     }
 }
 
+/// When the bag's audio topics are one stream published twice, unstamped and stamped, in
+/// one namespace and as many messages (`audio_capture` publishes `audio` and
+/// `audio_stamped`): the stamped one.
+fn same_stream_twice(topics: &[TopicInfo]) -> Option<TopicInfo> {
+    let audio: Vec<&TopicInfo> = topics
+        .iter()
+        .filter(|t| Kind::of(&t.msg_type).is_some_and(Kind::is_audio))
+        .collect();
+    let [a, b] = audio.as_slice() else {
+        return None;
+    };
+    let parent = |t: &str| {
+        t.rsplit_once('/')
+            .map_or(String::new(), |(p, _)| p.to_string())
+    };
+    let (plain, stamped) = match (Kind::of(&a.msg_type), Kind::of(&b.msg_type)) {
+        (Some(Kind::AudioData), Some(Kind::AudioDataStamped)) => (a, b),
+        (Some(Kind::AudioDataStamped), Some(Kind::AudioData)) => (b, a),
+        _ => return None,
+    };
+    (parent(&plain.topic) == parent(&stamped.topic) && plain.messages == stamped.messages)
+        .then(|| (*stamped).clone())
+}
+
 /// The topic for `role`: the one named (which must exist and fit), else the only one that
 /// fits.
 fn choose(
@@ -799,3 +826,60 @@ const MIN_AUDIO_SHARE: f64 = 0.75;
 /// The most: more samples than time (beyond a capture clock's drift and the receipt
 /// times' jitter) is a wrong format.
 const MAX_AUDIO_SHARE: f64 = 1.05;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn topic(name: &str, ty: &str, n: usize) -> TopicInfo {
+        TopicInfo {
+            topic: name.into(),
+            msg_type: ty.into(),
+            messages: n,
+            span_s: (0.0, 1.0),
+        }
+    }
+
+    #[test]
+    fn a_stream_published_stamped_and_unstamped_is_taken_stamped() {
+        let both = [
+            topic("/audio/audio", "audio_common_msgs/AudioData", 300),
+            topic(
+                "/audio/audio_stamped",
+                "audio_common_msgs/AudioDataStamped",
+                300,
+            ),
+            topic("/odom", "nav_msgs/Odometry", 900),
+        ];
+        assert_eq!(
+            same_stream_twice(&both).unwrap().topic,
+            "/audio/audio_stamped"
+        );
+        // Two microphones' streams, or counts that differ, are two streams: the user names one.
+        let other_ns = [
+            both[0].clone(),
+            topic(
+                "/mic2/audio_stamped",
+                "audio_common_msgs/AudioDataStamped",
+                300,
+            ),
+        ];
+        assert!(same_stream_twice(&other_ns).is_none());
+        let other_count = [
+            both[0].clone(),
+            topic(
+                "/audio/audio_stamped",
+                "audio_common_msgs/AudioDataStamped",
+                299,
+            ),
+        ];
+        assert!(same_stream_twice(&other_count).is_none());
+        let e = choose(&other_ns, None, "audio", "--audio-topic", Kind::is_audio)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("2 audio topics") && e.contains("--audio-topic"),
+            "{e}"
+        );
+    }
+}

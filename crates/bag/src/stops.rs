@@ -223,8 +223,11 @@ impl Run {
                 continue;
             }
             let segment = &self.segments[k];
-            let first = (((from - segment.start_s) * fs).ceil() as usize).min(segment.frames);
-            let last = (((to - segment.start_s) * fs).floor() as usize).min(segment.frames);
+            // The frames within the window; a bound that falls on a frame (to within a
+            // thousandth of one: times in seconds carry rounding) takes it.
+            let first = (((from - segment.start_s) * fs - 1e-3).ceil().max(0.0) as usize)
+                .min(segment.frames);
+            let last = (((to - segment.start_s) * fs + 1e-3).floor() as usize).min(segment.frames);
             let pose = if self.odometry.is_empty() {
                 mean_pose(&track[i..=j])
             } else {
