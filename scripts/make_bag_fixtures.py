@@ -3,7 +3,7 @@
 independent of ours), so that the `bag` crate's reader is tested against bags it did not
 write.
 
-    pip install rosbags==0.11.9
+    pip install rosbags==0.11.9 mcap==1.6.0
     python3 scripts/make_bag_fixtures.py fixtures/bags
 
 Both bags record the same robot run of 3.0 s: still at (1.0, 2.0), heading 0, until
@@ -21,7 +21,15 @@ can be checked.
   geometry_msgs/PoseStamped on /robot_pose at 5 Hz (the same poses, shifted by +10 m in
   x: another frame), so that a reader has two pose topics to choose from.
 
-Both also hold a nav_msgs/OccupancyGrid on /map (latched, frame "map"): 40 x 30 cells of
+- `run_ros2/`: a ROS 2 bag (rosbags' MCAP storage, CDR messages, ROS 2 Jazzy's types) of
+  the bz2 bag's topics, but audio_common_msgs/AudioDataStamped in S16LE on /mic/audio
+  (the ROS 2 port of audio_common has the same three messages).
+
+- `run_zstd.mcap`: run_ros2's messages rewritten by Foxglove's own MCAP writer (the
+  `mcap` package) in zstd-compressed chunks of 64 kB, as `ros2 bag record` compresses
+  them by default.
+
+All of them also hold a nav_msgs/OccupancyGrid on /map (latched, frame "map"): 40 x 30 cells of
 0.1 m from (-1.0, -0.5); the border cells occupied (100), the 5 x 4 cells from cell
 (10, 10) unknown (-1), cell (20, 15) at 50 (neither), the rest free (0). The lz4 bag's
 poses are odometry (frame "odom"), the bz2 bag's /robot_pose is in "map".
@@ -33,6 +41,8 @@ from pathlib import Path
 
 import numpy as np
 from rosbags.rosbag1 import Writer
+from rosbags.rosbag2 import StoragePlugin
+from rosbags.rosbag2 import Writer as Writer2
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 T0 = 1_700_000_000_000_000_000  # ns
@@ -48,8 +58,8 @@ AUDIO_MSGS = {
 }
 
 
-def typestore():
-    ts = get_typestore(Stores.ROS1_NOETIC)
+def typestore(store=Stores.ROS1_NOETIC):
+    ts = get_typestore(store)
     types = {}
     for name, text in AUDIO_MSGS.items():
         types.update(get_types_from_msg(text, name))
@@ -78,7 +88,10 @@ def stamp(ts, ns):
 
 
 def header(ts, ns, frame):
-    return ts.types["std_msgs/msg/Header"](seq=0, stamp=stamp(ts, ns), frame_id=frame)
+    H = ts.types["std_msgs/msg/Header"]
+    if "seq" in H.__dataclass_fields__:
+        return H(seq=0, stamp=stamp(ts, ns), frame_id=frame)
+    return H(stamp=stamp(ts, ns), frame_id=frame)
 
 
 def quat(ts, yaw):
@@ -103,44 +116,53 @@ def odometry(ts, t):
     return ns, T["nav_msgs/msg/Odometry"](header=header(ts, ns, "odom"), child_frame_id="base_link", pose=pwc, twist=twc)
 
 
-def write(path, compression, stamped, fmt, topic, info_topic, pose_stamped):
-    ts = typestore()
+def write(path, compression, stamped, fmt, topic, info_topic, pose_stamped, ros2=False):
+    ts = typestore(Stores.ROS2_JAZZY if ros2 else Stores.ROS1_NOETIC)
     T = ts.types
-    path.unlink(missing_ok=True)
+    ser = ts.serialize_cdr if ros2 else ts.serialize_ros1
+    if ros2:
+        import shutil
+        shutil.rmtree(path, ignore_errors=True)
+    else:
+        path.unlink(missing_ok=True)
     samples = pattern()
     if fmt == "S32LE":
         samples = samples * 65536
     dtype = {"S16LE": "<i2", "S32LE": "<i4"}[fmt]
-    w = Writer(path)
-    w.set_compression(compression)
+    if ros2:
+        w = Writer2(path, version=9, storage_plugin=StoragePlugin.MCAP)
+    else:
+        w = Writer(path)
+        w.set_compression(compression)
     with w:
         audio_type = "audio_common_msgs/msg/AudioDataStamped" if stamped else "audio_common_msgs/msg/AudioData"
-        c_info = w.add_connection(info_topic, "audio_common_msgs/msg/AudioInfo", typestore=ts, latching=1)
+        latched = {} if ros2 else {"latching": 1}
+        c_info = w.add_connection(info_topic, "audio_common_msgs/msg/AudioInfo", typestore=ts, **latched)
         c_audio = w.add_connection(topic, audio_type, typestore=ts)
         c_odom = w.add_connection("/odom", "nav_msgs/msg/Odometry", typestore=ts)
         c_pose = w.add_connection("/robot_pose", "geometry_msgs/msg/PoseStamped", typestore=ts) if pose_stamped else None
-        c_map = w.add_connection("/map", "nav_msgs/msg/OccupancyGrid", typestore=ts, latching=1)
+        c_map = w.add_connection("/map", "nav_msgs/msg/OccupancyGrid", typestore=ts, **latched)
         bits = 8 * np.dtype(dtype).itemsize
         info = T["audio_common_msgs/msg/AudioInfo"](
             channels=CH, sample_rate=FS, sample_format=fmt, bitrate=FS * CH * bits, coding_format="wave")
-        w.write(c_info, T0, ts.serialize_ros1(info, "audio_common_msgs/msg/AudioInfo"))
-        w.write(c_map, T0, ts.serialize_ros1(grid(ts, T0), "nav_msgs/msg/OccupancyGrid"))
+        w.write(c_info, T0, ser(info, "audio_common_msgs/msg/AudioInfo"))
+        w.write(c_map, T0, ser(grid(ts, T0), "nav_msgs/msg/OccupancyGrid"))
         events = []
         for k in range(int(FS * DURATION) // FRAMES):
             block = samples[k * FRAMES:(k + 1) * FRAMES].astype(dtype).tobytes()
             ns = T0 + round((k + 1) * FRAMES / FS * 1e9)
             data = T["audio_common_msgs/msg/AudioData"](data=np.frombuffer(block, dtype=np.uint8))
             msg = T[audio_type](header=header(ts, ns, "mic"), audio=data) if stamped else data
-            events.append((ns + 3_000_000, c_audio, ts.serialize_ros1(msg, audio_type)))
+            events.append((ns + 3_000_000, c_audio, ser(msg, audio_type)))
         for k in range(int(DURATION * 20) + 1):
             ns, msg = odometry(ts, k / 20)
-            events.append((ns + 1_000_000, c_odom, ts.serialize_ros1(msg, "nav_msgs/msg/Odometry")))
+            events.append((ns + 1_000_000, c_odom, ser(msg, "nav_msgs/msg/Odometry")))
         if c_pose is not None:
             for k in range(int(DURATION * 5) + 1):
                 t = k / 5
                 ns = T0 + round(t * 1e9)
                 msg = T["geometry_msgs/msg/PoseStamped"](header=header(ts, ns, "map"), pose=pose_msg(ts, t, dx=10.0))
-                events.append((ns + 2_000_000, c_pose, ts.serialize_ros1(msg, "geometry_msgs/msg/PoseStamped")))
+                events.append((ns + 2_000_000, c_pose, ser(msg, "geometry_msgs/msg/PoseStamped")))
         for ns, conn, data in sorted(events, key=lambda e: e[0]):
             w.write(conn, ns, data)
 
@@ -160,12 +182,34 @@ def grid(ts, ns):
     return T["nav_msgs/msg/OccupancyGrid"](header=header(ts, ns, "map"), info=info, data=data.reshape(-1))
 
 
+def recompress(src, dst):
+    """The messages of the MCAP file `src`, written to `dst` in zstd chunks of 64 kB."""
+    from mcap.reader import make_reader
+    from mcap.writer import CompressionType
+    from mcap.writer import Writer as McapWriter
+
+    dst.unlink(missing_ok=True)
+    with open(src, "rb") as f, open(dst, "wb") as g:
+        w = McapWriter(g, chunk_size=64 * 1024, compression=CompressionType.ZSTD)
+        w.start(profile="ros2", library="make_bag_fixtures.py")
+        schemas, channels = {}, {}
+        for schema, channel, message in make_reader(f).iter_messages():
+            if schema.id not in schemas:
+                schemas[schema.id] = w.register_schema(schema.name, schema.encoding, schema.data)
+            if channel.id not in channels:
+                channels[channel.id] = w.register_channel(channel.topic, channel.message_encoding, schemas[schema.id])
+            w.add_message(channels[channel.id], message.log_time, message.data, message.publish_time)
+        w.finish()
+
+
 def main():
     out = Path(sys.argv[1] if len(sys.argv) > 1 else "fixtures/bags")
     out.mkdir(parents=True, exist_ok=True)
     write(out / "run_lz4.bag", Writer.CompressionFormat.LZ4, True, "S16LE", "/audio", "/audio_info", False)
     write(out / "run_bz2.bag", Writer.CompressionFormat.BZ2, False, "S32LE", "/mic/audio", "/mic/audio_info", True)
-    for p in sorted(out.glob("*.bag")):
+    write(out / "run_ros2", None, True, "S16LE", "/mic/audio", "/mic/audio_info", True, ros2=True)
+    recompress(out / "run_ros2" / "run_ros2.mcap", out / "run_zstd.mcap")
+    for p in sorted(list(out.glob("*.bag")) + list(out.glob("*.mcap")) + list(out.glob("run_ros2/*"))):
         print(p, p.stat().st_size, "bytes")
 
 

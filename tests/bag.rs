@@ -362,7 +362,7 @@ fn a_bag_without_stops_or_with_a_missing_topic_is_a_clear_error() {
     let r = iasm(&["bag", arg(&wav)]);
     let err = String::from_utf8_lossy(&r.stderr);
     assert!(
-        err.contains("x.wav") && err.contains("not a ROS 1 bag"),
+        err.contains("x.wav") && err.contains("not a ROS bag"),
         "{err}"
     );
 }
@@ -403,6 +403,17 @@ fn the_robots_map_is_written_as_a_ros_map_file_and_reads_back() {
     assert_eq!(c(20.0, 15.0), Cell::Unknown);
     assert_eq!(c(5.0, 5.0), Cell::Free);
     assert_eq!(c(15.0, 13.0), Cell::Free);
+    // The same run as a ROS 2 bag in MCAP (its folder): the same data set.
+    let out2 = dir.path().join("d2");
+    let r = iasm(&["bag", arg(&fixtures.join("run_ros2")), "--out", arg(&out2)]);
+    assert!(r.status.success(), "{}", show(&r));
+    for file in ["pose/poses.csv", "map/map.yaml", "map/map.pgm"] {
+        assert_eq!(
+            std::fs::read(out.join(file)).unwrap(),
+            std::fs::read(out2.join(file)).unwrap(),
+            "{file}"
+        );
+    }
     // The odometry bag's map is in another frame than its poses: none is written.
     let r = iasm(&[
         "bag",

@@ -85,7 +85,7 @@ pub enum Command {
     /// appear, localise each new recording and update the map stop by stop; or replay a
     /// finished data set as if recorded live (--replay) and write the OSPA-per-stop curve.
     Watch(WatchArgs),
-    /// A robot run recorded in a ROS 1 bag made a data set: the stops at which it stood
+    /// A robot run recorded in a ROS bag made a data set: the stops at which it stood
     /// still, one WAV and one pose each, in the published layout for ssl, map and eval;
     /// without --out, what the bag holds and the stops it finds.
     Bag(BagArgs),
@@ -94,7 +94,8 @@ pub enum Command {
 /// `iasm bag`.
 #[derive(Debug, Clone, Args)]
 pub struct BagArgs {
-    /// The bag (ROS 1, format 2.0; chunks uncompressed, bz2 or lz4).
+    /// The bag: a ROS 1 .bag (format 2.0; chunks uncompressed, bz2 or lz4), or a ROS 2
+    /// bag stored in MCAP (its folder or its .mcap file; chunks uncompressed, zstd or lz4).
     pub bag: PathBuf,
     /// The data set folder to write: audio/ (a WAV per stop), pose/poses.csv, stops.csv
     /// (each stop's times in the bag), map/ (the robot's map, when the bag holds one in the

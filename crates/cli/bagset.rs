@@ -1,4 +1,5 @@
-//! A robot run recorded in a ROS 1 bag, written as a data set in the published layout.
+//! A robot run recorded in a ROS bag (ROS 1, or ROS 2 in MCAP), written as a data set in the
+//! published layout.
 //!
 //! The `bag` crate finds the stops at which the robot stood still, each with its pose and
 //! its audio. Written as a data set (a WAV per stop, a pose table), every command runs on

@@ -8,8 +8,9 @@ pub enum Error {
     /// The file could not be read.
     #[error("{0}")]
     Io(#[from] std::io::Error),
-    /// The file is not a ROS 1 bag (format 2.0); `what` says what it looks like instead.
-    #[error("not a ROS 1 bag (format 2.0): {what}")]
+    /// The file is not a bag this crate reads (ROS 1 format 2.0, or ROS 2 in MCAP); `what`
+    /// says what it looks like instead.
+    #[error("not a ROS bag that iasm reads (ROS 1, or ROS 2 in MCAP): {what}")]
     NotABag {
         /// What the file looks like.
         what: String,

@@ -15,6 +15,7 @@ use std::collections::HashMap;
 use std::io::{ErrorKind, Read};
 
 use crate::error::{Error, Result};
+use crate::msg::Encoding;
 
 const MAGIC: &[u8] = b"#ROSBAG V2.0\n";
 const OP_MESSAGE: u8 = 0x02;
@@ -38,6 +39,8 @@ pub struct Connection {
     pub topic: String,
     /// The message type (`audio_common_msgs/AudioData`).
     pub msg_type: String,
+    /// How its messages are serialised.
+    pub encoding: Encoding,
 }
 
 /// One message as [`scan`] hands it on.
@@ -65,6 +68,16 @@ pub struct Summary {
     pub truncated: Option<u64>,
     /// The chunks' compressions seen (`none`, `bz2`, `lz4`).
     pub compressions: Vec<String>,
+}
+
+impl Summary {
+    /// Counts a message of connection `id` at `time_ns` into its count and span.
+    pub fn count(&mut self, id: u32, time_ns: i64) {
+        *self.counts.entry(id).or_default() += 1;
+        let span = self.spans.entry(id).or_insert((time_ns, time_ns));
+        span.0 = span.0.min(time_ns);
+        span.1 = span.1.max(time_ns);
+    }
 }
 
 /// Reads every record of the bag `r` in order and hands each message to `visit`.
@@ -157,6 +170,7 @@ fn handle(
                     id,
                     topic,
                     msg_type,
+                    encoding: Encoding::Ros1,
                 };
                 summary.connections.push(c.clone());
                 e.insert(c);
@@ -178,10 +192,7 @@ fn handle(
                 offset,
                 what: format!("a message on connection {id}, which no record before it defines"),
             })?;
-            *summary.counts.entry(id).or_default() += 1;
-            let span = summary.spans.entry(id).or_insert((time_ns, time_ns));
-            span.0 = span.0.min(time_ns);
-            span.1 = span.1.max(time_ns);
+            summary.count(id, time_ns);
             visit(Message {
                 connection,
                 time_ns,
@@ -213,9 +224,9 @@ fn not_a_bag(head: &[u8]) -> Error {
             "a ROS bag of format {version}, which only ROS's own tools still read (rosbag reindex/fix)"
         )
     } else if head.starts_with(b"\x89MCAP") {
-        "an MCAP file (a ROS 2 bag): convert it to a ROS 1 bag (rosbags-convert)".into()
+        "an MCAP file (a ROS 2 bag): read it with bag::read_file, which tells the two apart".into()
     } else if head.starts_with(b"SQLite format") {
-        "an SQLite database (a ROS 2 bag's .db3): convert it to a ROS 1 bag (rosbags-convert)"
+        "an SQLite database (a ROS 2 bag's .db3), which iasm does not read: convert it to MCAP (ros2 bag convert)"
             .into()
     } else if head.is_empty() {
         "the file is empty".into()

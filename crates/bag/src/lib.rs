@@ -1,4 +1,4 @@
-//! A robot run out of a ROS 1 bag: its multichannel audio, its poses, and the stops at
+//! A robot run out of a ROS bag: its multichannel audio, its poses, and the stops at
 //! which it listened.
 //!
 //! Robots record what they hear and where they are with `rosbag record`: the audio as
@@ -16,11 +16,14 @@
 //! # Ok::<(), bag::Error>(())
 //! ```
 //!
-//! ROS 2 bags (SQLite or MCAP) are not read; `rosbags-convert` turns one into a ROS 1 bag.
+//! ROS 2 bags stored in MCAP (the default since ROS 2 Jazzy) are read too ([`ros2`]: CDR
+//! messages of the same types); those stored in SQLite (`.db3`) are not: `ros2 bag convert`
+//! turns one into MCAP.
 
 pub mod error;
 pub mod format;
 pub mod msg;
+pub mod ros2;
 pub mod run;
 pub mod stops;
 

@@ -110,15 +110,47 @@ pub struct Grid {
     pub data: Vec<i8>,
 }
 
-/// Reads ROS 1 serialised fields from a message's bytes.
+/// How a message's fields are laid out.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Encoding {
+    /// ROS 1: little-endian, packed; a header has a sequence number.
+    Ros1,
+    /// ROS 2's CDR (little-endian): a 4-byte encapsulation header, then each primitive
+    /// aligned to its size from the header's end; a string's length counts its terminating
+    /// NUL; a header has no sequence number.
+    Cdr,
+}
+
+/// Reads serialised fields from a message's bytes.
 struct Cursor<'a> {
     bytes: &'a [u8],
     at: usize,
+    encoding: Encoding,
 }
 
 impl<'a> Cursor<'a> {
-    fn new(bytes: &'a [u8]) -> Self {
-        Self { bytes, at: 0 }
+    /// A cursor at the first field; for CDR, after the encapsulation header, which must say
+    /// little-endian CDR.
+    fn new(bytes: &'a [u8], encoding: Encoding) -> Result<Self, String> {
+        match encoding {
+            Encoding::Ros1 => Ok(Self {
+                bytes,
+                at: 0,
+                encoding,
+            }),
+            Encoding::Cdr => match bytes {
+                [0, 1, _, _, ..] => Ok(Self {
+                    bytes: &bytes[4..],
+                    at: 0,
+                    encoding,
+                }),
+                [0, 0, _, _, ..] => Err("big-endian CDR, which ROS 2 does not write".into()),
+                [a, b, ..] => Err(format!(
+                    "a CDR encapsulation of 0x{a:02x}{b:02x}, not little-endian CDR"
+                )),
+                _ => Err("too short for a CDR message".into()),
+            },
+        }
     }
 
     fn take(&mut self, n: usize) -> Result<&'a [u8], String> {
@@ -134,34 +166,60 @@ impl<'a> Cursor<'a> {
         Ok(out)
     }
 
+    /// In CDR, moves to the next multiple of `n` (a primitive's size).
+    fn align(&mut self, n: usize) -> Result<(), String> {
+        if self.encoding == Encoding::Cdr {
+            let pad = (n - self.at % n) % n;
+            self.take(pad)?;
+        }
+        Ok(())
+    }
+
+    fn array<const N: usize>(&mut self) -> Result<[u8; N], String> {
+        self.align(N)?;
+        Ok(self.take(N)?.try_into().expect("N bytes"))
+    }
+
     fn u8(&mut self) -> Result<u8, String> {
         Ok(self.take(1)?[0])
     }
 
     fn u32(&mut self) -> Result<u32, String> {
-        Ok(u32::from_le_bytes(
-            self.take(4)?.try_into().expect("4 bytes"),
-        ))
+        Ok(u32::from_le_bytes(self.array()?))
+    }
+
+    fn f32(&mut self) -> Result<f32, String> {
+        Ok(f32::from_le_bytes(self.array()?))
     }
 
     fn f64(&mut self) -> Result<f64, String> {
-        Ok(f64::from_le_bytes(
-            self.take(8)?.try_into().expect("8 bytes"),
-        ))
+        Ok(f64::from_le_bytes(self.array()?))
     }
 
+    /// A `uint8[]` or `int8[]`: a count and the bytes.
     fn bytes(&mut self) -> Result<&'a [u8], String> {
         let n = self.u32()? as usize;
         self.take(n)
     }
 
     fn string(&mut self) -> Result<String, String> {
-        Ok(String::from_utf8_lossy(self.bytes()?).into_owned())
+        let mut b = self.bytes()?;
+        if self.encoding == Encoding::Cdr {
+            // CDR counts the terminating NUL.
+            match b.split_last() {
+                Some((0, rest)) => b = rest,
+                _ => return Err("a CDR string without its terminating NUL".into()),
+            }
+        }
+        Ok(String::from_utf8_lossy(b).into_owned())
     }
 
-    /// A `std_msgs/Header`'s stamp (`None` when zero) and frame (seq passed over).
+    /// A `std_msgs/Header`'s stamp (`None` when zero) and frame (ROS 1's seq passed over).
     fn header(&mut self) -> Result<(Option<i64>, String), String> {
-        self.u32()?;
+        if self.encoding == Encoding::Ros1 {
+            self.u32()?;
+        }
+        // ROS 1: u32 seconds; ROS 2: i32 seconds (times before 1970 are not a robot's).
         let sec = self.u32()?;
         let nsec = self.u32()?;
         let frame = self.string()?;
@@ -186,12 +244,20 @@ impl<'a> Cursor<'a> {
     }
 
     fn skip_f64s(&mut self, n: usize) -> Result<(), String> {
+        self.align(8)?;
         self.take(8 * n).map(|_| ())
     }
 
+    /// Every byte read (CDR may pad the end to a multiple of 4).
     fn done(self) -> Result<(), String> {
         match self.bytes.len() - self.at {
             0 => Ok(()),
+            n if self.encoding == Encoding::Cdr
+                && n < 4
+                && self.bytes[self.at..].iter().all(|&b| b == 0) =>
+            {
+                Ok(())
+            }
             n => Err(format!(
                 "{n} bytes left over after its last field: not the message definition this \
                  type has in ROS"
@@ -205,8 +271,8 @@ impl<'a> Cursor<'a> {
 ///
 /// # Errors
 /// Bytes that are not a message of `kind` (a text saying why).
-pub fn audio(kind: Kind, bytes: &[u8]) -> Result<(Option<i64>, &[u8]), String> {
-    let mut c = Cursor::new(bytes);
+pub fn audio(kind: Kind, encoding: Encoding, bytes: &[u8]) -> Result<(Option<i64>, &[u8]), String> {
+    let mut c = Cursor::new(bytes, encoding)?;
     let stamp = match kind {
         Kind::AudioData => None,
         Kind::AudioDataStamped => c.header()?.0,
@@ -221,8 +287,8 @@ pub fn audio(kind: Kind, bytes: &[u8]) -> Result<(Option<i64>, &[u8]), String> {
 ///
 /// # Errors
 /// Bytes that are not one.
-pub fn audio_info(bytes: &[u8]) -> Result<AudioInfo, String> {
-    let mut c = Cursor::new(bytes);
+pub fn audio_info(encoding: Encoding, bytes: &[u8]) -> Result<AudioInfo, String> {
+    let mut c = Cursor::new(bytes, encoding)?;
     let info = AudioInfo {
         channels: c.u8()?,
         sample_rate: c.u32()?,
@@ -238,8 +304,8 @@ pub fn audio_info(bytes: &[u8]) -> Result<AudioInfo, String> {
 ///
 /// # Errors
 /// Bytes that are not a message of `kind`, or an orientation that is not a rotation.
-pub fn pose(kind: Kind, bytes: &[u8]) -> Result<StampedPose, String> {
-    let mut c = Cursor::new(bytes);
+pub fn pose(kind: Kind, encoding: Encoding, bytes: &[u8]) -> Result<StampedPose, String> {
+    let mut c = Cursor::new(bytes, encoding)?;
     let ((stamp_ns, frame_id), pose) = match kind {
         Kind::Odometry => {
             let (stamp, frame) = c.header()?;
@@ -283,12 +349,12 @@ pub fn pose(kind: Kind, bytes: &[u8]) -> Result<StampedPose, String> {
 /// # Errors
 /// Bytes that are not one, a grid whose cells are not `width * height`, or a cell size
 /// that is not positive.
-pub fn grid(bytes: &[u8]) -> Result<Grid, String> {
-    let mut c = Cursor::new(bytes);
+pub fn grid(encoding: Encoding, bytes: &[u8]) -> Result<Grid, String> {
+    let mut c = Cursor::new(bytes, encoding)?;
     let (_, frame_id) = c.header()?;
     c.u32()?; // map_load_time
     c.u32()?;
-    let resolution = f32::from_le_bytes(c.take(4)?.try_into().expect("4 bytes"));
+    let resolution = c.f32()?;
     let width = c.u32()? as usize;
     let height = c.u32()? as usize;
     let origin = c.pose()?;
@@ -343,7 +409,7 @@ mod tests {
     fn a_pose_stamped_gives_its_yaw_and_stamp() {
         let mut b = header(12, 500_000_000, "map");
         b.extend(pose_bytes(1.5, -2.0, 2.5));
-        let p = pose(Kind::PoseStamped, &b).unwrap();
+        let p = pose(Kind::PoseStamped, Encoding::Ros1, &b).unwrap();
         assert_eq!(p.stamp_ns, Some(12_500_000_000));
         assert_eq!((p.pose.x, p.pose.y), (1.5, -2.0));
         approx::assert_abs_diff_eq!(p.pose.theta, 2.5, epsilon = 1e-12);
@@ -353,7 +419,7 @@ mod tests {
     fn a_yaw_beyond_pi_comes_back_wrapped() {
         let mut b = header(1, 0, "map");
         b.extend(pose_bytes(0.0, 0.0, 3.5));
-        let p = pose(Kind::PoseStamped, &b).unwrap();
+        let p = pose(Kind::PoseStamped, Encoding::Ros1, &b).unwrap();
         approx::assert_abs_diff_eq!(
             p.pose.theta,
             3.5 - 2.0 * std::f64::consts::PI,
@@ -366,11 +432,11 @@ mod tests {
         let mut b = header(1, 0, "map");
         b.extend(pose_bytes(0.0, 0.0, 0.0));
         // A PoseStamped read as a PoseWithCovarianceStamped runs out of bytes.
-        let e = pose(Kind::PoseWithCovarianceStamped, &b).unwrap_err();
+        let e = pose(Kind::PoseWithCovarianceStamped, Encoding::Ros1, &b).unwrap_err();
         assert!(e.contains("more bytes"), "{e}");
         // Extra bytes after the last field are refused too.
         b.extend([0u8; 3]);
-        let e = pose(Kind::PoseStamped, &b).unwrap_err();
+        let e = pose(Kind::PoseStamped, Encoding::Ros1, &b).unwrap_err();
         assert!(e.contains("3 bytes left over"), "{e}");
     }
 
@@ -379,7 +445,7 @@ mod tests {
         let mut b = header(1, 0, "map");
         b.extend([0.0f64; 7].iter().flat_map(|v| v.to_le_bytes()));
         assert!(
-            pose(Kind::PoseStamped, &b)
+            pose(Kind::PoseStamped, Encoding::Ros1, &b)
                 .unwrap_err()
                 .contains("not a rotation")
         );
@@ -390,13 +456,13 @@ mod tests {
         let mut b = 5u32.to_le_bytes().to_vec();
         b.extend([1, 2, 3, 4, 5]);
         assert_eq!(
-            audio(Kind::AudioData, &b).unwrap(),
+            audio(Kind::AudioData, Encoding::Ros1, &b).unwrap(),
             (None, &[1u8, 2, 3, 4, 5][..])
         );
         let mut s = header(0, 0, "");
         s.extend(&b);
         assert_eq!(
-            audio(Kind::AudioDataStamped, &s).unwrap().0,
+            audio(Kind::AudioDataStamped, Encoding::Ros1, &s).unwrap().0,
             None,
             "a zero stamp is none"
         );
@@ -407,7 +473,7 @@ mod tests {
         i.extend(1_536_000u32.to_le_bytes());
         i.extend(4u32.to_le_bytes());
         i.extend(b"wave");
-        let info = audio_info(&i).unwrap();
+        let info = audio_info(Encoding::Ros1, &i).unwrap();
         assert_eq!((info.channels, info.sample_rate), (6, 16000));
         assert_eq!(
             (info.sample_format.as_str(), info.coding_format.as_str()),

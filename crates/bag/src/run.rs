@@ -35,7 +35,7 @@ use geom::Pose;
 
 use crate::error::{Error, Result};
 use crate::format::{self, Summary};
-use crate::msg::{self, AudioInfo, Grid, Kind};
+use crate::msg::{self, AudioInfo, Encoding, Grid, Kind};
 
 /// Where an audio stream's start jumps by more than this (s), a new segment begins.
 pub const GAP_S: f64 = 0.2;
@@ -278,21 +278,61 @@ impl Run {
 /// format, not raw PCM, or whose bytes are not whole frames; a message that does not
 /// decode.
 pub fn read<R: Read>(r: R, options: &ReadOptions) -> Result<Run> {
-    let mut kept: HashMap<String, Raw> = HashMap::new();
-    let mut audio: HashMap<String, AudioRaw> = HashMap::new();
-    let summary = format::scan(r, |m| {
+    let mut kept = Kept::default();
+    let summary = format::scan(r, |m| kept.take(&m, options))?;
+    assemble(&summary, kept, options)
+}
+
+/// Reads the run out of the bag at `path`: a ROS 1 bag, or a ROS 2 bag in MCAP (its folder
+/// or one `.mcap` file; [`crate::ros2`]), told apart by their first bytes.
+///
+/// # Errors
+/// The file cannot be opened, or what [`read`] refuses.
+pub fn read_file(path: &std::path::Path, options: &ReadOptions) -> Result<Run> {
+    let mcap = path.is_dir() || {
+        let mut head = [0u8; 5];
+        let n = std::fs::File::open(path)?.read(&mut head)?;
+        head[..n].starts_with(b"\x89MCAP")
+    };
+    if mcap {
+        let mut kept = Kept::default();
+        let summary = crate::ros2::scan_files(path, |m| kept.take(&m, options))?;
+        return assemble(&summary, kept, options);
+    }
+    let file = std::fs::File::open(path)?;
+    read(std::io::BufReader::with_capacity(1 << 20, file), options)
+}
+
+/// What a scan keeps: the audio topics' samples, the last message of each occupancy grid,
+/// every message of the other topics of a kind [`msg`] reads.
+#[derive(Default)]
+struct Kept {
+    raw: HashMap<String, Raw>,
+    audio: HashMap<String, AudioRaw>,
+    encodings: HashMap<String, Encoding>,
+}
+
+impl Kept {
+    fn take(&mut self, m: &format::Message<'_>, options: &ReadOptions) -> Result<()> {
         let topic = &m.connection.topic;
-        match Kind::of(&m.connection.msg_type) {
+        let kind = Kind::of(&m.connection.msg_type);
+        if kind.is_some() {
+            self.encodings.insert(topic.clone(), m.connection.encoding);
+        }
+        match kind {
             Some(kind)
                 if kind.is_audio() && options.audio_topic.as_ref().is_none_or(|t| t == topic) =>
             {
-                let raw = audio.entry(topic.clone()).or_default();
-                let (stamp, data) = msg::audio(kind, m.data).map_err(|what| Error::Message {
-                    topic: topic.clone(),
-                    msg_type: m.connection.msg_type.clone(),
-                    index: raw.msgs.len() + 1,
-                    what,
-                })?;
+                let raw = self.audio.entry(topic.clone()).or_default();
+                let (stamp, data) =
+                    msg::audio(kind, m.connection.encoding, m.data).map_err(|what| {
+                        Error::Message {
+                            topic: topic.clone(),
+                            msg_type: m.connection.msg_type.clone(),
+                            index: raw.msgs.len() + 1,
+                            what,
+                        }
+                    })?;
                 raw.msgs.push((m.time_ns, stamp, data.len()));
                 raw.bytes.extend_from_slice(data);
             }
@@ -300,34 +340,27 @@ pub fn read<R: Read>(r: R, options: &ReadOptions) -> Result<Run> {
             Some(kind) if kind.is_audio() => {}
             // A map is republished as it grows: only the last is kept.
             Some(Kind::OccupancyGrid) => {
-                kept.insert(topic.clone(), vec![(m.time_ns, m.data.to_vec())]);
+                self.raw
+                    .insert(topic.clone(), vec![(m.time_ns, m.data.to_vec())]);
             }
-            Some(_) => kept
+            Some(_) => self
+                .raw
                 .entry(topic.clone())
                 .or_default()
                 .push((m.time_ns, m.data.to_vec())),
             None => {}
         }
         Ok(())
-    })?;
-    assemble(&summary, kept, audio, options)
+    }
 }
 
-/// Reads the run out of the bag at `path`, through a buffer.
-///
-/// # Errors
-/// The file cannot be opened, or what [`read`] refuses.
-pub fn read_file(path: &std::path::Path, options: &ReadOptions) -> Result<Run> {
-    let file = std::fs::File::open(path)?;
-    read(std::io::BufReader::with_capacity(1 << 20, file), options)
-}
-
-fn assemble(
-    summary: &Summary,
-    mut kept: HashMap<String, Raw>,
-    mut audio_raw: HashMap<String, AudioRaw>,
-    options: &ReadOptions,
-) -> Result<Run> {
+fn assemble(summary: &Summary, kept: Kept, options: &ReadOptions) -> Result<Run> {
+    let Kept {
+        raw: kept,
+        audio: mut audio_raw,
+        encodings,
+    } = kept;
+    let encoding = |topic: &str| encodings.get(topic).copied().unwrap_or(Encoding::Ros1);
     let start_ns = summary.spans.values().map(|s| s.0).min().unwrap_or(0);
     let rel = |ns: i64| (ns - start_ns) as f64 * 1e-9;
     let topics: Vec<TopicInfo> =
@@ -419,7 +452,7 @@ fn assemble(
 
     let format = match options.format {
         Some(f) => f,
-        None => format_from_info(&topics, &audio.topic, &mut kept)?,
+        None => format_from_info(&topics, &audio.topic, &kept, &encoding)?,
     };
     if format.channels == 0 || format.sample_rate == 0 {
         return Err(Error::Audio(format!(
@@ -439,7 +472,8 @@ fn assemble(
         let mut out = Vec::with_capacity(raw.len());
         let mut frame = None;
         for (i, (t, bytes)) in raw.iter().enumerate() {
-            let p = msg::pose(k, bytes).map_err(|what| message_error(topic, i, what))?;
+            let p = msg::pose(k, encoding(&topic.topic), bytes)
+                .map_err(|what| message_error(topic, i, what))?;
             if i == 0 {
                 frame = p.frame_id;
             }
@@ -457,6 +491,7 @@ fn assemble(
         &topics,
         options.map_topic.as_deref(),
         &kept,
+        &encoding,
         pose_frame.as_deref(),
         &mut notes,
     )?;
@@ -536,6 +571,7 @@ fn robot_map(
     topics: &[TopicInfo],
     named: Option<&str>,
     kept: &HashMap<String, Raw>,
+    encoding: &impl Fn(&str) -> Encoding,
     pose_frame: Option<&str>,
     notes: &mut Vec<String>,
 ) -> Result<(Option<String>, Option<Grid>)> {
@@ -566,7 +602,7 @@ fn robot_map(
     let Some((_, bytes)) = kept.get(&topic.topic).and_then(|r| r.last()) else {
         return Ok((Some(topic.topic), None));
     };
-    let grid = msg::grid(bytes)
+    let grid = msg::grid(encoding(&topic.topic), bytes)
         .map_err(|what| message_error(&topic, topic.messages.saturating_sub(1), what))?;
     let bare = |f: &str| f.trim_start_matches('/').to_string();
     let refused = match pose_frame {
@@ -692,7 +728,8 @@ fn choose(
 fn format_from_info(
     topics: &[TopicInfo],
     audio: &str,
-    kept: &mut HashMap<String, Raw>,
+    kept: &HashMap<String, Raw>,
+    encoding: &impl Fn(&str) -> Encoding,
 ) -> Result<AudioFormat> {
     let infos: Vec<&TopicInfo> = topics
         .iter()
@@ -726,8 +763,8 @@ fn format_from_info(
         .get(&info_topic.topic)
         .and_then(|r| r.last())
         .ok_or_else(|| Error::Audio(format!("{}: no AudioInfo message", info_topic.topic)))?;
-    let info: AudioInfo =
-        msg::audio_info(&raw.1).map_err(|what| message_error(info_topic, 0, what))?;
+    let info: AudioInfo = msg::audio_info(encoding(&info_topic.topic), &raw.1)
+        .map_err(|what| message_error(info_topic, 0, what))?;
     if !info.coding_format.is_empty() && !info.coding_format.eq_ignore_ascii_case("wave") {
         return Err(Error::Audio(format!(
             "{} is coded as {} ({}): localisation needs the raw samples of every channel; \

@@ -251,7 +251,7 @@ fn files_that_are_not_ros_1_bags_say_what_they_are() {
             .unwrap_err()
             .to_string()
     };
-    assert!(e(b"SQLite format 3\0....").contains("rosbags-convert"));
+    assert!(e(b"SQLite format 3\0....").contains("ros2 bag convert"));
     assert!(e(b"\x89MCAP0\r\n").contains("MCAP"));
     assert!(e(b"#ROSBAG V1.2\n").contains("format 1.2"));
     assert!(e(b"RIFF....WAVEfmt ").contains("not #ROSBAG V2.0"));
@@ -285,5 +285,101 @@ fn the_robots_map_in_the_poses_frame_is_read_cell_for_cell() {
             .unwrap()
             .map
             .is_none()
+    );
+}
+
+#[test]
+fn the_ros2_mcap_bag_gives_the_same_run_in_cdr() {
+    // The folder, its .mcap file alone, and the same messages in zstd chunks (written by
+    // Foxglove's MCAP writer, as ros2 bag record compresses by default).
+    for path in [
+        fixture("run_ros2"),
+        fixture("run_ros2/run_ros2.mcap"),
+        fixture("run_zstd.mcap"),
+    ] {
+        let run = bag::read_file(&path, &ReadOptions::default()).unwrap();
+        assert_eq!(run.audio_topic, "/mic/audio");
+        assert_eq!((run.format.channels, run.format.sample_rate), (4, 8000));
+        assert_eq!(run.format.sample, SampleFormat::S16LE);
+        assert_eq!(run.pose_topic, "/robot_pose");
+        assert_eq!(run.odom_topic.as_deref(), Some("/odom"));
+        assert_eq!(run.pose_frame.as_deref(), Some("map"));
+        let counts: Vec<(&str, usize)> = run
+            .topics
+            .iter()
+            .map(|t| (t.topic.as_str(), t.messages))
+            .collect();
+        for want in [
+            ("/mic/audio", 30),
+            ("/odom", 61),
+            ("/robot_pose", 16),
+            ("/map", 1),
+            ("/mic/audio_info", 1),
+        ] {
+            assert!(counts.contains(&want), "{want:?} in {counts:?}");
+        }
+        // Stamped at each buffer's end: the audio starts with the run.
+        assert_eq!(run.segments.len(), 1);
+        assert_abs_diff_eq!(run.segments[0].start_s, 0.0, epsilon = 1e-9);
+        assert_eq!(run.segments[0].frames, 24_000);
+        for (c, channel) in run.samples(0, 0..24_000).iter().enumerate() {
+            for i in (0..24_000).step_by(1009) {
+                assert_eq!(channel[i], pattern(i, c) / 32768.0, "frame {i} channel {c}");
+            }
+        }
+        let stops = run.stops(&StopOptions::default()).unwrap();
+        assert_eq!(stops.len(), 2);
+        assert_abs_diff_eq!(stops[0].listen_s.0, 0.3, epsilon = 1e-6);
+        assert_abs_diff_eq!(stops[1].listen_s.1, 2.8, epsilon = 1e-6);
+        assert_abs_diff_eq!(stops[1].pose.x, 11.15, epsilon = 1e-9);
+        assert_abs_diff_eq!(stops[1].pose.theta_deg(), 30.0, epsilon = 1e-9);
+        let g = run.map.expect("the map, in the poses' frame");
+        assert_eq!((g.width, g.height, g.resolution), (40, 30, 0.1));
+        assert_eq!(
+            (
+                g.data[0],
+                g.data[10 * 40 + 10],
+                g.data[15 * 40 + 20],
+                g.data[5 * 40 + 5]
+            ),
+            (100, -1, 50, 0)
+        );
+    }
+}
+
+#[test]
+fn a_ros2_bag_cut_off_is_read_up_to_the_cut() {
+    let bytes = std::fs::read(fixture("run_zstd.mcap")).unwrap();
+    let dir = std::env::temp_dir().join(format!("iasm-bag-cut-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut read_some = 0;
+    for cut in (0..bytes.len()).step_by(1021) {
+        let p = dir.join("cut.mcap");
+        std::fs::write(&p, &bytes[..cut]).unwrap();
+        match bag::read_file(&p, &ReadOptions::default()) {
+            Ok(run) => {
+                assert!(run.truncated.is_some());
+                read_some += 1;
+            }
+            Err(Error::NotABag { .. } | Error::Topic(_) | Error::Audio(_)) => {}
+            Err(e) => panic!("cut at {cut}: {e}"),
+        }
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert!(read_some > 0, "some cut-off bag still holds a run");
+}
+
+#[test]
+fn a_ros2_bag_in_sqlite_names_the_conversion() {
+    let dir = std::env::temp_dir().join(format!("iasm-bag-db3-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("run_0.db3"), b"SQLite format 3\0").unwrap();
+    let e = bag::read_file(&dir, &ReadOptions::default())
+        .unwrap_err()
+        .to_string();
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert!(
+        e.contains("SQLite") && e.contains("ros2 bag convert"),
+        "{e}"
     );
 }

@@ -1,4 +1,4 @@
-//! `iasm bag`: a robot run recorded in a ROS 1 bag, made a data set.
+//! `iasm bag`: a robot run recorded in a ROS bag, made a data set.
 
 use anyhow::{Context, Result, bail};
 

@@ -1,0 +1,217 @@
+//! ROS 2 bags in MCAP (`ros2 bag record`'s storage since ROS 2 Iron, and Jazzy's default).
+//!
+//! An MCAP file is a stream of records: schemas (a message type and its definition),
+//! channels (a topic, its schema and how its messages are encoded) and messages (a channel,
+//! a log time, the bytes), most of them inside chunks compressed with zstd or lz4. The
+//! `mcap` crate (Foxglove's, which maintains the format) reads the records through its
+//! sans-IO linear reader: front to back, from any [`Read`], one chunk in memory at a time.
+//! Messages of channels encoded as `cdr` (ROS 2) or `ros1` are handed on as
+//! [`crate::format`] hands on a ROS 1 bag's, the receipt time being the log time; other
+//! encodings (JSON, Protobuf) are listed but not decoded. A file that ends inside a record
+//! (a recorder that was killed) is read up to there, and [`Summary::truncated`] says so.
+//!
+//! A ROS 2 bag is a folder: `metadata.yaml` and one or more `.mcap` files (split by size or
+//! duration), read in their order as one run ([`scan_files`]).
+
+use std::collections::HashMap;
+use std::io::Read;
+use std::path::Path;
+
+use mcap::records::Record;
+use mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader, LinearReaderOptions};
+
+use crate::error::{Error, Result};
+use crate::format::{Connection, Message, Summary};
+use crate::msg::Encoding;
+
+/// The longest record read (bytes): a camera image is a few megabytes; a length beyond this
+/// is a corrupt file, not a record to allocate for.
+const MAX_RECORD_BYTES: usize = 1 << 30;
+
+/// Reads every record of the MCAP stream `r` and hands each message of a ROS channel to
+/// `visit`; `file` numbers the file within its bag (channel ids are per file), and
+/// `summary` gathers what is seen across the bag's files.
+///
+/// # Errors
+/// A stream that is not MCAP, a record that does not parse or decompress, what `visit`
+/// returns, or the reader's I/O errors; a stream cut off inside a record is not an error.
+pub fn scan<R: Read>(
+    mut r: R,
+    file: u32,
+    summary: &mut Summary,
+    mut visit: impl FnMut(Message<'_>) -> Result<()>,
+) -> Result<()> {
+    let options = LinearReaderOptions::default().with_record_length_limit(MAX_RECORD_BYTES);
+    let mut reader = LinearReader::new_with_options(options);
+    let mut schemas: HashMap<u16, String> = HashMap::new();
+    let mut by_id: HashMap<u32, Connection> = HashMap::new();
+    let mut read = 0u64;
+    let mut at_eof = false;
+    while let Some(event) = reader.next_event() {
+        let event = match event {
+            Ok(e) => e,
+            Err(_) if at_eof => {
+                // Cut off: everything before was read.
+                summary.truncated = Some(read);
+                break;
+            }
+            Err(e) if read == 0 || matches!(e, mcap::McapError::BadMagic) => {
+                return Err(Error::NotABag {
+                    what: format!("not an MCAP file ({e})"),
+                });
+            }
+            Err(e) => {
+                return Err(Error::Corrupt {
+                    offset: read,
+                    what: e.to_string(),
+                });
+            }
+        };
+        match event {
+            LinearReadEvent::ReadRequest(need) => {
+                let buf = reader.insert(need);
+                let n = loop {
+                    match r.read(buf) {
+                        Ok(n) => break n,
+                        Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                        Err(e) => return Err(e.into()),
+                    }
+                };
+                read += n as u64;
+                at_eof = n == 0;
+                reader.notify_read(n);
+            }
+            LinearReadEvent::Record { data, opcode } => {
+                let record = mcap::parse_record(opcode, data).map_err(|e| Error::Corrupt {
+                    offset: read,
+                    what: e.to_string(),
+                })?;
+                match record {
+                    Record::Schema { header, .. } => {
+                        schemas.insert(header.id, header.name);
+                    }
+                    Record::Channel(ch) => {
+                        let id = (file << 16) | u32::from(ch.id);
+                        let schema = schemas.get(&ch.schema_id).cloned().unwrap_or_default();
+                        let (msg_type, encoding) = match ch.message_encoding.as_str() {
+                            "cdr" => (schema, Encoding::Cdr),
+                            "ros1" => (schema, Encoding::Ros1),
+                            // Listed, but its messages are not handed on (no known kind).
+                            other => (format!("{schema} ({other})"), Encoding::Cdr),
+                        };
+                        let c = Connection {
+                            id,
+                            topic: ch.topic,
+                            msg_type,
+                            encoding,
+                        };
+                        if !summary.connections.iter().any(|k| k.id == id) {
+                            summary.connections.push(c.clone());
+                        }
+                        by_id.insert(id, c);
+                    }
+                    Record::Message { header, data } => {
+                        let id = (file << 16) | u32::from(header.channel_id);
+                        let connection = by_id.get(&id).ok_or_else(|| Error::Corrupt {
+                            offset: read,
+                            what: format!(
+                                "a message on channel {}, which no record before it defines",
+                                header.channel_id
+                            ),
+                        })?;
+                        let time_ns = i64::try_from(header.log_time).unwrap_or(i64::MAX);
+                        summary.count(id, time_ns);
+                        visit(Message {
+                            connection,
+                            time_ns,
+                            data: &data,
+                        })?;
+                    }
+                    _ => {}
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The `.mcap` files of a ROS 2 bag folder, in order (their names end in `_0`, `_1`, ...);
+/// a lone file is itself.
+///
+/// # Errors
+/// A folder without `.mcap` files (one of SQLite files is named, with a way to convert it).
+pub fn bag_files(path: &Path) -> Result<Vec<std::path::PathBuf>> {
+    if !path.is_dir() {
+        return Ok(vec![path.to_path_buf()]);
+    }
+    let mut mcaps = Vec::new();
+    let mut db3 = false;
+    for entry in std::fs::read_dir(path)? {
+        let p = entry?.path();
+        match p.extension().and_then(|e| e.to_str()) {
+            Some("mcap") => mcaps.push(p),
+            Some("db3") => db3 = true,
+            _ => {}
+        }
+    }
+    if mcaps.is_empty() {
+        return Err(Error::NotABag {
+            what: if db3 {
+                "a ROS 2 bag stored in SQLite (.db3), which iasm does not read: convert it to MCAP \
+                 (ros2 bag convert) or to a ROS 1 bag (rosbags-convert)"
+                    .into()
+            } else {
+                "a folder without .mcap files".into()
+            },
+        });
+    }
+    // Natural order: run_0.mcap, run_1.mcap, ..., run_10.mcap.
+    mcaps.sort_by_key(|p| {
+        let name = p
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let digits: String = name
+            .chars()
+            .rev()
+            .take_while(char::is_ascii_digit)
+            .collect();
+        let n: u64 = digits
+            .chars()
+            .rev()
+            .collect::<String>()
+            .parse()
+            .unwrap_or(0);
+        (
+            name.len() - digits.len(),
+            name[..name.len() - digits.len()].to_string(),
+            n,
+        )
+    });
+    Ok(mcaps)
+}
+
+/// Scans the files of a ROS 2 bag ([`bag_files`]) as one run.
+///
+/// # Errors
+/// As [`bag_files`] and [`scan`]; a file that cannot be opened.
+pub fn scan_files(
+    path: &Path,
+    mut visit: impl FnMut(Message<'_>) -> Result<()>,
+) -> Result<Summary> {
+    let mut summary = Summary::default();
+    for (k, file) in bag_files(path)?.iter().enumerate() {
+        let f = std::fs::File::open(file)?;
+        let k = u32::try_from(k).map_err(|_| Error::Config("more than 2^32 files".into()))?;
+        scan(
+            std::io::BufReader::with_capacity(1 << 20, f),
+            k,
+            &mut summary,
+            &mut visit,
+        )?;
+        if summary.truncated.is_some() {
+            break;
+        }
+    }
+    Ok(summary)
+}
