@@ -25,9 +25,13 @@ can be checked.
   the bz2 bag's topics, but audio_common_msgs/AudioDataStamped in S16LE on /mic/audio
   (the ROS 2 port of audio_common has the same three messages).
 
-- `run_zstd.mcap`: run_ros2's messages rewritten by Foxglove's own MCAP writer (the
-  `mcap` package) in zstd-compressed chunks of 64 kB, as `ros2 bag record` compresses
-  them by default.
+- The bz2 and ROS 2 bags also hold tf2_msgs/TFMessage: on /tf, map -> odom at 5 Hz (the
+  odometry frame at (5.0, -1.0), turned by 90 degrees, in the map) and odom -> base_link
+  at 20 Hz (the odometry's poses); on /tf_static, base_link -> laser (0.2 m ahead).
+
+- `run_zstd.mcap`: run_ros2's messages but /odom's and /robot_pose's, rewritten by
+  Foxglove's own MCAP writer (the `mcap` package) in zstd-compressed chunks of 64 kB, as
+  `ros2 bag record` compresses them by default: a bag whose poses are only in /tf.
 
 All of them also hold a nav_msgs/OccupancyGrid on /map (latched, frame "map"): 40 x 30 cells of
 0.1 m from (-1.0, -0.5); the border cells occupied (100), the 5 x 4 cells from cell
@@ -63,6 +67,9 @@ def typestore(store=Stores.ROS1_NOETIC):
     types = {}
     for name, text in AUDIO_MSGS.items():
         types.update(get_types_from_msg(text, name))
+    if "tf2_msgs/msg/TFMessage" not in ts.types:
+        # ROS 1 Noetic's store has no tf2_msgs.
+        types.update(get_types_from_msg("geometry_msgs/TransformStamped[] transforms\n", "tf2_msgs/msg/TFMessage"))
     ts.register(types)
     return ts
 
@@ -142,11 +149,15 @@ def write(path, compression, stamped, fmt, topic, info_topic, pose_stamped, ros2
         c_odom = w.add_connection("/odom", "nav_msgs/msg/Odometry", typestore=ts)
         c_pose = w.add_connection("/robot_pose", "geometry_msgs/msg/PoseStamped", typestore=ts) if pose_stamped else None
         c_map = w.add_connection("/map", "nav_msgs/msg/OccupancyGrid", typestore=ts, **latched)
+        c_tf = w.add_connection("/tf", "tf2_msgs/msg/TFMessage", typestore=ts) if pose_stamped else None
+        c_tfs = w.add_connection("/tf_static", "tf2_msgs/msg/TFMessage", typestore=ts, **latched) if pose_stamped else None
         bits = 8 * np.dtype(dtype).itemsize
         info = T["audio_common_msgs/msg/AudioInfo"](
             channels=CH, sample_rate=FS, sample_format=fmt, bitrate=FS * CH * bits, coding_format="wave")
         w.write(c_info, T0, ser(info, "audio_common_msgs/msg/AudioInfo"))
         w.write(c_map, T0, ser(grid(ts, T0), "nav_msgs/msg/OccupancyGrid"))
+        if c_tfs is not None:
+            w.write(c_tfs, T0, ser(tf_msg(ts, [(T0, "base_link", "laser", 0.2, 0.0, 0.0)]), "tf2_msgs/msg/TFMessage"))
         events = []
         for k in range(int(FS * DURATION) // FRAMES):
             block = samples[k * FRAMES:(k + 1) * FRAMES].astype(dtype).tobytes()
@@ -157,6 +168,15 @@ def write(path, compression, stamped, fmt, topic, info_topic, pose_stamped, ros2
         for k in range(int(DURATION * 20) + 1):
             ns, msg = odometry(ts, k / 20)
             events.append((ns + 1_000_000, c_odom, ser(msg, "nav_msgs/msg/Odometry")))
+        if c_tf is not None:
+            for k in range(int(DURATION * 20) + 1):
+                t = k / 20
+                ns = T0 + round(t * 1e9)
+                x, y, yaw = pose_at(t)
+                trs = [(ns, "odom", "base_link", x, y, yaw)]
+                if k % 4 == 0:
+                    trs.append((ns, "map", "odom", 5.0, -1.0, math.radians(90.0)))
+                events.append((ns + 1_500_000, c_tf, ser(tf_msg(ts, trs), "tf2_msgs/msg/TFMessage")))
         if c_pose is not None:
             for k in range(int(DURATION * 5) + 1):
                 t = k / 5
@@ -182,8 +202,20 @@ def grid(ts, ns):
     return T["nav_msgs/msg/OccupancyGrid"](header=header(ts, ns, "map"), info=info, data=data.reshape(-1))
 
 
-def recompress(src, dst):
-    """The messages of the MCAP file `src`, written to `dst` in zstd chunks of 64 kB."""
+def tf_msg(ts, transforms):
+    """A TFMessage of (ns, parent, child, x, y, yaw) transforms."""
+    T = ts.types
+    V = T["geometry_msgs/msg/Vector3"]
+    out = []
+    for ns, parent, child, x, y, yaw in transforms:
+        tr = T["geometry_msgs/msg/Transform"](translation=V(x=x, y=y, z=0.0), rotation=quat(ts, yaw))
+        out.append(T["geometry_msgs/msg/TransformStamped"](header=header(ts, ns, parent), child_frame_id=child, transform=tr))
+    return T["tf2_msgs/msg/TFMessage"](transforms=out)
+
+
+def recompress(src, dst, drop=()):
+    """The messages of the MCAP file `src` but those of the topics `drop`, written to `dst`
+    in zstd chunks of 64 kB."""
     from mcap.reader import make_reader
     from mcap.writer import CompressionType
     from mcap.writer import Writer as McapWriter
@@ -194,6 +226,8 @@ def recompress(src, dst):
         w.start(profile="ros2", library="make_bag_fixtures.py")
         schemas, channels = {}, {}
         for schema, channel, message in make_reader(f).iter_messages():
+            if channel.topic in drop:
+                continue
             if schema.id not in schemas:
                 schemas[schema.id] = w.register_schema(schema.name, schema.encoding, schema.data)
             if channel.id not in channels:
@@ -208,7 +242,7 @@ def main():
     write(out / "run_lz4.bag", Writer.CompressionFormat.LZ4, True, "S16LE", "/audio", "/audio_info", False)
     write(out / "run_bz2.bag", Writer.CompressionFormat.BZ2, False, "S32LE", "/mic/audio", "/mic/audio_info", True)
     write(out / "run_ros2", None, True, "S16LE", "/mic/audio", "/mic/audio_info", True, ros2=True)
-    recompress(out / "run_ros2" / "run_ros2.mcap", out / "run_zstd.mcap")
+    recompress(out / "run_ros2" / "run_ros2.mcap", out / "run_zstd.mcap", drop=("/odom", "/robot_pose"))
     for p in sorted(list(out.glob("*.bag")) + list(out.glob("*.mcap")) + list(out.glob("run_ros2/*"))):
         print(p, p.stat().st_size, "bytes")
 

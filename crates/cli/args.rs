@@ -110,8 +110,10 @@ pub struct BagArgs {
     #[arg(long, value_name = "TOPIC")]
     pub audio_topic: Option<String>,
     /// The topic of the poses to map in (nav_msgs/Odometry, geometry_msgs/PoseStamped,
-    /// PoseWithCovarianceStamped or Pose2D) [default: the bag's one pose topic, or, beside
-    /// odometry, the one other: a localiser's, in the map's frame].
+    /// PoseWithCovarianceStamped or Pose2D), or /tf for the chain of transforms from the
+    /// tree's root (map) to the robot's base frame [default: the bag's one pose topic, or,
+    /// beside odometry, the one other: a localiser's, in the map's frame; /tf when the bag
+    /// has no pose topic].
     #[arg(long, value_name = "TOPIC")]
     pub pose_topic: Option<String>,
     /// The odometry topic to find the stops by, when the pose topic is a localiser's that
@@ -119,6 +121,10 @@ pub struct BagArgs {
     /// beside a pose topic of another type]; "none" finds them by the pose topic.
     #[arg(long, value_name = "TOPIC")]
     pub odom_topic: Option<String>,
+    /// The robot's base frame, for poses from /tf [default: base_footprint, else
+    /// base_link].
+    #[arg(long, value_name = "FRAME")]
+    pub base_frame: Option<String>,
     /// The robot's map (nav_msgs/OccupancyGrid), written to map/ when it is in the poses'
     /// frame [default: the bag's one grid topic, or /map]; "none" for no map.
     #[arg(long, value_name = "TOPIC")]

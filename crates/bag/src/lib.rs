@@ -26,6 +26,7 @@ pub mod msg;
 pub mod ros2;
 pub mod run;
 pub mod stops;
+pub mod tf;
 
 pub use error::{Error, Result};
 pub use run::{

@@ -32,6 +32,8 @@ pub enum Kind {
     Pose2D,
     /// `nav_msgs/OccupancyGrid`.
     OccupancyGrid,
+    /// `tf2_msgs/TFMessage` (`/tf`, `/tf_static`).
+    Tf,
 }
 
 impl Kind {
@@ -48,6 +50,7 @@ impl Kind {
             "geometry_msgs/PoseWithCovarianceStamped" => Self::PoseWithCovarianceStamped,
             "geometry_msgs/Pose2D" => Self::Pose2D,
             "nav_msgs/OccupancyGrid" => Self::OccupancyGrid,
+            "tf2_msgs/TFMessage" => Self::Tf,
             _ => return None,
         })
     }
@@ -90,6 +93,19 @@ pub struct StampedPose {
     /// The header's frame (`map`, `odom`); `None` for a type without a header.
     pub frame_id: Option<String>,
     /// The pose in the plane: position, and heading as the yaw of the orientation.
+    pub pose: Pose,
+}
+
+/// One transform of a `tf2_msgs/TFMessage`: the child frame's pose in the parent's.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Transform {
+    /// Its stamp (ns since the epoch); `None` when zero.
+    pub stamp_ns: Option<i64>,
+    /// The parent frame.
+    pub parent: String,
+    /// The child frame.
+    pub child: String,
+    /// The child's pose in the parent, in the plane.
     pub pose: Pose,
 }
 
@@ -381,6 +397,33 @@ pub fn grid(encoding: Encoding, bytes: &[u8]) -> Result<Grid, String> {
 
 fn stamp_pose_finite(p: &Pose) -> bool {
     p.x.is_finite() && p.y.is_finite() && p.theta.is_finite()
+}
+
+/// A `TFMessage`'s transforms.
+///
+/// # Errors
+/// Bytes that are not one, or a rotation that is not one.
+pub fn transforms(encoding: Encoding, bytes: &[u8]) -> Result<Vec<Transform>, String> {
+    let mut c = Cursor::new(bytes, encoding)?;
+    let n = c.u32()? as usize;
+    // Each transform takes at least 60 bytes: a count beyond that is not a count.
+    if n > bytes.len() / 60 {
+        return Err(format!("{n} transforms in {} bytes", bytes.len()));
+    }
+    let mut out = Vec::with_capacity(n);
+    for _ in 0..n {
+        let (stamp_ns, parent) = c.header()?;
+        let child = c.string()?;
+        let pose = c.pose()?;
+        out.push(Transform {
+            stamp_ns,
+            parent,
+            child,
+            pose,
+        });
+    }
+    c.done()?;
+    Ok(out)
 }
 
 #[cfg(test)]

@@ -6,7 +6,8 @@
 //! named there, else chosen by type when the choice is unambiguous: the one audio topic;
 //! the `AudioInfo` topic beside it; the one pose topic, or, when odometry and one other pose
 //! topic are recorded (a localiser's `/amcl_pose` in the map's frame), that other one, with
-//! the odometry kept to find the stops ([`crate::stops`]). Anything else is an error that
+//! the odometry kept to find the stops ([`crate::stops`]); without a pose topic, the chain
+//! of `/tf` from the map to the robot's base ([`crate::tf`]). Anything else is an error that
 //! lists the candidates and names the option to choose with.
 //!
 //! **Time.** A message's time is its header's stamp where it has one, else the time the
@@ -131,6 +132,9 @@ pub struct ReadOptions {
     pub format: Option<AudioFormat>,
     /// The occupancy grid topic; `Some("")` for none.
     pub map_topic: Option<String>,
+    /// The robot's base frame, for poses out of `/tf` ([`crate::tf`]; default: the first of
+    /// [`crate::tf::BASE_FRAMES`] the transforms have).
+    pub base_frame: Option<String>,
 }
 
 /// A topic of the bag.
@@ -400,54 +404,120 @@ fn assemble(summary: &Summary, kept: Kept, options: &ReadOptions) -> Result<Run>
         }
         (named, _) => choose(&topics, named, "audio", "--audio-topic", |k| k.is_audio())?,
     };
+    // Each pose topic's poses, and the frame its first message gives.
+    let decode_poses = |topic: &TopicInfo, raw: &Raw| {
+        let k = kind(topic).expect("a pose topic");
+        let mut out = Vec::with_capacity(raw.len());
+        let mut frame = None;
+        for (i, (t, bytes)) in raw.iter().enumerate() {
+            let p = msg::pose(k, encoding(&topic.topic), bytes)
+                .map_err(|what| message_error(topic, i, what))?;
+            if i == 0 {
+                frame = p.frame_id;
+            }
+            out.push((*t, p.stamp_ns, p.pose));
+        }
+        Result::Ok((out, frame))
+    };
     let pose_candidates: Vec<&TopicInfo> = topics
         .iter()
         .filter(|t| kind(t).is_some_and(Kind::is_pose))
         .collect();
-    let pose = match &options.pose_topic {
-        Some(_) => choose(
-            &topics,
-            options.pose_topic.as_deref(),
-            "pose",
-            "--pose-topic",
-            Kind::is_pose,
-        )?,
-        None => {
-            let others: Vec<&&TopicInfo> = pose_candidates
+    let tf_topics: Vec<&TopicInfo> = topics
+        .iter()
+        .filter(|t| kind(t) == Some(Kind::Tf))
+        .collect();
+    let from_tf = match options.pose_topic.as_deref() {
+        Some(named) => tf_topics.iter().any(|t| t.topic == named),
+        None => pose_candidates.is_empty() && !tf_topics.is_empty(),
+    };
+    // (name, poses, their frame), (name, odometry) for the stops.
+    type Series = Vec<(i64, Option<i64>, Pose)>;
+    type Named = (String, Series, Option<String>);
+    type Stops = (Option<String>, Series);
+    let ((pose_name, pose_msgs, pose_frame), (odom_name, odom_msgs)): (Named, Stops) = if from_tf {
+        let mut messages = Vec::new();
+        for t in &tf_topics {
+            for (i, (rt, bytes)) in kept
+                .get(&t.topic)
+                .map_or(&[][..], Vec::as_slice)
                 .iter()
-                .filter(|t| kind(t) != Some(Kind::Odometry))
-                .collect();
-            if pose_candidates.len() > 1 && others.len() == 1 {
-                notes.push(format!(
-                    "poses from {} ({}), stops found by odometry",
-                    others[0].topic, others[0].msg_type
-                ));
-                (*others[0]).clone()
-            } else {
-                choose(&topics, None, "pose", "--pose-topic", Kind::is_pose)?
+                .enumerate()
+            {
+                let trs = msg::transforms(encoding(&t.topic), bytes)
+                    .map_err(|what| message_error(t, i, what))?;
+                messages.push((*rt, trs));
             }
         }
-    };
-    let odom = match options.odom_topic.as_deref() {
-        Some("") => None,
-        Some(name) => {
-            let t = choose(
+        let track = crate::tf::track(&messages, options.base_frame.as_deref())
+            .map_err(|e| Error::Topic(format!("poses from /tf: {e}")))?;
+        notes.push(format!("poses from /tf: {} in {}", track.base, track.frame));
+        let odom = (!track.odometry.is_empty()).then(|| format!("/tf (odom -> {})", track.base));
+        (
+            (
+                format!("/tf ({} -> {})", track.frame, track.base),
+                track.poses,
+                Some(track.frame),
+            ),
+            (odom, track.odometry),
+        )
+    } else {
+        let pose = match &options.pose_topic {
+            Some(_) => choose(
                 &topics,
-                Some(name),
-                "odometry",
-                "--odom-topic",
+                options.pose_topic.as_deref(),
+                "pose",
+                "--pose-topic",
                 Kind::is_pose,
-            )?;
-            (t.topic != pose.topic).then_some(t)
-        }
-        None if kind(&pose) != Some(Kind::Odometry) => {
-            let odoms: Vec<&&TopicInfo> = pose_candidates
-                .iter()
-                .filter(|t| kind(t) == Some(Kind::Odometry))
-                .collect();
-            (odoms.len() == 1).then(|| (*odoms[0]).clone())
-        }
-        None => None,
+            )?,
+            None => {
+                let others: Vec<&&TopicInfo> = pose_candidates
+                    .iter()
+                    .filter(|t| kind(t) != Some(Kind::Odometry))
+                    .collect();
+                if pose_candidates.len() > 1 && others.len() == 1 {
+                    notes.push(format!(
+                        "poses from {} ({}), stops found by odometry",
+                        others[0].topic, others[0].msg_type
+                    ));
+                    (*others[0]).clone()
+                } else {
+                    choose(&topics, None, "pose", "--pose-topic", Kind::is_pose)?
+                }
+            }
+        };
+        let odom = match options.odom_topic.as_deref() {
+            Some("") => None,
+            Some(name) => {
+                let t = choose(
+                    &topics,
+                    Some(name),
+                    "odometry",
+                    "--odom-topic",
+                    Kind::is_pose,
+                )?;
+                (t.topic != pose.topic).then_some(t)
+            }
+            None if kind(&pose) != Some(Kind::Odometry) => {
+                let odoms: Vec<&&TopicInfo> = pose_candidates
+                    .iter()
+                    .filter(|t| kind(t) == Some(Kind::Odometry))
+                    .collect();
+                (odoms.len() == 1).then(|| (*odoms[0]).clone())
+            }
+            None => None,
+        };
+
+        let (pose_msgs, pose_frame) =
+            decode_poses(&pose, kept.get(&pose.topic).unwrap_or(&Vec::new()))?;
+        let odom_msgs = match &odom {
+            Some(o) => decode_poses(o, kept.get(&o.topic).unwrap_or(&Vec::new()))?.0,
+            None => Vec::new(),
+        };
+        (
+            (pose.topic.clone(), pose_msgs, pose_frame),
+            (odom.map(|o| o.topic), odom_msgs),
+        )
     };
 
     let format = match options.format {
@@ -466,27 +536,6 @@ fn assemble(summary: &Summary, kept: Kept, options: &ReadOptions) -> Result<Run>
         bytes: audio_bytes,
     } = audio_raw.remove(&audio.topic).unwrap_or_default();
     drop(audio_raw);
-    // Each pose topic's poses, and the frame its first message gives.
-    let decode_poses = |topic: &TopicInfo, raw: &Raw| {
-        let k = kind(topic).expect("a pose topic");
-        let mut out = Vec::with_capacity(raw.len());
-        let mut frame = None;
-        for (i, (t, bytes)) in raw.iter().enumerate() {
-            let p = msg::pose(k, encoding(&topic.topic), bytes)
-                .map_err(|what| message_error(topic, i, what))?;
-            if i == 0 {
-                frame = p.frame_id;
-            }
-            out.push((*t, p.stamp_ns, p.pose));
-        }
-        Result::Ok((out, frame))
-    };
-    let (pose_msgs, pose_frame) =
-        decode_poses(&pose, kept.get(&pose.topic).unwrap_or(&Vec::new()))?;
-    let odom_msgs = match &odom {
-        Some(o) => decode_poses(o, kept.get(&o.topic).unwrap_or(&Vec::new()))?.0,
-        None => Vec::new(),
-    };
     let (map_topic, map) = robot_map(
         &topics,
         options.map_topic.as_deref(),
@@ -503,11 +552,11 @@ fn assemble(summary: &Summary, kept: Kept, options: &ReadOptions) -> Result<Run>
             audio_msgs.iter().map(|m| (m.0, m.1)).collect::<Vec<_>>(),
         ),
         (
-            pose.topic.as_str(),
+            pose_name.as_str(),
             pose_msgs.iter().map(|m| (m.0, m.1)).collect(),
         ),
         (
-            odom.as_ref().map_or("", |o| o.topic.as_str()),
+            odom_name.as_deref().unwrap_or(""),
             odom_msgs.iter().map(|m| (m.0, m.1)).collect(),
         ),
     ];
@@ -551,9 +600,9 @@ fn assemble(summary: &Summary, kept: Kept, options: &ReadOptions) -> Result<Run>
         format,
         segments,
         audio: audio_bytes,
-        pose_topic: pose.topic.clone(),
+        pose_topic: pose_name,
         poses: timed(&pose_msgs),
-        odom_topic: odom.as_ref().map(|o| o.topic.clone()),
+        odom_topic: odom_name,
         odometry: timed(&odom_msgs),
         pose_frame,
         map_topic,
@@ -707,7 +756,7 @@ fn choose(
             match role {
                 "audio" => "audio_common_msgs/AudioData and AudioDataStamped",
                 _ =>
-                    "nav_msgs/Odometry, geometry_msgs/PoseStamped, PoseWithCovarianceStamped and Pose2D",
+                    "nav_msgs/Odometry, geometry_msgs/PoseStamped, PoseWithCovarianceStamped and Pose2D, or tf2_msgs/TFMessage",
             },
             if topics.is_empty() {
                 "none".to_string()

@@ -136,7 +136,7 @@ fn mean_pose(poses: &[TimedPose]) -> Pose {
 
 /// `track`'s pose at `t`, linear between its poses (the heading along the shorter arc),
 /// held beyond its ends.
-fn pose_at(track: &[TimedPose], t: f64) -> Pose {
+pub(crate) fn pose_at(track: &[TimedPose], t: f64) -> Pose {
     let k = track.partition_point(|p| p.t <= t);
     if k == 0 {
         return track[0].pose;
@@ -158,7 +158,7 @@ fn pose_at(track: &[TimedPose], t: f64) -> Pose {
 }
 
 /// `a ⊕ b`: `b`, given in `a`'s frame, in the frame `a` is given in.
-fn compose(a: Pose, b: Pose) -> Pose {
+pub(crate) fn compose(a: Pose, b: Pose) -> Pose {
     let (s, c) = a.theta.sin_cos();
     Pose::new(
         a.x + c * b.x - s * b.y,

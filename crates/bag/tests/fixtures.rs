@@ -290,13 +290,8 @@ fn the_robots_map_in_the_poses_frame_is_read_cell_for_cell() {
 
 #[test]
 fn the_ros2_mcap_bag_gives_the_same_run_in_cdr() {
-    // The folder, its .mcap file alone, and the same messages in zstd chunks (written by
-    // Foxglove's MCAP writer, as ros2 bag record compresses by default).
-    for path in [
-        fixture("run_ros2"),
-        fixture("run_ros2/run_ros2.mcap"),
-        fixture("run_zstd.mcap"),
-    ] {
+    // The folder, and its .mcap file alone.
+    for path in [fixture("run_ros2"), fixture("run_ros2/run_ros2.mcap")] {
         let run = bag::read_file(&path, &ReadOptions::default()).unwrap();
         assert_eq!(run.audio_topic, "/mic/audio");
         assert_eq!((run.format.channels, run.format.sample_rate), (4, 8000));
@@ -382,4 +377,66 @@ fn a_ros2_bag_in_sqlite_names_the_conversion() {
         e.contains("SQLite") && e.contains("ros2 bag convert"),
         "{e}"
     );
+}
+
+#[test]
+fn poses_from_tf_compose_the_localiser_and_the_odometry() {
+    // /tf: map -> odom is (5.0, -1.0) turned by 90 degrees, odom -> base_link the odometry;
+    // /tf_static: base_link -> laser 0.2 m ahead. The stops in the map: the odometry's
+    // (1.0, 2.0, 0) and (1.15, 2.0, 30 deg) turned by 90 degrees and moved by (5, -1).
+    // Named in the bags that have pose topics too; the zstd bag's (written by Foxglove's
+    // MCAP writer in zstd chunks, as ros2 bag record compresses by default) are only in /tf,
+    // which is then taken without being named.
+    for path in [
+        fixture("run_bz2.bag"),
+        fixture("run_ros2"),
+        fixture("run_zstd.mcap"),
+    ] {
+        let named = !path.ends_with("run_zstd.mcap");
+        let opts = ReadOptions {
+            pose_topic: named.then(|| "/tf".into()),
+            ..Default::default()
+        };
+        let run = bag::read_file(&path, &opts).unwrap();
+        if !named {
+            // Every sample of the zstd chunks, as the run wrote it.
+            assert_eq!(run.segments[0].frames, 24_000);
+            for (c, channel) in run.samples(0, 0..24_000).iter().enumerate() {
+                for i in (0..24_000).step_by(1009) {
+                    assert_eq!(channel[i], pattern(i, c) / 32768.0, "frame {i} channel {c}");
+                }
+            }
+        }
+        assert_eq!(run.pose_topic, "/tf (map -> base_link)");
+        assert_eq!(run.odom_topic.as_deref(), Some("/tf (odom -> base_link)"));
+        assert_eq!(run.pose_frame.as_deref(), Some("map"));
+        assert!(run.map.is_some(), "the map is in the poses' frame");
+        let stops = run.stops(&StopOptions::default()).unwrap();
+        assert_eq!(stops.len(), 2, "{path:?}");
+        for (s, (x, y, deg)) in stops.iter().zip([(3.0, 0.0, 90.0), (3.0, 0.15, 120.0)]) {
+            assert_abs_diff_eq!(s.pose.x, x, epsilon = 1e-9);
+            assert_abs_diff_eq!(s.pose.y, y, epsilon = 1e-9);
+            assert_abs_diff_eq!(s.pose.theta_deg(), deg, epsilon = 1e-9);
+        }
+        // The laser's frame, 0.2 m ahead of the base through the static link.
+        let opts = ReadOptions {
+            base_frame: Some("laser".into()),
+            ..opts
+        };
+        let run = bag::read_file(&path, &opts).unwrap();
+        let s = &run.stops(&StopOptions::default()).unwrap()[1];
+        let a = 120f64.to_radians();
+        assert_abs_diff_eq!(s.pose.x, 3.0 + 0.2 * a.cos(), epsilon = 1e-9);
+        assert_abs_diff_eq!(s.pose.y, 0.15 + 0.2 * a.sin(), epsilon = 1e-9);
+        // A frame the tree does not have is named in the error, with the frames it has.
+        let opts = ReadOptions {
+            base_frame: Some("base_footprint".into()),
+            ..opts
+        };
+        let e = bag::read_file(&path, &opts).unwrap_err().to_string();
+        assert!(
+            e.contains("no transform has base_footprint as its child"),
+            "{e}"
+        );
+    }
 }

@@ -26,6 +26,7 @@ pub fn run(a: &BagArgs) -> Result<Outcome> {
         pose_topic: a.pose_topic.clone(),
         odom_topic: a.odom_topic.as_deref().map(none_is_empty),
         map_topic: a.map_topic.as_deref().map(none_is_empty),
+        base_frame: a.base_frame.clone(),
         format,
     };
     let stops = bag::StopOptions {
