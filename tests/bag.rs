@@ -416,7 +416,12 @@ fn the_robots_map_is_written_as_a_ros_map_file_and_reads_back() {
     }
     // A bag whose poses are only in /tf: the chain map -> odom -> base_link, with the map.
     let out3 = dir.path().join("d3");
-    let r = iasm(&["bag", arg(&fixtures.join("run_zstd.mcap")), "--out", arg(&out3)]);
+    let r = iasm(&[
+        "bag",
+        arg(&fixtures.join("run_zstd.mcap")),
+        "--out",
+        arg(&out3),
+    ]);
     assert!(r.status.success(), "{}", show(&r));
     assert_eq!(
         std::fs::read_to_string(out3.join("pose/poses.csv")).unwrap(),

@@ -5,6 +5,9 @@
 //! a log time, the bytes), most of them inside chunks compressed with zstd or lz4. The
 //! `mcap` crate (Foxglove's, which maintains the format) reads the records through its
 //! sans-IO linear reader: front to back, from any [`Read`], one chunk in memory at a time.
+//! The chunks are decompressed here, in pure Rust (ruzstd, lz4_flex), with their sizes
+//! bounded: the reader's own zstd path spins forever on a chunk whose compressed size is
+//! corrupt (mcap 0.24), and a robot's bag may end in any state.
 //! Messages of channels encoded as `cdr` (ROS 2) or `ros1` are handed on as
 //! [`crate::format`] hands on a ROS 1 bag's, the receipt time being the log time; other
 //! encodings (JSON, Protobuf) are listed but not decoded. A file that ends inside a record
@@ -41,10 +44,13 @@ pub fn scan<R: Read>(
     summary: &mut Summary,
     mut visit: impl FnMut(Message<'_>) -> Result<()>,
 ) -> Result<()> {
-    let options = LinearReaderOptions::default().with_record_length_limit(MAX_RECORD_BYTES);
+    // Chunks are decompressed here, not by the reader (mcap 0.24's zstd loop spins forever on
+    // a chunk whose compressed size is corrupt).
+    let options = LinearReaderOptions::default()
+        .with_record_length_limit(MAX_RECORD_BYTES)
+        .with_emit_chunks(true);
     let mut reader = LinearReader::new_with_options(options);
-    let mut schemas: HashMap<u16, String> = HashMap::new();
-    let mut by_id: HashMap<u32, Connection> = HashMap::new();
+    let mut state = State::default();
     let mut read = 0u64;
     let mut at_eof = false;
     while let Some(event) = reader.next_event() {
@@ -68,6 +74,11 @@ pub fn scan<R: Read>(
             }
         };
         match event {
+            LinearReadEvent::ReadRequest(_) if at_eof => {
+                // It asks for more after the end: the file ends inside a record.
+                summary.truncated = Some(read);
+                break;
+            }
             LinearReadEvent::ReadRequest(need) => {
                 let buf = reader.insert(need);
                 let n = loop {
@@ -82,57 +93,155 @@ pub fn scan<R: Read>(
                 reader.notify_read(n);
             }
             LinearReadEvent::Record { data, opcode } => {
-                let record = mcap::parse_record(opcode, data).map_err(|e| Error::Corrupt {
-                    offset: read,
-                    what: e.to_string(),
-                })?;
-                match record {
-                    Record::Schema { header, .. } => {
-                        schemas.insert(header.id, header.name);
+                let corrupt = |what: String| Error::Corrupt { offset: read, what };
+                let record =
+                    mcap::parse_record(opcode, data).map_err(|e| corrupt(e.to_string()))?;
+                if let Record::Chunk { header, data } = record {
+                    let records = decompress(&header, &data).map_err(corrupt)?;
+                    for (op, body) in inner_records(&records).map_err(corrupt)? {
+                        let record =
+                            mcap::parse_record(op, body).map_err(|e| corrupt(e.to_string()))?;
+                        state.take(record, file, summary, read, &mut visit)?;
                     }
-                    Record::Channel(ch) => {
-                        let id = (file << 16) | u32::from(ch.id);
-                        let schema = schemas.get(&ch.schema_id).cloned().unwrap_or_default();
-                        let (msg_type, encoding) = match ch.message_encoding.as_str() {
-                            "cdr" => (schema, Encoding::Cdr),
-                            "ros1" => (schema, Encoding::Ros1),
-                            // Listed, but its messages are not handed on (no known kind).
-                            other => (format!("{schema} ({other})"), Encoding::Cdr),
-                        };
-                        let c = Connection {
-                            id,
-                            topic: ch.topic,
-                            msg_type,
-                            encoding,
-                        };
-                        if !summary.connections.iter().any(|k| k.id == id) {
-                            summary.connections.push(c.clone());
-                        }
-                        by_id.insert(id, c);
-                    }
-                    Record::Message { header, data } => {
-                        let id = (file << 16) | u32::from(header.channel_id);
-                        let connection = by_id.get(&id).ok_or_else(|| Error::Corrupt {
-                            offset: read,
-                            what: format!(
-                                "a message on channel {}, which no record before it defines",
-                                header.channel_id
-                            ),
-                        })?;
-                        let time_ns = i64::try_from(header.log_time).unwrap_or(i64::MAX);
-                        summary.count(id, time_ns);
-                        visit(Message {
-                            connection,
-                            time_ns,
-                            data: &data,
-                        })?;
-                    }
-                    _ => {}
+                } else {
+                    state.take(record, file, summary, read, &mut visit)?;
                 }
             }
         }
     }
     Ok(())
+}
+
+/// The schemas and channels seen so far in one file.
+#[derive(Default)]
+struct State {
+    schemas: HashMap<u16, String>,
+    by_id: HashMap<u32, Connection>,
+}
+
+impl State {
+    /// Keeps a schema or a channel, hands a message on.
+    fn take(
+        &mut self,
+        record: Record<'_>,
+        file: u32,
+        summary: &mut Summary,
+        offset: u64,
+        visit: &mut impl FnMut(Message<'_>) -> Result<()>,
+    ) -> Result<()> {
+        match record {
+            Record::Schema { header, .. } => {
+                self.schemas.insert(header.id, header.name);
+            }
+            Record::Channel(ch) => {
+                let id = (file << 16) | u32::from(ch.id);
+                let schema = self.schemas.get(&ch.schema_id).cloned().unwrap_or_default();
+                let (msg_type, encoding) = match ch.message_encoding.as_str() {
+                    "cdr" => (schema, Encoding::Cdr),
+                    "ros1" => (schema, Encoding::Ros1),
+                    // Listed, but its messages are not handed on (no known kind).
+                    other => (format!("{schema} ({other})"), Encoding::Cdr),
+                };
+                let c = Connection {
+                    id,
+                    topic: ch.topic,
+                    msg_type,
+                    encoding,
+                };
+                if !summary.connections.iter().any(|k| k.id == id) {
+                    summary.connections.push(c.clone());
+                }
+                self.by_id.insert(id, c);
+            }
+            Record::Message { header, data } => {
+                let id = (file << 16) | u32::from(header.channel_id);
+                let connection = self.by_id.get(&id).ok_or_else(|| Error::Corrupt {
+                    offset,
+                    what: format!(
+                        "a message on channel {}, which no record before it defines",
+                        header.channel_id
+                    ),
+                })?;
+                let time_ns = i64::try_from(header.log_time).unwrap_or(i64::MAX);
+                summary.count(id, time_ns);
+                visit(Message {
+                    connection,
+                    time_ns,
+                    data: &data,
+                })?;
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+}
+
+/// A chunk's records, decompressed: zstd (ruzstd) or lz4 frames (lz4_flex), no more than
+/// the size its header gives plus a byte.
+fn decompress(
+    header: &mcap::records::ChunkHeader,
+    data: &[u8],
+) -> std::result::Result<Vec<u8>, String> {
+    let size = header.uncompressed_size;
+    if size > MAX_RECORD_BYTES as u64 {
+        return Err(format!("a chunk of {size} bytes"));
+    }
+    let mut out = Vec::new();
+    let got = match header.compression.as_str() {
+        "" => {
+            out.extend_from_slice(data);
+            Ok(0)
+        }
+        "zstd" => ruzstd::decoding::StreamingDecoder::new(data)
+            .map_err(|e| std::io::Error::other(e.to_string()))
+            .and_then(|d| d.take(size + 1).read_to_end(&mut out)),
+        "lz4" => lz4_flex::frame::FrameDecoder::new(data)
+            .take(size + 1)
+            .read_to_end(&mut out),
+        other => {
+            return Err(format!(
+                "a chunk compressed with {other:?}, which is not zstd or lz4"
+            ));
+        }
+    };
+    got.map_err(|e| {
+        format!(
+            "a {} chunk that does not decompress: {e}",
+            header.compression
+        )
+    })?;
+    if out.len() as u64 != size {
+        return Err(format!(
+            "a chunk of {} bytes where its header says {size}",
+            out.len()
+        ));
+    }
+    Ok(out)
+}
+
+/// The records of a chunk: each an opcode, a `u64` length and that many bytes.
+fn inner_records(mut bytes: &[u8]) -> std::result::Result<Vec<(u8, &[u8])>, String> {
+    let mut out = Vec::new();
+    while !bytes.is_empty() {
+        if bytes.len() < 9 {
+            return Err("a chunk's last record is cut off".into());
+        }
+        let op = bytes[0];
+        let len = u64::from_le_bytes(bytes[1..9].try_into().expect("8 bytes"));
+        let rest = &bytes[9..];
+        let len = usize::try_from(len)
+            .ok()
+            .filter(|&n| n <= rest.len())
+            .ok_or_else(|| {
+                format!(
+                    "a record of {len} bytes in a chunk where {} remain",
+                    rest.len()
+                )
+            })?;
+        out.push((op, &rest[..len]));
+        bytes = &rest[len..];
+    }
+    Ok(out)
 }
 
 /// The `.mcap` files of a ROS 2 bag folder, in order (their names end in `_0`, `_1`, ...);
