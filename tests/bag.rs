@@ -313,7 +313,7 @@ fn a_bag_without_stops_or_with_a_missing_topic_is_a_clear_error() {
     let err = String::from_utf8_lossy(&r.stderr);
     assert_eq!(r.status.code(), Some(2), "{err}");
     assert!(
-        err.contains("nothing written") && err.contains("at 0 places"),
+        err.contains("nothing written") && err.contains("no stops found (a stop: the robot within"),
         "{err}"
     );
     assert!(!out.exists());

@@ -124,16 +124,21 @@ pub fn run(a: &BagArgs) -> Result<Outcome> {
     }
     let listened: f64 = got.stops.iter().map(|s| s.listen_s.1 - s.listen_s.0).sum();
     println!("{} stops, {listened:.1} s of audio", got.stops.len());
+    let n = got.stops.len();
     let too_few = format!(
-        "the robot stood still (within {} m and {} degrees) long enough to listen for {} s after \
-         --settle {} s and before --end-margin {} s at {} place{}; a source needs three stops",
+        "{} found (a stop: the robot within {} m and {} deg, --still-radius and --still-turn, \
+         for {} s of audio, --min-listen, after {} s of settling, --settle, and before a {}-s \
+         margin, --end-margin); a source needs three stops",
+        match n {
+            0 => "no stops".to_string(),
+            1 => "only 1 stop".to_string(),
+            n => format!("only {n} stops"),
+        },
         a.still_radius,
         a.still_turn,
         a.min_listen,
         a.settle,
         a.end_margin,
-        got.stops.len(),
-        if got.stops.len() == 1 { "" } else { "s" }
     );
     let Some(out) = &a.out else {
         if got.stops.len() < 3 {
