@@ -33,7 +33,12 @@ can be checked.
   Foxglove's own MCAP writer (the `mcap` package) in zstd-compressed chunks of 64 kB, as
   `ros2 bag record` compresses them by default: a bag whose poses are only in /tf.
 
-All of them also hold a nav_msgs/OccupancyGrid on /map (latched, frame "map"): 40 x 30 cells of
+- `run_audiostamped.mcap`: the ROS 2 `audio_common` of `audio_capturer_node` (its own
+  audio_common_msgs: AudioStamped = header + Audio {AudioInfo {format, channels, rate,
+  chunk}, AudioData {float32[], int32[], int16[], int8[], uint8[]}}), the samples as
+  int16 (paInt16, its default) on /audio/in, with /odom; zstd chunks. No map.
+
+The others also hold a nav_msgs/OccupancyGrid on /map (latched, frame "map"): 40 x 30 cells of
 0.1 m from (-1.0, -0.5); the border cells occupied (100), the 5 x 4 cells from cell
 (10, 10) unknown (-1), cell (20, 15) at 50 (neither), the rest free (0). The lz4 bag's
 poses are odometry (frame "odom"), the bz2 bag's /robot_pose is in "map".
@@ -236,6 +241,49 @@ def recompress(src, dst, drop=()):
         w.finish()
 
 
+def write_audiostamped(dst):
+    """`run_audiostamped.mcap` (module docs), through a temporary ROS 2 bag."""
+    import shutil
+    import tempfile
+
+    ts = get_typestore(Stores.ROS2_JAZZY)
+    defs = {
+        "audio_common_msgs/msg/AudioInfo": "int32 format\nint32 channels\nint32 rate\nint32 chunk\n",
+        "audio_common_msgs/msg/AudioData": "float32[] float32_data\nint32[] int32_data\nint16[] int16_data\nint8[] int8_data\nuint8[] uint8_data\n",
+        "audio_common_msgs/msg/Audio": "audio_common_msgs/AudioInfo info\naudio_common_msgs/AudioData audio_data\n",
+        "audio_common_msgs/msg/AudioStamped": "std_msgs/Header header\naudio_common_msgs/Audio audio\n",
+    }
+    types = {}
+    for name, text in defs.items():
+        types.update(get_types_from_msg(text, name))
+    ts.register(types)
+    T = ts.types
+    tmp = Path(tempfile.mkdtemp()) / "bag"
+    samples = pattern().astype("<i2")
+    empty = lambda dt: np.zeros(0, dtype=dt)
+    with Writer2(tmp, version=9, storage_plugin=StoragePlugin.MCAP) as w:
+        ca = w.add_connection("/audio/in", "audio_common_msgs/msg/AudioStamped", typestore=ts)
+        co = w.add_connection("/odom", "nav_msgs/msg/Odometry", typestore=ts)
+        events = []
+        for k in range(int(FS * DURATION) // FRAMES):
+            ns = T0 + round((k + 1) * FRAMES / FS * 1e9)
+            info = T["audio_common_msgs/msg/AudioInfo"](format=8, channels=CH, rate=FS, chunk=FRAMES)
+            data = T["audio_common_msgs/msg/AudioData"](
+                float32_data=empty(np.float32), int32_data=empty(np.int32),
+                int16_data=samples[k * FRAMES:(k + 1) * FRAMES].reshape(-1), int8_data=empty(np.int8),
+                uint8_data=empty(np.uint8))
+            audio = T["audio_common_msgs/msg/Audio"](info=info, audio_data=data)
+            msg = T["audio_common_msgs/msg/AudioStamped"](header=header(ts, ns, "mic"), audio=audio)
+            events.append((ns + 3_000_000, ca, ts.serialize_cdr(msg, "audio_common_msgs/msg/AudioStamped")))
+        for k in range(int(DURATION * 20) + 1):
+            ns, msg = odometry(ts, k / 20)
+            events.append((ns + 1_000_000, co, ts.serialize_cdr(msg, "nav_msgs/msg/Odometry")))
+        for ns, conn, data in sorted(events, key=lambda e: e[0]):
+            w.write(conn, ns, data)
+    recompress(next(tmp.glob("*.mcap")), dst)
+    shutil.rmtree(tmp.parent)
+
+
 def main():
     out = Path(sys.argv[1] if len(sys.argv) > 1 else "fixtures/bags")
     out.mkdir(parents=True, exist_ok=True)
@@ -243,6 +291,7 @@ def main():
     write(out / "run_bz2.bag", Writer.CompressionFormat.BZ2, False, "S32LE", "/mic/audio", "/mic/audio_info", True)
     write(out / "run_ros2", None, True, "S16LE", "/mic/audio", "/mic/audio_info", True, ros2=True)
     recompress(out / "run_ros2" / "run_ros2.mcap", out / "run_zstd.mcap", drop=("/odom", "/robot_pose"))
+    write_audiostamped(out / "run_audiostamped.mcap")
     for p in sorted(list(out.glob("*.bag")) + list(out.glob("*.mcap")) + list(out.glob("run_ros2/*"))):
         print(p, p.stat().st_size, "bytes")
 

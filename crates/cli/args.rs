@@ -105,8 +105,8 @@ pub struct BagArgs {
     /// Replace the --out folder even if it is not empty and not an earlier output of iasm.
     #[arg(long)]
     pub force: bool,
-    /// The audio topic (audio_common_msgs/AudioData or AudioDataStamped) [default: the
-    /// bag's one audio topic].
+    /// The audio topic (audio_common_msgs/AudioData, AudioDataStamped or AudioStamped)
+    /// [default: the bag's one audio topic].
     #[arg(long, value_name = "TOPIC")]
     pub audio_topic: Option<String>,
     /// The topic of the poses to map in (nav_msgs/Odometry, geometry_msgs/PoseStamped,
@@ -137,7 +137,7 @@ pub struct BagArgs {
     /// too).
     #[arg(long, value_name = "HZ", requires = "audio_channels")]
     pub sample_rate: Option<u32>,
-    /// The audio's sample format with --audio-channels: U8, S16LE, S24LE, S32LE, F32LE or
+    /// The audio's sample format with --audio-channels: U8, S8, S16LE, S24LE, S32LE, F32LE or
     /// F64LE.
     #[arg(
         long,

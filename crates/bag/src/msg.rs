@@ -5,7 +5,9 @@
 //! Audio: `audio_common_msgs/AudioData` (`uint8[] data`: interleaved frames, as ROS's
 //! `audio_capture` publishes them), `audio_common_msgs/AudioDataStamped` (a header and
 //! one), and `audio_common_msgs/AudioInfo`, which says their channels, rate and sample
-//! format. Poses: `nav_msgs/Odometry`, `geometry_msgs/PoseStamped`,
+//! format; and `audio_common_msgs/AudioStamped` of the ROS 2 `audio_common` of
+//! `audio_capturer_node`, a package of the same name whose messages carry their own format
+//! and their samples in typed arrays. Poses: `nav_msgs/Odometry`, `geometry_msgs/PoseStamped`,
 //! `geometry_msgs/PoseWithCovarianceStamped` (AMCL's `/amcl_pose`) and
 //! `geometry_msgs/Pose2D`. The robot's own map: `nav_msgs/OccupancyGrid`. Each message
 //! must decode to its last byte, so that a type of the same name but another definition is
@@ -20,6 +22,9 @@ pub enum Kind {
     AudioData,
     /// `audio_common_msgs/AudioDataStamped`.
     AudioDataStamped,
+    /// `audio_common_msgs/AudioStamped` (the ROS 2 `audio_common` of `audio_capturer_node`):
+    /// a header, the format, and the samples in a typed array.
+    AudioStamped,
     /// `audio_common_msgs/AudioInfo`.
     AudioInfo,
     /// `nav_msgs/Odometry`.
@@ -44,6 +49,7 @@ impl Kind {
         Some(match name.as_str() {
             "audio_common_msgs/AudioData" => Self::AudioData,
             "audio_common_msgs/AudioDataStamped" => Self::AudioDataStamped,
+            "audio_common_msgs/AudioStamped" => Self::AudioStamped,
             "audio_common_msgs/AudioInfo" => Self::AudioInfo,
             "nav_msgs/Odometry" => Self::Odometry,
             "geometry_msgs/PoseStamped" => Self::PoseStamped,
@@ -57,7 +63,10 @@ impl Kind {
 
     /// Whether its messages are audio samples.
     pub fn is_audio(self) -> bool {
-        matches!(self, Self::AudioData | Self::AudioDataStamped)
+        matches!(
+            self,
+            Self::AudioData | Self::AudioDataStamped | Self::AudioStamped
+        )
     }
 
     /// Whether its messages are poses.
@@ -67,6 +76,30 @@ impl Kind {
             Self::Odometry | Self::PoseStamped | Self::PoseWithCovarianceStamped | Self::Pose2D
         )
     }
+}
+
+/// The format an `AudioStamped` message gives its own samples.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Embedded {
+    /// Channels per frame.
+    pub channels: i32,
+    /// Frames per second.
+    pub rate: i32,
+    /// The sample format, by the array that holds the samples: `F32LE`, `S32LE`, `S16LE`,
+    /// `S8` or `U8`.
+    pub sample: &'static str,
+}
+
+/// An audio message: its stamp, its samples' bytes (interleaved frames), and for
+/// `AudioStamped` their format.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct AudioChunk<'a> {
+    /// The header's stamp (ns); `None` for `AudioData` or a stamp of zero.
+    pub stamp_ns: Option<i64>,
+    /// The samples, little-endian.
+    pub data: &'a [u8],
+    /// The format the message gives (only `AudioStamped` does).
+    pub format: Option<Embedded>,
 }
 
 /// `audio_common_msgs/AudioInfo`.
@@ -218,6 +251,20 @@ impl<'a> Cursor<'a> {
         self.take(n)
     }
 
+    /// A sequence of `width`-byte numbers, as its bytes: a count, then (in CDR aligned to
+    /// `width`) the elements.
+    fn numbers(&mut self, width: usize) -> Result<&'a [u8], String> {
+        let n = self.u32()? as usize;
+        if n == 0 {
+            return Ok(&[]);
+        }
+        self.align(width)?;
+        let len = n
+            .checked_mul(width)
+            .ok_or_else(|| format!("{n} elements of {width} bytes"))?;
+        self.take(len)
+    }
+
     fn string(&mut self) -> Result<String, String> {
         let mut b = self.bytes()?;
         if self.encoding == Encoding::Cdr {
@@ -287,16 +334,51 @@ impl<'a> Cursor<'a> {
 ///
 /// # Errors
 /// Bytes that are not a message of `kind` (a text saying why).
-pub fn audio(kind: Kind, encoding: Encoding, bytes: &[u8]) -> Result<(Option<i64>, &[u8]), String> {
+pub fn audio(kind: Kind, encoding: Encoding, bytes: &[u8]) -> Result<AudioChunk<'_>, String> {
     let mut c = Cursor::new(bytes, encoding)?;
-    let stamp = match kind {
+    let stamp_ns = match kind {
         Kind::AudioData => None,
-        Kind::AudioDataStamped => c.header()?.0,
+        Kind::AudioDataStamped | Kind::AudioStamped => c.header()?.0,
         other => return Err(format!("{other:?} is not an audio message")),
     };
-    let data = c.bytes()?;
+    if kind != Kind::AudioStamped {
+        let data = c.bytes()?;
+        c.done()?;
+        return Ok(AudioChunk {
+            stamp_ns,
+            data,
+            format: None,
+        });
+    }
+    // AudioInfo { int32 format, channels, rate, chunk }, then AudioData { float32[],
+    // int32[], int16[], int8[], uint8[] }, one of them filled.
+    let _format = c.u32()?;
+    let channels = c.u32()? as i32;
+    let rate = c.u32()? as i32;
+    let _chunk = c.u32()?;
+    let arrays = [
+        ("F32LE", c.numbers(4)?),
+        ("S32LE", c.numbers(4)?),
+        ("S16LE", c.numbers(2)?),
+        ("S8", c.numbers(1)?),
+        ("U8", c.numbers(1)?),
+    ];
     c.done()?;
-    Ok((stamp, data))
+    let filled: Vec<&(&str, &[u8])> = arrays.iter().filter(|a| !a.1.is_empty()).collect();
+    let (sample, data) = match filled.as_slice() {
+        [] => ("S16LE", &[][..]),
+        [(name, data)] => (*name, *data),
+        _ => return Err("samples in more than one of its arrays".into()),
+    };
+    Ok(AudioChunk {
+        stamp_ns,
+        data,
+        format: Some(Embedded {
+            channels,
+            rate,
+            sample,
+        }),
+    })
 }
 
 /// An `AudioInfo` message.
@@ -499,13 +581,15 @@ mod tests {
         let mut b = 5u32.to_le_bytes().to_vec();
         b.extend([1, 2, 3, 4, 5]);
         assert_eq!(
-            audio(Kind::AudioData, Encoding::Ros1, &b).unwrap(),
-            (None, &[1u8, 2, 3, 4, 5][..])
+            audio(Kind::AudioData, Encoding::Ros1, &b).unwrap().data,
+            &[1u8, 2, 3, 4, 5][..]
         );
         let mut s = header(0, 0, "");
         s.extend(&b);
         assert_eq!(
-            audio(Kind::AudioDataStamped, Encoding::Ros1, &s).unwrap().0,
+            audio(Kind::AudioDataStamped, Encoding::Ros1, &s)
+                .unwrap()
+                .stamp_ns,
             None,
             "a zero stamp is none"
         );

@@ -50,6 +50,8 @@ pub const CLOCK_MISMATCH_S: f64 = 5.0;
 pub enum SampleFormat {
     /// Unsigned 8-bit.
     U8,
+    /// Signed 8-bit.
+    S8,
     /// Signed 16-bit little-endian.
     S16LE,
     /// Signed 24-bit little-endian, packed in 3 bytes.
@@ -66,7 +68,7 @@ impl SampleFormat {
     /// Bytes per sample.
     pub fn bytes(self) -> usize {
         match self {
-            Self::U8 => 1,
+            Self::U8 | Self::S8 => 1,
             Self::S16LE => 2,
             Self::S24LE => 3,
             Self::S32LE | Self::F32LE => 4,
@@ -78,6 +80,7 @@ impl SampleFormat {
     fn decode(self, b: &[u8]) -> f32 {
         match self {
             Self::U8 => (f32::from(b[0]) - 128.0) / 128.0,
+            Self::S8 => f32::from(b[0] as i8) / 128.0,
             Self::S16LE => f32::from(i16::from_le_bytes([b[0], b[1]])) / 32768.0,
             Self::S24LE => (i32::from_le_bytes([0, b[0], b[1], b[2]]) >> 8) as f32 / 8_388_608.0,
             Self::S32LE => i32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f32 / 2_147_483_648.0,
@@ -93,6 +96,7 @@ impl FromStr for SampleFormat {
     fn from_str(s: &str) -> Result<Self> {
         Ok(match s.to_ascii_uppercase().as_str() {
             "U8" => Self::U8,
+            "S8" => Self::S8,
             "S16LE" => Self::S16LE,
             "S24LE" => Self::S24LE,
             "S32LE" => Self::S32LE,
@@ -100,7 +104,7 @@ impl FromStr for SampleFormat {
             "F64LE" => Self::F64LE,
             _ => {
                 return Err(Error::Audio(format!(
-                    "sample format {s:?} is not one of U8, S16LE, S24LE, S32LE, F32LE, F64LE"
+                    "sample format {s:?} is not one of U8, S8, S16LE, S24LE, S32LE, F32LE, F64LE"
                 )));
             }
         })
@@ -217,6 +221,8 @@ type Raw = Vec<(i64, Vec<u8>)>;
 struct AudioRaw {
     msgs: Vec<(i64, Option<i64>, usize)>,
     bytes: Vec<u8>,
+    /// The format its messages give (`AudioStamped`), the same in each.
+    embedded: Option<msg::Embedded>,
 }
 
 impl std::fmt::Debug for Run {
@@ -328,17 +334,33 @@ impl Kept {
                 if kind.is_audio() && options.audio_topic.as_ref().is_none_or(|t| t == topic) =>
             {
                 let raw = self.audio.entry(topic.clone()).or_default();
-                let (stamp, data) =
-                    msg::audio(kind, m.connection.encoding, m.data).map_err(|what| {
-                        Error::Message {
-                            topic: topic.clone(),
-                            msg_type: m.connection.msg_type.clone(),
-                            index: raw.msgs.len() + 1,
-                            what,
+                let error = |what: String| Error::Message {
+                    topic: topic.clone(),
+                    msg_type: m.connection.msg_type.clone(),
+                    index: raw.msgs.len() + 1,
+                    what,
+                };
+                let chunk = msg::audio(kind, m.connection.encoding, m.data).map_err(error)?;
+                if let Some(f) = chunk.format.filter(|_| !chunk.data.is_empty()) {
+                    match raw.embedded {
+                        None => raw.embedded = Some(f),
+                        Some(before) if before != f => {
+                            return Err(error(format!(
+                                "its format ({} channels at {} Hz, {}) is not the one before it \
+                                 ({} channels at {} Hz, {})",
+                                f.channels,
+                                f.rate,
+                                f.sample,
+                                before.channels,
+                                before.rate,
+                                before.sample
+                            )));
                         }
-                    })?;
-                raw.msgs.push((m.time_ns, stamp, data.len()));
-                raw.bytes.extend_from_slice(data);
+                        Some(_) => {}
+                    }
+                }
+                raw.msgs.push((m.time_ns, chunk.stamp_ns, chunk.data.len()));
+                raw.bytes.extend_from_slice(chunk.data);
             }
             // Another audio topic than the one named: not kept.
             Some(kind) if kind.is_audio() => {}
@@ -520,22 +542,28 @@ fn assemble(summary: &Summary, kept: Kept, options: &ReadOptions) -> Result<Run>
         )
     };
 
-    let format = match options.format {
-        Some(f) => f,
-        None => format_from_info(&topics, &audio.topic, &kept, &encoding)?,
-    };
-    if format.channels == 0 || format.sample_rate == 0 {
-        return Err(Error::Audio(format!(
-            "audio of {} channels at {} Hz",
-            format.channels, format.sample_rate
-        )));
-    }
-
     let AudioRaw {
         msgs: audio_msgs,
         bytes: audio_bytes,
+        embedded,
     } = audio_raw.remove(&audio.topic).unwrap_or_default();
     drop(audio_raw);
+    let format = match (options.format, embedded) {
+        (Some(f), _) => f,
+        // AudioStamped: the messages say their format.
+        (None, Some(e)) => AudioFormat {
+            channels: u16::try_from(e.channels).unwrap_or(0),
+            sample_rate: u32::try_from(e.rate).unwrap_or(0),
+            sample: e.sample.parse()?,
+        },
+        (None, None) => format_from_info(&topics, &audio.topic, &kept, &encoding)?,
+    };
+    if format.channels == 0 || format.sample_rate == 0 {
+        return Err(Error::Audio(format!(
+            "{}: audio of {} channels at {} Hz",
+            audio.topic, format.channels, format.sample_rate
+        )));
+    }
     let (map_topic, map) = robot_map(
         &topics,
         options.map_topic.as_deref(),
@@ -754,7 +782,7 @@ fn choose(
         [] => Err(Error::Topic(format!(
             "no {role} topic in the bag (it reads {}); its topics: {}",
             match role {
-                "audio" => "audio_common_msgs/AudioData and AudioDataStamped",
+                "audio" => "audio_common_msgs/AudioData, AudioDataStamped and AudioStamped",
                 _ =>
                     "nav_msgs/Odometry, geometry_msgs/PoseStamped, PoseWithCovarianceStamped and Pose2D, or tf2_msgs/TFMessage",
             },

@@ -460,6 +460,7 @@ fn a_bag_with_bytes_changed_anywhere_is_read_or_refused_never_a_panic() {
         "run_bz2.bag",
         "run_zstd.mcap",
         "run_ros2/run_ros2.mcap",
+        "run_audiostamped.mcap",
     ] {
         let bytes = std::fs::read(fixture(name)).unwrap();
         for _ in 0..400 {
@@ -477,4 +478,28 @@ fn a_bag_with_bytes_changed_anywhere_is_read_or_refused_never_a_panic() {
         }
     }
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn audio_stamped_messages_carry_their_own_format() {
+    // The ROS 2 audio_common of audio_capturer_node: AudioStamped, int16 samples, no
+    // AudioInfo topic; the format is each message's own.
+    let run = bag::read_file(&fixture("run_audiostamped.mcap"), &ReadOptions::default()).unwrap();
+    assert_eq!(run.audio_topic, "/audio/in");
+    assert_eq!((run.format.channels, run.format.sample_rate), (4, 8000));
+    assert_eq!(run.format.sample, SampleFormat::S16LE);
+    assert_eq!(run.segments.len(), 1);
+    // The run starts with its first message, the odometry's at 1 ms; the audio's stamps
+    // put its first sample at 0, 1 ms before.
+    assert_abs_diff_eq!(run.segments[0].start_s, -0.001, epsilon = 1e-9);
+    assert_eq!(run.segments[0].frames, 24_000);
+    for (c, channel) in run.samples(0, 0..24_000).iter().enumerate() {
+        for i in (0..24_000).step_by(1013) {
+            assert_eq!(channel[i], pattern(i, c) / 32768.0, "frame {i} channel {c}");
+        }
+    }
+    let stops = run.stops(&StopOptions::default()).unwrap();
+    assert_eq!(stops.len(), 2);
+    assert_abs_diff_eq!(stops[1].pose.x, 1.15, epsilon = 1e-9);
+    assert!(run.map.is_none());
 }
