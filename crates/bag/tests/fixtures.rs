@@ -20,6 +20,17 @@ fn pattern(i: usize, c: usize) -> f32 {
     ((37 * i + 1000 * c) % 4096) as f32 - 2048.0
 }
 
+/// The run's one segment holds the 3 s of the pattern, full scale at 1 (every 997th frame
+/// of every channel checked).
+fn assert_every_sample(run: &bag::Run) {
+    assert_eq!(run.segments[0].frames, 24_000);
+    for (c, channel) in run.samples(0, 0..24_000).iter().enumerate() {
+        for i in (0..24_000).step_by(997) {
+            assert_eq!(channel[i], pattern(i, c) / 32768.0, "frame {i} channel {c}");
+        }
+    }
+}
+
 #[test]
 fn the_lz4_bag_gives_every_sample_and_both_stops() {
     let run = bag::read_file(&fixture("run_lz4.bag"), &ReadOptions::default()).unwrap();
@@ -58,11 +69,7 @@ fn the_lz4_bag_gives_every_sample_and_both_stops() {
     let seg = &run.segments[0];
     assert_abs_diff_eq!(seg.start_s, 0.0, epsilon = 1e-9);
     assert_eq!(seg.frames, 24_000);
-    for (c, channel) in run.samples(0, 0..24_000).iter().enumerate() {
-        for i in (0..24_000).step_by(997) {
-            assert_eq!(channel[i], pattern(i, c) / 32768.0, "frame {i} channel {c}");
-        }
-    }
+    assert_every_sample(&run);
 
     let stops = run.stops(&StopOptions::default()).unwrap();
     assert_eq!(stops.len(), 2);
@@ -317,11 +324,7 @@ fn the_ros2_mcap_bag_gives_the_same_run_in_cdr() {
         assert_eq!(run.segments.len(), 1);
         assert_abs_diff_eq!(run.segments[0].start_s, 0.0, epsilon = 1e-9);
         assert_eq!(run.segments[0].frames, 24_000);
-        for (c, channel) in run.samples(0, 0..24_000).iter().enumerate() {
-            for i in (0..24_000).step_by(1009) {
-                assert_eq!(channel[i], pattern(i, c) / 32768.0, "frame {i} channel {c}");
-            }
-        }
+        assert_every_sample(&run);
         let stops = run.stops(&StopOptions::default()).unwrap();
         assert_eq!(stops.len(), 2);
         assert_abs_diff_eq!(stops[0].listen_s.0, 0.3, epsilon = 1e-6);
@@ -401,11 +404,7 @@ fn poses_from_tf_compose_the_localiser_and_the_odometry() {
         if !named {
             // Every sample of the zstd chunks, as the run wrote it.
             assert_eq!(run.segments[0].frames, 24_000);
-            for (c, channel) in run.samples(0, 0..24_000).iter().enumerate() {
-                for i in (0..24_000).step_by(1009) {
-                    assert_eq!(channel[i], pattern(i, c) / 32768.0, "frame {i} channel {c}");
-                }
-            }
+            assert_every_sample(&run);
         }
         assert_eq!(run.pose_topic, "/tf (map -> base_link)");
         assert_eq!(run.odom_topic.as_deref(), Some("/tf (odom -> base_link)"));
@@ -493,11 +492,7 @@ fn audio_stamped_messages_carry_their_own_format() {
     // put its first sample at 0, 1 ms before.
     assert_abs_diff_eq!(run.segments[0].start_s, -0.001, epsilon = 1e-9);
     assert_eq!(run.segments[0].frames, 24_000);
-    for (c, channel) in run.samples(0, 0..24_000).iter().enumerate() {
-        for i in (0..24_000).step_by(1013) {
-            assert_eq!(channel[i], pattern(i, c) / 32768.0, "frame {i} channel {c}");
-        }
-    }
+    assert_every_sample(&run);
     let stops = run.stops(&StopOptions::default()).unwrap();
     assert_eq!(stops.len(), 2);
     assert_abs_diff_eq!(stops[1].pose.x, 1.15, epsilon = 1e-9);
