@@ -216,6 +216,14 @@ fn decompress(
             out.len()
         ));
     }
+    // The writer's CRC-32 of the records (0: not computed).
+    let crc = crc32fast::hash(&out);
+    if header.uncompressed_crc != 0 && crc != header.uncompressed_crc {
+        return Err(format!(
+            "a chunk whose records' checksum is {crc:08x} where its header says {:08x}",
+            header.uncompressed_crc
+        ));
+    }
     Ok(out)
 }
 

@@ -498,3 +498,28 @@ fn audio_stamped_messages_carry_their_own_format() {
     assert_abs_diff_eq!(stops[1].pose.x, 1.15, epsilon = 1e-9);
     assert!(run.map.is_none());
 }
+
+#[test]
+fn an_mcap_chunk_whose_checksum_fails_is_refused() {
+    // run_zstd.mcap's first chunk carries the CRC-32 0x428fbdb2 of its records (Foxglove's
+    // writer computes it); changed by one bit, the chunk is refused, not read.
+    let mut bytes = std::fs::read(fixture("run_zstd.mcap")).unwrap();
+    let crc = 0x428f_bdb2u32.to_le_bytes();
+    let at = bytes
+        .windows(4)
+        .position(|w| w == crc)
+        .expect("the first chunk's CRC");
+    bytes[at] ^= 1;
+    let dir = std::env::temp_dir().join(format!("iasm-bag-crc-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("crc.mcap");
+    std::fs::write(&path, &bytes).unwrap();
+    let e = bag::read_file(&path, &ReadOptions::default())
+        .unwrap_err()
+        .to_string();
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert!(
+        e.contains("checksum is 428fbdb2 where its header says 428fbdb3"),
+        "{e}"
+    );
+}
