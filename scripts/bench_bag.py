@@ -4,6 +4,7 @@
     pip install rosbags==0.11.9 mcap==1.6.0
     python3 scripts/bench_bag.py make /tmp/big10.bag 10     # a 10-minute ROS 1 bag
     rosbags-convert --src /tmp/big10.bag --dst /tmp/big10_ros2 --dst-storage mcap
+    rosbags-convert --src /tmp/big10.bag --dst /tmp/big10_db3 --dst-storage sqlite3
     python3 scripts/bench_bag.py zstd /tmp/big10_ros2/big10_ros2.mcap /tmp/big10_zstd.mcap
     /usr/bin/time -f "%e s %M KB" iasm bag /tmp/big10.bag      # and the two MCAP stores
     python3 scripts/bench_bag.py read /tmp/big10.bag            # the rosbags baseline

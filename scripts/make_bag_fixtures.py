@@ -29,6 +29,8 @@ can be checked.
   odometry frame at (5.0, -1.0), turned by 90 degrees, in the map) and odom -> base_link
   at 20 Hz (the odometry's poses); on /tf_static, base_link -> laser (0.2 m ahead).
 
+- `run_db3/`: the same ROS 2 bag in rosbag2's SQLite storage (`.db3`, Humble's default).
+
 - `run_zstd.mcap`: run_ros2's messages but /odom's and /robot_pose's, rewritten by
   Foxglove's own MCAP writer (the `mcap` package) in zstd-compressed chunks of 64 kB, as
   `ros2 bag record` compresses them by default: a bag whose poses are only in /tf.
@@ -128,7 +130,7 @@ def odometry(ts, t):
     return ns, T["nav_msgs/msg/Odometry"](header=header(ts, ns, "odom"), child_frame_id="base_link", pose=pwc, twist=twc)
 
 
-def write(path, compression, stamped, fmt, topic, info_topic, pose_stamped, ros2=False):
+def write(path, compression, stamped, fmt, topic, info_topic, pose_stamped, ros2=False, storage=StoragePlugin.MCAP):
     ts = typestore(Stores.ROS2_JAZZY if ros2 else Stores.ROS1_NOETIC)
     T = ts.types
     ser = ts.serialize_cdr if ros2 else ts.serialize_ros1
@@ -142,7 +144,7 @@ def write(path, compression, stamped, fmt, topic, info_topic, pose_stamped, ros2
         samples = samples * 65536
     dtype = {"S16LE": "<i2", "S32LE": "<i4"}[fmt]
     if ros2:
-        w = Writer2(path, version=9, storage_plugin=StoragePlugin.MCAP)
+        w = Writer2(path, version=9, storage_plugin=storage)
     else:
         w = Writer(path)
         w.set_compression(compression)
@@ -290,9 +292,11 @@ def main():
     write(out / "run_lz4.bag", Writer.CompressionFormat.LZ4, True, "S16LE", "/audio", "/audio_info", False)
     write(out / "run_bz2.bag", Writer.CompressionFormat.BZ2, False, "S32LE", "/mic/audio", "/mic/audio_info", True)
     write(out / "run_ros2", None, True, "S16LE", "/mic/audio", "/mic/audio_info", True, ros2=True)
+    write(out / "run_db3", None, True, "S16LE", "/mic/audio", "/mic/audio_info", True, ros2=True,
+          storage=StoragePlugin.SQLITE3)
     recompress(out / "run_ros2" / "run_ros2.mcap", out / "run_zstd.mcap", drop=("/odom", "/robot_pose"))
     write_audiostamped(out / "run_audiostamped.mcap")
-    for p in sorted(list(out.glob("*.bag")) + list(out.glob("*.mcap")) + list(out.glob("run_ros2/*"))):
+    for p in sorted(list(out.glob("*.bag")) + list(out.glob("*.mcap")) + list(out.glob("run_*/*"))):
         print(p, p.stat().st_size, "bytes")
 
 

@@ -403,15 +403,32 @@ fn the_robots_map_is_written_as_a_ros_map_file_and_reads_back() {
     assert_eq!(c(20.0, 15.0), Cell::Unknown);
     assert_eq!(c(5.0, 5.0), Cell::Free);
     assert_eq!(c(15.0, 13.0), Cell::Free);
-    // The same run as a ROS 2 bag in MCAP (its folder): the same data set.
-    let out2 = dir.path().join("d2");
-    let r = iasm(&["bag", arg(&fixtures.join("run_ros2")), "--out", arg(&out2)]);
-    assert!(r.status.success(), "{}", show(&r));
-    for file in ["pose/poses.csv", "map/map.yaml", "map/map.pgm"] {
+    // The same run as a ROS 2 bag in MCAP and in SQLite (their folders): the same poses
+    // and map as the ROS 1 bag's, and the same audio as each other (both stamped S16LE;
+    // the ROS 1 bag's is S32LE, timed by receipt).
+    for ros2 in ["run_ros2", "run_db3"] {
+        let r = iasm(&[
+            "bag",
+            arg(&fixtures.join(ros2)),
+            "--out",
+            arg(&dir.path().join(ros2)),
+        ]);
+        assert!(r.status.success(), "{}", show(&r));
+        for file in ["pose/poses.csv", "map/map.yaml", "map/map.pgm"] {
+            let theirs = std::fs::read(dir.path().join(ros2).join(file)).unwrap();
+            assert_eq!(
+                std::fs::read(out.join(file)).unwrap(),
+                theirs,
+                "{ros2}: {file}"
+            );
+        }
+    }
+    for stop in ["audio/stop01.wav", "audio/stop02.wav"] {
+        let mcap = std::fs::read(dir.path().join("run_ros2").join(stop)).unwrap();
         assert_eq!(
-            std::fs::read(out.join(file)).unwrap(),
-            std::fs::read(out2.join(file)).unwrap(),
-            "{file}"
+            mcap,
+            std::fs::read(dir.path().join("run_db3").join(stop)).unwrap(),
+            "{stop}"
         );
     }
     // A bag whose poses are only in /tf: the chain map -> odom -> base_link, with the map.

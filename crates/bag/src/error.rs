@@ -43,6 +43,9 @@ pub enum Error {
     /// or a sample format not supported.
     #[error("{0}")]
     Audio(String),
+    /// A ROS 2 SQLite bag that SQLite cannot read as rosbag2's tables.
+    #[error("the SQLite database: {0}")]
+    Database(String),
     /// An option out of its range.
     #[error("{0}")]
     Config(String),

@@ -226,7 +226,7 @@ fn not_a_bag(head: &[u8]) -> Error {
     } else if head.starts_with(b"\x89MCAP") {
         "an MCAP file (a ROS 2 bag): read it with bag::read_file, which tells the two apart".into()
     } else if head.starts_with(b"SQLite format") {
-        "an SQLite database (a ROS 2 bag's .db3), which iasm does not read: convert it to MCAP (ros2 bag convert)"
+        "an SQLite database (a ROS 2 bag's .db3): read it with bag::read_file, which tells them apart"
             .into()
     } else if head.is_empty() {
         "the file is empty".into()

@@ -16,9 +16,8 @@
 //! # Ok::<(), bag::Error>(())
 //! ```
 //!
-//! ROS 2 bags stored in MCAP (the default since ROS 2 Jazzy) are read too ([`ros2`]: CDR
-//! messages of the same types); those stored in SQLite (`.db3`) are not: `ros2 bag convert`
-//! turns one into MCAP.
+//! ROS 2 bags are read too ([`ros2`]: CDR messages of the same types), stored in MCAP (the
+//! default since Jazzy) or in SQLite (`.db3`, the default through Humble and Iron).
 
 pub mod error;
 pub mod format;

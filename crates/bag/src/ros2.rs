@@ -14,7 +14,10 @@
 //! (a recorder that was killed) is read up to there, and [`Summary::truncated`] says so.
 //!
 //! A ROS 2 bag is a folder: `metadata.yaml` and one or more `.mcap` files (split by size or
-//! duration), read in their order as one run ([`scan_files`]).
+//! duration), read in their order as one run ([`scan_files`]). Through Humble and Iron,
+//! rosbag2 stored them in SQLite instead (`.db3`: a `topics` table and a `messages` table
+//! of topic, time stamp and CDR bytes), read through SQLite itself ([`scan_sqlite`]:
+//! rusqlite, SQLite built in), in time order.
 
 use std::collections::HashMap;
 use std::io::Read;
@@ -252,38 +255,65 @@ fn inner_records(mut bytes: &[u8]) -> std::result::Result<Vec<(u8, &[u8])>, Stri
     Ok(out)
 }
 
-/// The `.mcap` files of a ROS 2 bag folder, in order (their names end in `_0`, `_1`, ...);
-/// a lone file is itself.
+/// How a ROS 2 bag's files store its messages.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Storage {
+    /// MCAP files.
+    Mcap,
+    /// SQLite databases (`.db3`).
+    Sqlite,
+}
+
+/// The files of a ROS 2 bag (a folder of `.mcap` or `.db3` files, split by size or
+/// duration, in their order: `_0`, `_1`, ...), or a lone file told by its first bytes.
 ///
 /// # Errors
-/// A folder without `.mcap` files (one of SQLite files is named, with a way to convert it).
-pub fn bag_files(path: &Path) -> Result<Vec<std::path::PathBuf>> {
+/// A folder with neither; a folder of compressed files (`.db3.zstd`), named with the way
+/// to decompress them.
+pub fn bag_files(path: &Path) -> Result<(Storage, Vec<std::path::PathBuf>)> {
     if !path.is_dir() {
-        return Ok(vec![path.to_path_buf()]);
+        let mut head = [0u8; 16];
+        let n = std::fs::File::open(path)?.read(&mut head)?;
+        let storage = if head[..n].starts_with(b"SQLite format 3") {
+            Storage::Sqlite
+        } else {
+            Storage::Mcap
+        };
+        return Ok((storage, vec![path.to_path_buf()]));
     }
-    let mut mcaps = Vec::new();
-    let mut db3 = false;
+    let (mut mcaps, mut db3s, mut zstd) = (Vec::new(), Vec::new(), false);
     for entry in std::fs::read_dir(path)? {
         let p = entry?.path();
+        let name = p
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
         match p.extension().and_then(|e| e.to_str()) {
             Some("mcap") => mcaps.push(p),
-            Some("db3") => db3 = true,
+            Some("db3") => db3s.push(p),
+            Some("zstd") if name.ends_with(".db3.zstd") || name.ends_with(".mcap.zstd") => {
+                zstd = true
+            }
             _ => {}
         }
     }
-    if mcaps.is_empty() {
-        return Err(Error::NotABag {
-            what: if db3 {
-                "a ROS 2 bag stored in SQLite (.db3), which iasm does not read: convert it to MCAP \
-                 (ros2 bag convert) or to a ROS 1 bag (rosbags-convert)"
-                    .into()
-            } else {
-                "a folder without .mcap files".into()
-            },
-        });
-    }
-    // Natural order: run_0.mcap, run_1.mcap, ..., run_10.mcap.
-    mcaps.sort_by_key(|p| {
+    let (storage, mut files) = match (mcaps.is_empty(), db3s.is_empty()) {
+        (false, _) => (Storage::Mcap, mcaps),
+        (true, false) => (Storage::Sqlite, db3s),
+        (true, true) => {
+            return Err(Error::NotABag {
+                what: if zstd {
+                    "a ROS 2 bag compressed file by file (.zstd): decompress them (zstd -d) and \
+                     give the folder"
+                        .into()
+                } else {
+                    "a folder without .mcap or .db3 files".into()
+                },
+            });
+        }
+    };
+    // Natural order: run_0, run_1, ..., run_10.
+    files.sort_by_key(|p| {
         let name = p
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
@@ -305,30 +335,109 @@ pub fn bag_files(path: &Path) -> Result<Vec<std::path::PathBuf>> {
             n,
         )
     });
-    Ok(mcaps)
+    Ok((storage, files))
 }
 
 /// Scans the files of a ROS 2 bag ([`bag_files`]) as one run.
 ///
 /// # Errors
-/// As [`bag_files`] and [`scan`]; a file that cannot be opened.
+/// As [`bag_files`], [`scan`] and [`scan_sqlite`]; a file that cannot be opened.
 pub fn scan_files(
     path: &Path,
     mut visit: impl FnMut(Message<'_>) -> Result<()>,
 ) -> Result<Summary> {
     let mut summary = Summary::default();
-    for (k, file) in bag_files(path)?.iter().enumerate() {
-        let f = std::fs::File::open(file)?;
-        let k = u32::try_from(k).map_err(|_| Error::Config("more than 2^32 files".into()))?;
-        scan(
-            std::io::BufReader::with_capacity(1 << 20, f),
-            k,
-            &mut summary,
-            &mut visit,
-        )?;
+    let (storage, files) = bag_files(path)?;
+    for (k, file) in files.iter().enumerate() {
+        let k = u32::try_from(k).map_err(|_| Error::Config("more than 2^16 files".into()))?;
+        match storage {
+            Storage::Mcap => {
+                let f = std::fs::File::open(file)?;
+                scan(
+                    std::io::BufReader::with_capacity(1 << 20, f),
+                    k,
+                    &mut summary,
+                    &mut visit,
+                )?;
+            }
+            Storage::Sqlite => scan_sqlite(file, k, &mut summary, &mut visit)?,
+        }
         if summary.truncated.is_some() {
             break;
         }
     }
     Ok(summary)
+}
+
+/// Reads the messages of one rosbag2 SQLite file (`topics`: id, name, type,
+/// serialization format; `messages`: topic id, time stamp, data), in time order, and hands
+/// each on; `file` numbers it within its bag, as for [`scan`].
+///
+/// # Errors
+/// A database that SQLite cannot open or read (not rosbag2's tables, a corrupt page),
+/// or what `visit` returns.
+pub fn scan_sqlite(
+    path: &Path,
+    file: u32,
+    summary: &mut Summary,
+    visit: &mut impl FnMut(Message<'_>) -> Result<()>,
+) -> Result<()> {
+    use rusqlite::{Connection as Db, OpenFlags};
+    let sql = |e: rusqlite::Error| Error::Database(e.to_string());
+    let db = Db::open_with_flags(
+        path,
+        OpenFlags::SQLITE_OPEN_READ_ONLY | OpenFlags::SQLITE_OPEN_NO_MUTEX,
+    )
+    .map_err(sql)?;
+    let mut by_id: HashMap<i64, Connection> = HashMap::new();
+    let mut topics = db
+        .prepare("SELECT id, name, type, serialization_format FROM topics")
+        .map_err(sql)?;
+    let mut rows = topics.query([]).map_err(sql)?;
+    while let Some(row) = rows.next().map_err(sql)? {
+        let tid: i64 = row.get(0).map_err(sql)?;
+        let name: String = row.get(1).map_err(sql)?;
+        let ty: String = row.get(2).map_err(sql)?;
+        let format: String = row.get(3).map_err(sql)?;
+        let id = (file << 16) | (tid as u32 & 0xffff);
+        let (msg_type, encoding) = match format.as_str() {
+            "cdr" => (ty, Encoding::Cdr),
+            other => (format!("{ty} ({other})"), Encoding::Cdr),
+        };
+        let c = Connection {
+            id,
+            topic: name,
+            msg_type,
+            encoding,
+        };
+        if !summary.connections.iter().any(|k| k.id == id) {
+            summary.connections.push(c.clone());
+        }
+        by_id.insert(tid, c);
+    }
+    let mut messages = db
+        .prepare("SELECT topic_id, timestamp, data FROM messages ORDER BY timestamp, id")
+        .map_err(sql)?;
+    let mut rows = messages.query([]).map_err(sql)?;
+    while let Some(row) = rows.next().map_err(sql)? {
+        let tid: i64 = row.get(0).map_err(sql)?;
+        let time_ns: i64 = row.get(1).map_err(sql)?;
+        let data = row
+            .get_ref(2)
+            .map_err(sql)?
+            .as_blob()
+            .map_err(|e| Error::Database(e.to_string()))?;
+        let connection = by_id.get(&tid).ok_or_else(|| {
+            Error::Database(format!(
+                "a message of topic {tid}, which the topics table does not list"
+            ))
+        })?;
+        summary.count(connection.id, time_ns);
+        visit(Message {
+            connection,
+            time_ns,
+            data,
+        })?;
+    }
+    Ok(())
 }

@@ -299,12 +299,12 @@ pub fn read<R: Read>(r: R, options: &ReadOptions) -> Result<Run> {
 /// # Errors
 /// The file cannot be opened, or what [`read`] refuses.
 pub fn read_file(path: &std::path::Path, options: &ReadOptions) -> Result<Run> {
-    let mcap = path.is_dir() || {
-        let mut head = [0u8; 5];
+    let ros2 = path.is_dir() || {
+        let mut head = [0u8; 16];
         let n = std::fs::File::open(path)?.read(&mut head)?;
-        head[..n].starts_with(b"\x89MCAP")
+        head[..n].starts_with(b"\x89MCAP") || head[..n].starts_with(b"SQLite format 3")
     };
-    if mcap {
+    if ros2 {
         let mut kept = Kept::default();
         let summary = crate::ros2::scan_files(path, |m| kept.take(&m, options))?;
         return assemble(&summary, kept, options);

@@ -258,7 +258,7 @@ fn files_that_are_not_ros_1_bags_say_what_they_are() {
             .unwrap_err()
             .to_string()
     };
-    assert!(e(b"SQLite format 3\0....").contains("ros2 bag convert"));
+    assert!(e(b"SQLite format 3\0....").contains("bag::read_file"));
     assert!(e(b"\x89MCAP0\r\n").contains("MCAP"));
     assert!(e(b"#ROSBAG V1.2\n").contains("format 1.2"));
     assert!(e(b"RIFF....WAVEfmt ").contains("not #ROSBAG V2.0"));
@@ -298,7 +298,13 @@ fn the_robots_map_in_the_poses_frame_is_read_cell_for_cell() {
 #[test]
 fn the_ros2_mcap_bag_gives_the_same_run_in_cdr() {
     // The folder, and its .mcap file alone.
-    for path in [fixture("run_ros2"), fixture("run_ros2/run_ros2.mcap")] {
+    // (And the same bag in rosbag2's SQLite storage, Humble's default.)
+    for path in [
+        fixture("run_ros2"),
+        fixture("run_ros2/run_ros2.mcap"),
+        fixture("run_db3"),
+        fixture("run_db3/run_db3.db3"),
+    ] {
         let run = bag::read_file(&path, &ReadOptions::default()).unwrap();
         assert_eq!(run.audio_topic, "/mic/audio");
         assert_eq!((run.format.channels, run.format.sample_rate), (4, 8000));
@@ -368,18 +374,23 @@ fn a_ros2_bag_cut_off_is_read_up_to_the_cut() {
 }
 
 #[test]
-fn a_ros2_bag_in_sqlite_names_the_conversion() {
+fn a_ros2_sqlite_bag_that_is_not_one_or_is_compressed_says_so() {
     let dir = std::env::temp_dir().join(format!("iasm-bag-db3-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
+    // SQLite's magic and nothing else: SQLite refuses it, and the error says so.
     std::fs::write(dir.join("run_0.db3"), b"SQLite format 3\0").unwrap();
     let e = bag::read_file(&dir, &ReadOptions::default())
         .unwrap_err()
         .to_string();
+    assert!(e.contains("SQLite database"), "{e}");
+    // A bag compressed file by file.
+    std::fs::remove_file(dir.join("run_0.db3")).unwrap();
+    std::fs::write(dir.join("run_0.db3.zstd"), b"(\xb5/\xfd").unwrap();
+    let e = bag::read_file(&dir, &ReadOptions::default())
+        .unwrap_err()
+        .to_string();
     std::fs::remove_dir_all(&dir).unwrap();
-    assert!(
-        e.contains("SQLite") && e.contains("ros2 bag convert"),
-        "{e}"
-    );
+    assert!(e.contains("zstd -d"), "{e}");
 }
 
 #[test]
@@ -460,6 +471,7 @@ fn a_bag_with_bytes_changed_anywhere_is_read_or_refused_never_a_panic() {
         "run_zstd.mcap",
         "run_ros2/run_ros2.mcap",
         "run_audiostamped.mcap",
+        "run_db3/run_db3.db3",
     ] {
         let bytes = std::fs::read(fixture(name)).unwrap();
         for _ in 0..400 {
