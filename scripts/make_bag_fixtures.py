@@ -29,6 +29,10 @@ can be checked.
   odometry frame at (5.0, -1.0), turned by 90 degrees, in the map) and odom -> base_link
   at 20 Hz (the odometry's poses); on /tf_static, base_link -> laser (0.2 m ahead).
 
+- `run_split/`: run_lz4.bag cut in two as `rosbag record --split` cuts a run: the
+  messages recorded before 1.5 s in run_split_0.bag (with the one AudioInfo), the rest in
+  run_split_1.bag, each file with its own connection records.
+
 - `run_db3/`: the same ROS 2 bag in rosbag2's SQLite storage (`.db3`, Humble's default).
 
 - `run_zstd.mcap`: run_ros2's messages but /odom's and /robot_pose's, rewritten by
@@ -286,10 +290,36 @@ def write_audiostamped(dst):
     shutil.rmtree(tmp.parent)
 
 
+def split(src, dst, at_ns):
+    """The ROS 1 bag `src` cut at `at_ns` into `dst`/`dst.name`_0.bag and _1.bag."""
+    import shutil
+    from rosbags.rosbag1 import Reader
+
+    shutil.rmtree(dst, ignore_errors=True)
+    dst.mkdir(parents=True)
+    with Reader(src) as r:
+        msgs = list(r.messages())
+        conns = r.connections
+        writers = []
+        for k in range(2):
+            w = Writer(dst / f"{dst.name}_{k}.bag")
+            w.set_compression(Writer.CompressionFormat.LZ4)
+            w.open()
+            ids = {c.id: w.add_connection(c.topic, c.msgtype, msgdef=c.msgdef.data, md5sum=c.digest,
+                                          callerid=c.ext.callerid, latching=c.ext.latching) for c in conns}
+            writers.append((w, ids))
+        for c, t, data in msgs:
+            w, ids = writers[0 if t < at_ns else 1]
+            w.write(ids[c.id], t, data)
+        for w, _ in writers:
+            w.close()
+
+
 def main():
     out = Path(sys.argv[1] if len(sys.argv) > 1 else "fixtures/bags")
     out.mkdir(parents=True, exist_ok=True)
     write(out / "run_lz4.bag", Writer.CompressionFormat.LZ4, True, "S16LE", "/audio", "/audio_info", False)
+    split(out / "run_lz4.bag", out / "run_split", T0 + 1_500_000_000)
     write(out / "run_bz2.bag", Writer.CompressionFormat.BZ2, False, "S32LE", "/mic/audio", "/mic/audio_info", True)
     write(out / "run_ros2", None, True, "S16LE", "/mic/audio", "/mic/audio_info", True, ros2=True)
     write(out / "run_db3", None, True, "S16LE", "/mic/audio", "/mic/audio_info", True, ros2=True,

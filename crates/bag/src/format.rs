@@ -86,16 +86,29 @@ impl Summary {
 /// A file that is not a ROS 1 bag of format 2.0, a record that does not parse, a chunk
 /// that does not decompress, what `visit` returns, or the reader's I/O errors. A file cut
 /// off inside a record is not an error ([`Summary::truncated`]).
-pub fn scan<R: Read>(
+pub fn scan<R: Read>(r: R, mut visit: impl FnMut(Message<'_>) -> Result<()>) -> Result<Summary> {
+    let mut summary = Summary::default();
+    scan_into(r, 0, &mut summary, &mut visit)?;
+    Ok(summary)
+}
+
+/// [`scan`] of one file of a bag split into several (`rosbag record --split`), numbered
+/// `file` (connection numbers are per file: a connection's [`Connection::id`] is `file`
+/// in its upper 16 bits), into the `summary` of the whole bag.
+///
+/// # Errors
+/// As [`scan`].
+pub fn scan_into<R: Read>(
     mut r: R,
+    file: u32,
+    summary: &mut Summary,
     mut visit: impl FnMut(Message<'_>) -> Result<()>,
-) -> Result<Summary> {
+) -> Result<()> {
     let mut magic = [0u8; 13];
     let got = read_up_to(&mut r, &mut magic)?;
     if got < MAGIC.len() || magic != MAGIC {
         return Err(not_a_bag(&magic[..got]));
     }
-    let mut summary = Summary::default();
     let mut by_id: HashMap<u32, Connection> = HashMap::new();
     let mut offset = MAGIC.len() as u64;
     loop {
@@ -134,13 +147,13 @@ pub fn scan<R: Read>(
                     };
                     let rec_at = at;
                     at += rec.len;
-                    handle(rec, start + rec_at, &mut by_id, &mut summary, &mut visit)?;
+                    handle(rec, start + rec_at, file, &mut by_id, summary, &mut visit)?;
                 }
             }
-            _ => handle(record, start, &mut by_id, &mut summary, &mut visit)?,
+            _ => handle(record, start, file, &mut by_id, summary, &mut visit)?,
         }
     }
-    Ok(summary)
+    Ok(())
 }
 
 /// Handles one record outside a chunk's framing: a connection is kept, a message is
@@ -148,6 +161,7 @@ pub fn scan<R: Read>(
 fn handle(
     rec: Record,
     offset: u64,
+    file: u32,
     by_id: &mut HashMap<u32, Connection>,
     summary: &mut Summary,
     visit: &mut impl FnMut(Message<'_>) -> Result<()>,
@@ -167,7 +181,7 @@ fn handle(
                 })?;
             if let std::collections::hash_map::Entry::Vacant(e) = by_id.entry(id) {
                 let c = Connection {
-                    id,
+                    id: (file << 16) | (id & 0xffff),
                     topic,
                     msg_type,
                     encoding: Encoding::Ros1,
@@ -192,7 +206,7 @@ fn handle(
                 offset,
                 what: format!("a message on connection {id}, which no record before it defines"),
             })?;
-            summary.count(id, time_ns);
+            summary.count(connection.id, time_ns);
             visit(Message {
                 connection,
                 time_ns,

@@ -262,10 +262,13 @@ pub enum Storage {
     Mcap,
     /// SQLite databases (`.db3`).
     Sqlite,
+    /// Not ROS 2: the ROS 1 bags of a run that `rosbag record --split` cut into files.
+    Ros1,
 }
 
 /// The files of a ROS 2 bag (a folder of `.mcap` or `.db3` files, split by size or
-/// duration, in their order: `_0`, `_1`, ...), or a lone file told by its first bytes.
+/// duration, in their order: `_0`, `_1`, ...), or of a ROS 1 bag split by `rosbag record
+/// --split` (a folder of `.bag` files), or a lone file told by its first bytes.
 ///
 /// # Errors
 /// A folder with neither; a folder of compressed files (`.db3.zstd`), named with the way
@@ -281,7 +284,7 @@ pub fn bag_files(path: &Path) -> Result<(Storage, Vec<std::path::PathBuf>)> {
         };
         return Ok((storage, vec![path.to_path_buf()]));
     }
-    let (mut mcaps, mut db3s, mut zstd) = (Vec::new(), Vec::new(), false);
+    let (mut mcaps, mut db3s, mut bags, mut zstd) = (Vec::new(), Vec::new(), Vec::new(), false);
     for entry in std::fs::read_dir(path)? {
         let p = entry?.path();
         let name = p
@@ -291,23 +294,25 @@ pub fn bag_files(path: &Path) -> Result<(Storage, Vec<std::path::PathBuf>)> {
         match p.extension().and_then(|e| e.to_str()) {
             Some("mcap") => mcaps.push(p),
             Some("db3") => db3s.push(p),
+            Some("bag") => bags.push(p),
             Some("zstd") if name.ends_with(".db3.zstd") || name.ends_with(".mcap.zstd") => {
                 zstd = true
             }
             _ => {}
         }
     }
-    let (storage, mut files) = match (mcaps.is_empty(), db3s.is_empty()) {
-        (false, _) => (Storage::Mcap, mcaps),
-        (true, false) => (Storage::Sqlite, db3s),
-        (true, true) => {
+    let (storage, mut files) = match (mcaps.is_empty(), db3s.is_empty(), bags.is_empty()) {
+        (false, _, _) => (Storage::Mcap, mcaps),
+        (true, false, _) => (Storage::Sqlite, db3s),
+        (true, true, false) => (Storage::Ros1, bags),
+        (true, true, true) => {
             return Err(Error::NotABag {
                 what: if zstd {
                     "a ROS 2 bag compressed file by file (.zstd): decompress them (zstd -d) and \
                      give the folder"
                         .into()
                 } else {
-                    "a folder without .mcap or .db3 files".into()
+                    "a folder without .mcap, .db3 or .bag files".into()
                 },
             });
         }
@@ -361,6 +366,15 @@ pub fn scan_files(
                 )?;
             }
             Storage::Sqlite => scan_sqlite(file, k, &mut summary, &mut visit)?,
+            Storage::Ros1 => {
+                let f = std::fs::File::open(file)?;
+                crate::format::scan_into(
+                    std::io::BufReader::with_capacity(1 << 20, f),
+                    k,
+                    &mut summary,
+                    &mut visit,
+                )?;
+            }
         }
         if summary.truncated.is_some() {
             break;

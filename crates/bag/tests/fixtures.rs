@@ -33,7 +33,18 @@ fn assert_every_sample(run: &bag::Run) {
 
 #[test]
 fn the_lz4_bag_gives_every_sample_and_both_stops() {
-    let run = bag::read_file(&fixture("run_lz4.bag"), &ReadOptions::default()).unwrap();
+    check_lz4_run(&bag::read_file(&fixture("run_lz4.bag"), &ReadOptions::default()).unwrap());
+}
+
+#[test]
+fn a_bag_split_in_two_files_is_read_as_one_run() {
+    // run_lz4.bag cut at 1.5 s as rosbag record --split cuts a run: the AudioInfo is in the
+    // first file only, the audio runs on across the cut as one segment.
+    check_lz4_run(&bag::read_file(&fixture("run_split"), &ReadOptions::default()).unwrap());
+}
+
+/// Everything run_lz4.bag holds (scripts/make_bag_fixtures.py).
+fn check_lz4_run(run: &bag::Run) {
     assert_eq!(run.audio_topic, "/audio");
     assert_eq!(run.pose_topic, "/odom");
     assert_eq!(run.odom_topic, None);
@@ -69,7 +80,7 @@ fn the_lz4_bag_gives_every_sample_and_both_stops() {
     let seg = &run.segments[0];
     assert_abs_diff_eq!(seg.start_s, 0.0, epsilon = 1e-9);
     assert_eq!(seg.frames, 24_000);
-    assert_every_sample(&run);
+    assert_every_sample(run);
 
     let stops = run.stops(&StopOptions::default()).unwrap();
     assert_eq!(stops.len(), 2);
