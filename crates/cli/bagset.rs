@@ -102,7 +102,7 @@ pub fn write_dataset(
     run.stops.par_iter().enumerate().try_for_each(|(i, s)| {
         let audio = run.run.stop_audio(s);
         let channels: Vec<&[f32]> = picked.iter().map(|&c| audio[c].as_slice()).collect();
-        write_wav(&out.join("audio").join(stop_file(i, width)), &channels, fs)
+        crate::output::write_float_wav(&out.join("audio").join(stop_file(i, width)), &channels, fs)
     })?;
     for (i, s) in run.stops.iter().enumerate() {
         let name = stop_file(i, width);
@@ -164,21 +164,4 @@ fn grid_pgm(grid: &bag::msg::Grid) -> Vec<u8> {
 
 fn stop_file(i: usize, width: usize) -> String {
     format!("stop{:0width$}.wav", i + 1)
-}
-
-fn write_wav(path: &Path, channels: &[&[f32]], fs: u32) -> Result<()> {
-    let spec = hound::WavSpec {
-        channels: u16::try_from(channels.len()).context("more than 65535 channels")?,
-        sample_rate: fs,
-        bits_per_sample: 32,
-        sample_format: hound::SampleFormat::Float,
-    };
-    let ctx = || format!("writing {}", path.display());
-    let mut w = hound::WavWriter::create(path, spec).with_context(ctx)?;
-    for t in 0..channels.first().map_or(0, |c| c.len()) {
-        for ch in channels {
-            w.write_sample(ch[t]).with_context(ctx)?;
-        }
-    }
-    w.finalize().with_context(ctx)
 }

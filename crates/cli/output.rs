@@ -54,6 +54,34 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     written.with_context(|| format!("writing {}", path.display()))
 }
 
+/// Writes `channels` (one slice of samples per channel, all as long as the first) as a
+/// 32-bit float WAV at `fs` Hz: the data sets iasm writes (`simulate`, `bag`) keep every
+/// sample of a float or integer source exactly enough.
+///
+/// # Errors
+/// More than 65535 channels, or the file cannot be written; the message names `path`.
+pub fn write_float_wav<T: Copy + Into<f64>>(
+    path: &Path,
+    channels: &[impl AsRef<[T]>],
+    fs: u32,
+) -> Result<()> {
+    let spec = hound::WavSpec {
+        channels: u16::try_from(channels.len()).context("more than 65535 channels")?,
+        sample_rate: fs,
+        bits_per_sample: 32,
+        sample_format: hound::SampleFormat::Float,
+    };
+    let ctx = || format!("writing {}", path.display());
+    let mut w = hound::WavWriter::create(path, spec).with_context(ctx)?;
+    for t in 0..channels.first().map_or(0, |c| c.as_ref().len()) {
+        for ch in channels {
+            w.write_sample(ch.as_ref()[t].into() as f32)
+                .with_context(ctx)?;
+        }
+    }
+    w.finalize().with_context(ctx)
+}
+
 /// Builds a data set folder at `out` with `fill`, which writes into the folder it is given:
 /// a temporary folder beside `out`, marked with [`SIMULATE_MARKER`] and renamed into place
 /// when `fill` succeeds. An existing `out` is replaced whole when it is empty, an earlier

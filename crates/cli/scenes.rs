@@ -111,7 +111,7 @@ pub fn write_dataset(scene: &PreparedScene, out: &Path) -> Result<()> {
     (0..k).into_par_iter().try_for_each(|i| -> Result<()> {
         let audio = scene.render_stop(i);
         let path = out.join("audio").join(format!("sub{:0width$}.wav", i + 1));
-        write_f32_wav(&path, &audio, scene.scene.fs)?;
+        crate::output::write_float_wav(&path, &audio, scene.scene.fs)?;
         bar.inc(1);
         Ok(())
     })?;
@@ -140,23 +140,6 @@ pub fn write_dataset(scene: &PreparedScene, out: &Path) -> Result<()> {
 
 fn write(path: &Path, bytes: &[u8]) -> Result<()> {
     crate::output::write_atomic(path, bytes)
-}
-
-fn write_f32_wav(path: &Path, channels: &[Vec<f64>], fs: u32) -> Result<()> {
-    let spec = hound::WavSpec {
-        channels: channels.len() as u16,
-        sample_rate: fs,
-        bits_per_sample: 32,
-        sample_format: hound::SampleFormat::Float,
-    };
-    let ctx = || format!("writing {}", path.display());
-    let mut w = hound::WavWriter::create(path, spec).with_context(ctx)?;
-    for t in 0..channels[0].len() {
-        for ch in channels {
-            w.write_sample(ch[t] as f32).with_context(ctx)?;
-        }
-    }
-    w.finalize().with_context(ctx)
 }
 
 /// The occupancy map of a scene: walls a cell thick and obstacles occupied, the room free,

@@ -378,22 +378,13 @@ fn decompress(compression: &str, data: Vec<u8>, size: usize, offset: u64) -> Res
     let corrupt = |what: String| Error::Corrupt { offset, what };
     let out = match compression {
         "none" => data,
-        "bz2" => {
-            let mut out = Vec::new();
-            bzip2::read::BzDecoder::new(data.as_slice())
-                .take(size as u64 + 1)
-                .read_to_end(&mut out)
-                .map_err(|e| corrupt(format!("a bz2 chunk that does not decompress: {e}")))?;
-            out
-        }
-        "lz4" => {
-            let mut out = Vec::new();
-            lz4_flex::frame::FrameDecoder::new(data.as_slice())
-                .take(size as u64 + 1)
-                .read_to_end(&mut out)
-                .map_err(|e| corrupt(format!("an lz4 chunk that does not decompress: {e}")))?;
-            out
-        }
+        "bz2" => read_bounded(bzip2::read::BzDecoder::new(data.as_slice()), size as u64)
+            .map_err(|e| corrupt(format!("a bz2 chunk that does not decompress: {e}")))?,
+        "lz4" => read_bounded(
+            lz4_flex::frame::FrameDecoder::new(data.as_slice()),
+            size as u64,
+        )
+        .map_err(|e| corrupt(format!("an lz4 chunk that does not decompress: {e}")))?,
         other => {
             return Err(corrupt(format!(
                 "a chunk compressed with {other:?}, which is not none, bz2 or lz4"
@@ -406,6 +397,15 @@ fn decompress(compression: &str, data: Vec<u8>, size: usize, offset: u64) -> Res
             out.len()
         )));
     }
+    Ok(out)
+}
+
+/// What the decoder `r` gives, but no more than a byte beyond `size` (a chunk's
+/// decompressed length as its header gives it), so that a corrupt chunk cannot fill the
+/// memory; the caller compares the length with `size`.
+pub(crate) fn read_bounded(r: impl Read, size: u64) -> std::io::Result<Vec<u8>> {
+    let mut out = Vec::new();
+    r.take(size + 1).read_to_end(&mut out)?;
     Ok(out)
 }
 

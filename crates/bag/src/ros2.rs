@@ -27,7 +27,7 @@ use mcap::records::Record;
 use mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader, LinearReaderOptions};
 
 use crate::error::{Error, Result};
-use crate::format::{Connection, Message, Summary};
+use crate::format::{Connection, Message, Summary, read_bounded};
 use crate::msg::Encoding;
 
 /// The longest record read (bytes): a camera image is a few megabytes; a length beyond this
@@ -189,25 +189,19 @@ fn decompress(
     if size > MAX_RECORD_BYTES as u64 {
         return Err(format!("a chunk of {size} bytes"));
     }
-    let mut out = Vec::new();
     let got = match header.compression.as_str() {
-        "" => {
-            out.extend_from_slice(data);
-            Ok(0)
-        }
+        "" => Ok(data.to_vec()),
         "zstd" => ruzstd::decoding::StreamingDecoder::new(data)
             .map_err(|e| std::io::Error::other(e.to_string()))
-            .and_then(|d| d.take(size + 1).read_to_end(&mut out)),
-        "lz4" => lz4_flex::frame::FrameDecoder::new(data)
-            .take(size + 1)
-            .read_to_end(&mut out),
+            .and_then(|d| read_bounded(d, size)),
+        "lz4" => read_bounded(lz4_flex::frame::FrameDecoder::new(data), size),
         other => {
             return Err(format!(
                 "a chunk compressed with {other:?}, which is not zstd or lz4"
             ));
         }
     };
-    got.map_err(|e| {
+    let out = got.map_err(|e| {
         format!(
             "a {} chunk that does not decompress: {e}",
             header.compression
@@ -262,7 +256,8 @@ pub enum Storage {
     Mcap,
     /// SQLite databases (`.db3`).
     Sqlite,
-    /// Not ROS 2: the ROS 1 bags of a run that `rosbag record --split` cut into files.
+    /// Not ROS 2: a ROS 1 bag, or the ROS 1 bags of a run that `rosbag record --split` cut
+    /// into files.
     Ros1,
 }
 
@@ -277,10 +272,13 @@ pub fn bag_files(path: &Path) -> Result<(Storage, Vec<std::path::PathBuf>)> {
     if !path.is_dir() {
         let mut head = [0u8; 16];
         let n = std::fs::File::open(path)?.read(&mut head)?;
-        let storage = if head[..n].starts_with(b"SQLite format 3") {
+        let storage = if head[..n].starts_with(b"\x89MCAP") {
+            Storage::Mcap
+        } else if head[..n].starts_with(b"SQLite format 3") {
             Storage::Sqlite
         } else {
-            Storage::Mcap
+            // A ROS 1 bag, or what its reader will name as not one.
+            Storage::Ros1
         };
         return Ok((storage, vec![path.to_path_buf()]));
     }
@@ -343,7 +341,8 @@ pub fn bag_files(path: &Path) -> Result<(Storage, Vec<std::path::PathBuf>)> {
     Ok((storage, files))
 }
 
-/// Scans the files of a ROS 2 bag ([`bag_files`]) as one run.
+/// Scans the files of a bag ([`bag_files`]: a ROS 1 bag, or a folder or file of a ROS 2
+/// bag or of a split ROS 1 run) as one run.
 ///
 /// # Errors
 /// As [`bag_files`], [`scan`] and [`scan_sqlite`]; a file that cannot be opened.

@@ -293,24 +293,16 @@ pub fn read<R: Read>(r: R, options: &ReadOptions) -> Result<Run> {
     assemble(&summary, kept, options)
 }
 
-/// Reads the run out of the bag at `path`: a ROS 1 bag, or a ROS 2 bag in MCAP (its folder
-/// or one `.mcap` file; [`crate::ros2`]), told apart by their first bytes.
+/// Reads the run out of the bag at `path`: a ROS 1 bag, a ROS 2 bag in MCAP or SQLite (its
+/// folder or one of its files), or the folder of a split ROS 1 run, told apart by their
+/// first bytes ([`crate::ros2::bag_files`]).
 ///
 /// # Errors
 /// The file cannot be opened, or what [`read`] refuses.
 pub fn read_file(path: &std::path::Path, options: &ReadOptions) -> Result<Run> {
-    let ros2 = path.is_dir() || {
-        let mut head = [0u8; 16];
-        let n = std::fs::File::open(path)?.read(&mut head)?;
-        head[..n].starts_with(b"\x89MCAP") || head[..n].starts_with(b"SQLite format 3")
-    };
-    if ros2 {
-        let mut kept = Kept::default();
-        let summary = crate::ros2::scan_files(path, |m| kept.take(&m, options))?;
-        return assemble(&summary, kept, options);
-    }
-    let file = std::fs::File::open(path)?;
-    read(std::io::BufReader::with_capacity(1 << 20, file), options)
+    let mut kept = Kept::default();
+    let summary = crate::ros2::scan_files(path, |m| kept.take(&m, options))?;
+    assemble(&summary, kept, options)
 }
 
 /// What a scan keeps: the audio topics' samples, the last message of each occupancy grid,
@@ -712,6 +704,11 @@ fn message_error(topic: &TopicInfo, i: usize, what: String) -> Error {
     }
 }
 
+/// A topic's namespace: all but its last name (`/mic` of `/mic/audio`).
+fn namespace(topic: &str) -> &str {
+    topic.rsplit_once('/').map_or("", |(ns, _)| ns)
+}
+
 /// When the bag's audio topics are one stream published twice, unstamped and stamped, in
 /// one namespace and as many messages (`audio_capture` publishes `audio` and
 /// `audio_stamped`): the stamped one.
@@ -723,16 +720,12 @@ fn same_stream_twice(topics: &[TopicInfo]) -> Option<TopicInfo> {
     let [a, b] = audio.as_slice() else {
         return None;
     };
-    let parent = |t: &str| {
-        t.rsplit_once('/')
-            .map_or(String::new(), |(p, _)| p.to_string())
-    };
     let (plain, stamped) = match (Kind::of(&a.msg_type), Kind::of(&b.msg_type)) {
         (Some(Kind::AudioData), Some(Kind::AudioDataStamped)) => (a, b),
         (Some(Kind::AudioDataStamped), Some(Kind::AudioData)) => (b, a),
         _ => return None,
     };
-    (parent(&plain.topic) == parent(&stamped.topic) && plain.messages == stamped.messages)
+    (namespace(&plain.topic) == namespace(&stamped.topic) && plain.messages == stamped.messages)
         .then(|| (*stamped).clone())
 }
 
@@ -812,13 +805,9 @@ fn format_from_info(
         .iter()
         .filter(|t| Kind::of(&t.msg_type) == Some(Kind::AudioInfo))
         .collect();
-    let parent = |t: &str| {
-        t.rsplit_once('/')
-            .map_or(String::new(), |(p, _)| p.to_string())
-    };
     let beside: Vec<&&TopicInfo> = infos
         .iter()
-        .filter(|t| parent(&t.topic) == parent(audio))
+        .filter(|t| namespace(&t.topic) == namespace(audio))
         .collect();
     let info_topic = match (beside.as_slice(), infos.as_slice()) {
         ([one], _) => *one,
