@@ -116,13 +116,18 @@ pub fn write_dataset(scene: &PreparedScene, out: &Path) -> Result<()> {
         Ok(())
     })?;
     bar.finish_and_clear();
+    if let Some(alone) = scene.render_robot_alone(0) {
+        std::fs::create_dir_all(out.join("noise"))
+            .with_context(|| format!("creating {}", out.join("noise").display()))?;
+        crate::output::write_float_wav(&out.join("noise/robot.wav"), &alone, scene.scene.fs)?;
+    }
     let mut poses = String::from("x,y,theta_deg\n");
     for s in &scene.stops {
         poses.push_str(&format!("{:.4},{:.4},{:.4}\n", s.x, s.y, s.theta_deg()));
     }
     write(&out.join("pose/poses.csv"), poses.as_bytes())?;
     let mut gt = String::from("x,y,z\n");
-    for s in &scene.scene.sources {
+    for s in scene.room_sources() {
         gt.push_str(&format!("{},{},{}\n", s.pos[0], s.pos[1], s.pos[2]));
     }
     write(&out.join("src_gt.csv"), gt.as_bytes())?;

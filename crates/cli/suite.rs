@@ -219,7 +219,7 @@ pub fn run_scene(path: &Path, base: &Settings, num: Option<usize>) -> Result<Vec
         "scene {}: expect.map_seeds must be at least 1",
         path.display()
     );
-    let sources = scene.scene.sources.len();
+    let sources = scene.room_sources().count();
     let stops = scene.stops.len();
     let own_n = e.num.unwrap_or(user_n(sources));
     let n = num.unwrap_or(own_n);

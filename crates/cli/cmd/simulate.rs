@@ -17,13 +17,17 @@ pub fn run(scene_path: &Path, out: &Path, force: bool) -> Result<Outcome> {
     let (scene, _) = load_scene(scene_path)?;
     replace_dir(out, force, |dir| write_dataset(&scene, dir))?;
     println!(
-        "{}: {} stops x {} microphones x {:.2} s at {} Hz, {} sources, written to {} ({:.1} s)",
+        "{}: {} stops x {} microphones x {:.2} s at {} Hz, {} sources{}, written to {} ({:.1} s)",
         scene_path.display(),
         scene.stops.len(),
         scene.mics.len(),
         scene.scene.clip_s,
         scene.scene.fs,
-        scene.scene.sources.len(),
+        scene.room_sources().count(),
+        match scene.scene.sources.len() - scene.room_sources().count() {
+            0 => String::new(),
+            k => format!(" and {k} on the robot (its noise alone in noise/robot.wav)"),
+        },
         out.display(),
         t0.elapsed().as_secs_f64()
     );

@@ -22,6 +22,10 @@
 //! level_db = 65.0       # dB SPL at 1 m
 //! active_s = [0.0, 0.8] # plays only then (s into each clip); the decay follows
 //! at_stops = [0, 5]     # plays at stops 0 to 5 only (a talker who leaves)
+//! [[sources]]           # the robot's own noise (a fan): carried with the array
+//! on_robot = true       # pos is then [forward, left, up] (m) in the array frame
+//! pos = [-0.15, 0.05, -0.25]
+//! signal = "pink_noise"
 //! [trajectory]
 //! waypoints = [[1.0, 1.0], [5.0, 1.0]]
 //! spacing = 0.5         # or poses = [[x, y, theta_deg], ...]
@@ -165,6 +169,14 @@ pub struct SourceSpec {
     /// drives). Default: every stop.
     #[serde(default)]
     pub at_stops: Option<[usize; 2]>,
+    /// The source is part of the robot (a fan, a computer, a motor held still): it moves
+    /// with the array, and `pos` is its position in the array frame (forward, left, up
+    /// from the array frame's origin, m), as the microphones' are. Its signal is the same
+    /// kind at every stop, and [`PreparedScene::render_robot_alone`] renders it without the
+    /// room's sources (the recording a user makes of the robot standing in a quiet room
+    /// to tell the SSL what its own noise sounds like). Default: false.
+    #[serde(default)]
+    pub on_robot: bool,
 }
 
 fn default_f0() -> f64 {
@@ -209,6 +221,11 @@ pub struct PreparedScene {
     pub stops: Vec<Pose>,
     /// Each source's signal (pressure at 1 m, Pa).
     pub signals: Vec<Vec<f64>>,
+    /// Each source's signal in the recording of the robot alone
+    /// ([`PreparedScene::render_robot_alone`]): another stretch of the same kind of signal
+    /// for the sources on the robot (a noise recorded at another time is another
+    /// realisation of it), empty for the others.
+    pub alone_signals: Vec<Vec<f64>>,
     /// Built on the first stop rendered, shared by the others.
     renderer: std::sync::OnceLock<Renderer>,
 }
@@ -332,7 +349,7 @@ impl Scene {
             }
             _ => return Err(invalid("array", "give preset or positions, not both")),
         };
-        for (i, s) in self.sources.iter().enumerate() {
+        for (i, s) in self.sources.iter().enumerate().filter(|(_, s)| !s.on_robot) {
             if !room.contains(s.pos) {
                 return Err(invalid(
                     format!("sources[{i}].pos"),
@@ -340,8 +357,11 @@ impl Scene {
                 ));
             }
         }
-        if self.sources.is_empty() {
-            return Err(invalid("sources", "a scene needs at least one source"));
+        if self.sources.iter().all(|s| s.on_robot) {
+            return Err(invalid(
+                "sources",
+                "a scene needs at least one source in the room (not on_robot)",
+            ));
         }
         let stops = self.stops()?;
         for (i, src) in self.sources.iter().enumerate() {
@@ -368,9 +388,23 @@ impl Scene {
                     ));
                 }
             }
+            for (i, src) in self.sources.iter().enumerate().filter(|(_, s)| s.on_robot) {
+                let w = mic_world(*st, self.array.height, src.pos);
+                if !room.contains(w) {
+                    return Err(invalid(
+                        format!("sources[{i}].pos"),
+                        format!("on the robot at stop {k}, {w:?} is outside the room"),
+                    ));
+                }
+            }
         }
         let n = self.clip_samples();
-        if n.saturating_mul(self.sources.len()) > MAX_SIGNAL_SAMPLES {
+        let on_robot = self.sources.iter().filter(|s| s.on_robot).count();
+        let n_alone = n.max((ROBOT_ALONE_S * f64::from(self.fs)).round() as usize);
+        let samples = n
+            .saturating_mul(self.sources.len())
+            .saturating_add(n_alone.saturating_mul(on_robot));
+        if samples > MAX_SIGNAL_SAMPLES {
             return Err(invalid(
                 "clip_s",
                 format!(
@@ -426,12 +460,46 @@ impl Scene {
                 Ok(x)
             })
             .collect::<Result<Vec<Vec<f64>>, SimError>>()?;
+        // The robot alone: the same kinds of signal from a generator of their own, so that
+        // the scene's other signals do not change with whether a robot source is there.
+        let mut rng = StdRng::seed_from_u64(self.seed ^ ROBOT_ALONE_SEED);
+        let alone_signals = self
+            .sources
+            .iter()
+            .zip(&signals)
+            .map(|(s, x)| {
+                if !s.on_robot {
+                    return Vec::new();
+                }
+                let unit = match &s.wav {
+                    // Another stretch of the same recording: from its middle on, repeated.
+                    Some(_) => {
+                        return x
+                            .iter()
+                            .cycle()
+                            .skip(n / 2)
+                            .take(n_alone)
+                            .copied()
+                            .collect();
+                    }
+                    None => generate(
+                        s.signal.unwrap_or_default().signal(s.f0),
+                        n_alone,
+                        self.fs,
+                        &mut rng,
+                    ),
+                };
+                let rms = 10f64.powf((s.level_db - 94.0) / 20.0);
+                unit.into_iter().map(|v| v * rms).collect()
+            })
+            .collect();
         Ok(PreparedScene {
             scene: self,
             room,
             mics,
             stops,
             signals,
+            alone_signals,
             renderer: std::sync::OnceLock::new(),
         })
     }
@@ -508,6 +576,13 @@ impl Scene {
     }
 }
 
+/// The recording of the robot alone lasts this long (s), or a stop's clip if longer: a
+/// user records a few seconds of it, and its covariance is a mean over them.
+pub const ROBOT_ALONE_S: f64 = 4.0;
+
+/// Seeds the signals of the recording of the robot alone (with the scene's seed).
+const ROBOT_ALONE_SEED: u64 = 0x0A11_0E5E_ED00_0001;
+
 /// World position of array-frame point `p` with the robot at `stop` and the array frame's
 /// origin `height` above the floor.
 pub fn mic_world(stop: Pose, height: f64, p: [f64; 3]) -> [f64; 3] {
@@ -571,22 +646,88 @@ impl PreparedScene {
                 .sources
                 .iter()
                 .zip(&self.signals)
+                .filter(|(s, _)| !s.on_robot)
                 .map(|(s, x)| RoomSource {
                     pos: s.pos,
                     signal: x.clone(),
                 })
                 .collect();
-            let rir_s = sc
-                .rir_s
-                .unwrap_or_else(|| sc.room.rt60.unwrap_or(0.3).min(0.5));
-            let cfg = RenderConfig {
-                fs: f64::from(sc.fs),
-                speed_of_sound: sc.speed_of_sound,
-                rir_len: (rir_s * f64::from(sc.fs)) as usize,
-                max_order: sc.max_order,
-            };
-            Renderer::new(&self.room, &sources, self.clip_samples(), &cfg)
+            Renderer::new(
+                &self.room,
+                &sources,
+                self.clip_samples(),
+                &self.render_config(),
+            )
         })
+    }
+
+    fn render_config(&self) -> RenderConfig {
+        let sc = &self.scene;
+        let rir_s = sc
+            .rir_s
+            .unwrap_or_else(|| sc.room.rt60.unwrap_or(0.3).min(0.5));
+        RenderConfig {
+            fs: f64::from(sc.fs),
+            speed_of_sound: sc.speed_of_sound,
+            rir_len: (rir_s * f64::from(sc.fs)) as usize,
+            max_order: sc.max_order,
+        }
+    }
+
+    /// The sources in the room (every one not `on_robot`): what a map should find.
+    pub fn room_sources(&self) -> impl Iterator<Item = &SourceSpec> {
+        self.scene.sources.iter().filter(|s| !s.on_robot)
+    }
+
+    /// Whether any source is carried by the robot (`on_robot`).
+    pub fn has_robot_sources(&self) -> bool {
+        self.scene.sources.iter().any(|s| s.on_robot)
+    }
+
+    /// The sources on the robot at stop `k`, each with `signals` (one per scene source),
+    /// rendered at `mics`: their images depend on where the robot stands, so each stop
+    /// builds its own.
+    fn render_on_robot(
+        &self,
+        k: usize,
+        signals: &[Vec<f64>],
+        mics: &[[f64; 3]],
+    ) -> Option<Vec<Vec<f64>>> {
+        let sc = &self.scene;
+        let sources: Vec<RoomSource> = sc
+            .sources
+            .iter()
+            .zip(signals)
+            .filter(|(s, _)| s.on_robot)
+            .map(|(s, x)| RoomSource {
+                pos: mic_world(self.stops[k], sc.array.height, s.pos),
+                signal: x.clone(),
+            })
+            .collect();
+        let n = signals.iter().map(Vec::len).max().unwrap_or(0);
+        (!sources.is_empty())
+            .then(|| Renderer::new(&self.room, &sources, n, &self.render_config()).render(mics))
+    }
+
+    /// What the array hears of the robot alone at stop `k`: its own sources (`on_robot`,
+    /// another stretch of their signals than at the stops) and the sensor noise of stop
+    /// `k` (another draw of it), without the room's sources: the recording a user makes of
+    /// the robot's own noise. `None` when no source is on the robot.
+    ///
+    /// # Panics
+    /// If `k` is not a stop.
+    pub fn render_robot_alone(&self, k: usize) -> Option<Vec<Vec<f64>>> {
+        let mics = self.mics_at(k);
+        let mut out = self.render_on_robot(k, &self.alone_signals, &mics)?;
+        self.add_sensor_noise(k, &mics, &mut out, ROBOT_ALONE_SEED);
+        Some(out)
+    }
+
+    fn mics_at(&self, k: usize) -> Vec<[f64; 3]> {
+        self.mics
+            .iter()
+            .map(|&p| mic_world(self.stops[k], self.scene.array.height, p))
+            .collect()
     }
 
     /// What the array hears at stop `k` (channel-major, Pa), with sensor noise seeded by the
@@ -596,39 +737,65 @@ impl PreparedScene {
     /// If `k` is not a stop.
     pub fn render_stop(&self, k: usize) -> Vec<Vec<f64>> {
         let sc = &self.scene;
-        let mics: Vec<[f64; 3]> = self
-            .mics
-            .iter()
-            .map(|&p| mic_world(self.stops[k], sc.array.height, p))
-            .collect();
+        let mics = self.mics_at(k);
         let playing: Vec<bool> = sc
             .sources
             .iter()
+            .filter(|s| !s.on_robot)
             .map(|s| s.at_stops.is_none_or(|[a, b]| (a..=b).contains(&k)))
             .collect();
         let mut out = self.renderer().render_playing(&mics, &playing);
-        if let Some(snr) = sc.snr_db {
-            // The sensor noise is relative to what the array hears there with every source
-            // playing, so that a stop where one is silent hears the same noise.
-            let everyone = if playing.iter().all(|&p| p) {
-                None
-            } else {
-                Some(self.renderer().render(&mics))
-            };
-            let full = everyone.as_ref().unwrap_or(&out);
-            let p = full.iter().flatten().map(|v| v * v).sum::<f64>()
-                / (full.len() * full[0].len()) as f64;
-            let sd = p.sqrt() * 10f64.powf(-snr / 20.0);
-            let mut rng = StdRng::seed_from_u64(
-                sc.seed ^ (0x9E37_79B9_7F4A_7C15u64.wrapping_mul(k as u64 + 1)),
-            );
-            for ch in &mut out {
-                for v in ch.iter_mut() {
-                    *v += sd * rng.sample::<f64, _>(StandardNormal);
+        self.add_sensor_noise_of(k, &mics, &mut out, &playing, 0);
+        if let Some(robot) = self.render_on_robot(k, &self.signals, &mics) {
+            for (o, r) in out.iter_mut().zip(&robot) {
+                for (o, r) in o.iter_mut().zip(r) {
+                    *o += r;
                 }
             }
         }
         out
+    }
+
+    /// Adds stop `k`'s sensor noise to `out` (heard at `mics`), its generator's seed mixed
+    /// with `salt`.
+    fn add_sensor_noise(&self, k: usize, mics: &[[f64; 3]], out: &mut [Vec<f64>], salt: u64) {
+        let n_room = self.room_sources().count();
+        self.add_sensor_noise_of(k, mics, out, &vec![false; n_room], salt);
+    }
+
+    /// Adds sensor noise at the scene's SNR against what the room's sources give at `mics`
+    /// with every one playing (`out` already holds it when every flag of `playing` is
+    /// set): a stop where one is silent hears the same noise, and the robot's own sources
+    /// do not change it.
+    fn add_sensor_noise_of(
+        &self,
+        k: usize,
+        mics: &[[f64; 3]],
+        out: &mut [Vec<f64>],
+        playing: &[bool],
+        salt: u64,
+    ) {
+        let sc = &self.scene;
+        let Some(snr) = sc.snr_db else {
+            return;
+        };
+        let everyone = if playing.iter().all(|&p| p) {
+            None
+        } else {
+            Some(self.renderer().render(mics))
+        };
+        let full = everyone.as_deref().unwrap_or(out);
+        let p =
+            full.iter().flatten().map(|v| v * v).sum::<f64>() / (full.len() * full[0].len()) as f64;
+        let sd = p.sqrt() * 10f64.powf(-snr / 20.0);
+        let mut rng = StdRng::seed_from_u64(
+            sc.seed ^ salt ^ (0x9E37_79B9_7F4A_7C15u64.wrapping_mul(k as u64 + 1)),
+        );
+        for ch in out.iter_mut() {
+            for v in ch.iter_mut() {
+                *v += sd * rng.sample::<f64, _>(StandardNormal);
+            }
+        }
     }
 }
 
@@ -774,6 +941,91 @@ spacing = 0.5
         );
         let e = refusal(&bad, std::path::Path::new("."));
         assert!(e.contains("sources[0].at_stops"), "{e}");
+    }
+
+    #[test]
+    fn a_source_on_the_robot_goes_where_the_robot_goes() {
+        let fan =
+            "\n[[sources]]\non_robot = true\npos = [-0.3, 0.1, -0.2]\nsignal = \"pink_noise\"\n";
+        let anechoic = SCENE.replace(
+            "0.5, 0.5, 0.5, 0.5, 0.5, 0.5",
+            "1.0, 1.0, 1.0, 1.0, 1.0, 1.0",
+        );
+        let with = |text: &str| {
+            Scene::from_toml(&format!("{text}{fan}"))
+                .unwrap()
+                .prepare(two_mics)
+                .unwrap()
+        };
+        let without = |text: &str| Scene::from_toml(text).unwrap().prepare(two_mics).unwrap();
+        let diff = |a: &[Vec<f64>], b: &[Vec<f64>]| -> Vec<Vec<f64>> {
+            a.iter()
+                .zip(b)
+                .map(|(x, y)| x.iter().zip(y).map(|(x, y)| x - y).collect())
+                .collect()
+        };
+        let far = |a: &[Vec<f64>], b: &[Vec<f64>]| {
+            let d: f64 = diff(a, b).iter().flatten().map(|v| v * v).sum();
+            let p: f64 = a.iter().flatten().map(|v| v * v).sum();
+            (d / p).sqrt()
+        };
+        let p = with(&anechoic);
+        assert_eq!(
+            p.room_sources().count(),
+            1,
+            "the fan is not a source of the room"
+        );
+        assert!(p.has_robot_sources());
+        // Stop 0 faces +x at (1, 1), stop 6 faces +y at (3, 2): in an anechoic room the
+        // fan, carried along, sounds the same at both.
+        let (a, b) = (
+            p.render_robot_alone(0).unwrap(),
+            p.render_robot_alone(6).unwrap(),
+        );
+        assert!(far(&a, &b) < 1e-9, "{}", far(&a, &b));
+        // What a stop hears is the room's sources and the fan: the part the fan adds is
+        // the same at both stops, and a fresh stretch of it is not the recording alone.
+        let q = without(&anechoic);
+        let part = |k| diff(&p.render_stop(k), &q.render_stop(k));
+        assert!(far(&part(0), &part(6)) < 1e-9);
+        assert!(
+            far(&part(0), &a) > 0.5,
+            "another stretch of the fan's noise"
+        );
+        assert_eq!(
+            a[0].len(),
+            (ROBOT_ALONE_S * 8000.0) as usize,
+            "a few seconds alone"
+        );
+        // In a room with walls its reflections move with the robot.
+        let lively = with(SCENE);
+        let (a, b) = (
+            lively.render_robot_alone(0).unwrap(),
+            lively.render_robot_alone(6).unwrap(),
+        );
+        assert!(far(&a, &b) > 0.05, "{}", far(&a, &b));
+        assert!(without(SCENE).render_robot_alone(0).is_none());
+        // A robot whose fan would leave the room is refused, the field named.
+        let out = format!("{SCENE}\n[[sources]]\non_robot = true\npos = [0.0, -1.5, 0.0]\n");
+        let e = Scene::from_toml(&out)
+            .unwrap()
+            .prepare(two_mics)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("sources[1].pos") && e.contains("on the robot at stop"),
+            "{e}"
+        );
+        let only = SCENE.replace(
+            "pos = [1.5, 3.0, 1.2]",
+            "pos = [0.1, 0.0, 0.0]\non_robot = true",
+        );
+        let e = Scene::from_toml(&only)
+            .unwrap()
+            .prepare(two_mics)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("at least one source in the room"), "{e}");
     }
 
     #[test]
