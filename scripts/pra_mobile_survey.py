@@ -17,7 +17,13 @@ Hand-run only (no test or CI uses Python); the figures it gave are in BENCHMARKS
 `TALKERS=1,3` (environment) keeps only those talkers of the five (0-based), for scenes of
 fewer sources (BENCHMARKS.md, session 28). `SIGNAL=noise` makes each source a steady
 white-noise source (a fan, an air vent) in place of its sentence, for the steady-recording
-pooling (`ssl::Pooling::Auto`; BENCHMARKS.md, session 29).
+pooling (`ssl::Pooling::Auto`; BENCHMARKS.md, session 29). `FAN_DB=50` puts a fan on the
+robot (pink noise at that level in dB SPL at 1 m, the talkers being at 65 dB; 0.2 m behind
+and 0.3 m below the array's centre, moving with it) and writes the robot alone (4 s at the
+first stop, another stretch of the fan's noise, the same sensor noise level) as
+`noise/robot.wav`, for the robot's-noise subtraction (`ssl::noise`; BENCHMARKS.md,
+session 32); every WAV then shares one scale, so that the levels of the stops and of the
+robot alone agree.
 """
 import os
 import subprocess
@@ -61,6 +67,20 @@ def speech(voice, text, tmp):
     return s / np.sqrt(np.mean(s[np.abs(s) > 1e-4] ** 2))
 
 
+def pink(n, rng):
+    """Unit-power pink noise (1/f power), shaped in the frequency domain."""
+    spec = np.fft.rfft(rng.normal(0.0, 1.0, n))
+    f = np.arange(len(spec))
+    spec[1:] /= np.sqrt(f[1:])
+    spec[0] = 0.0
+    x = np.fft.irfft(spec, n)
+    return x / np.sqrt(np.mean(x ** 2))
+
+
+FAN_OFFSET = np.array([-0.2, 0.0, -0.3])
+ALONE_S = 4.0
+
+
 def stops():
     poses = []
     for (x0, y0), (x1, y1) in zip(WAYPOINTS, WAYPOINTS[1:]):
@@ -86,18 +106,45 @@ def main():
     os.makedirs(out + "/pose", exist_ok=True)
     poses = stops()
     n = int(CLIP_S * FS)
-    for k, (x, y, th) in enumerate(poses):
+    fan_db = os.environ.get("FAN_DB")
+    fan_gain = None if fan_db is None else 10 ** ((float(fan_db) - 65.0) / 20.0)
+
+    def heard(x, y, th, sources, length):
         room = pra.ShoeBox(DIMS, fs=FS, materials=pra.Material(e_abs), max_order=max_order)
-        for s, (_, pos, _) in zip(sigs, TALKERS):
-            room.add_source(pos, signal=np.roll(s, -rng.integers(0, len(s)))[:n])
         c, sn = np.cos(np.radians(th)), np.sin(np.radians(th))
         rot = np.array([[c, -sn, 0], [sn, c, 0], [0, 0, 1]])
-        mics = rot @ array.T + np.array([[x], [y], [ARRAY_Z]])
-        room.add_microphone_array(pra.MicrophoneArray(mics, FS))
+        centre = np.array([x, y, ARRAY_Z])
+        for pos, signal in sources:
+            if pos is None:  # the fan, in the array frame
+                pos = rot @ FAN_OFFSET + centre
+            room.add_source(list(pos), signal=signal)
+        room.add_microphone_array(pra.MicrophoneArray(rot @ array.T + centre[:, None], FS))
         room.simulate()
-        sig = room.mic_array.signals[:, :n]
-        sig = sig + rng.normal(0, np.sqrt(np.mean(sig ** 2) / 10 ** (snr / 10)), sig.shape)
-        sig = 0.5 * sig / np.max(np.abs(sig))
+        return room.mic_array.signals[:, :length]
+
+    clips, sd0 = [], None
+    for k, (x, y, th) in enumerate(poses):
+        sources = [(pos, np.roll(s, -rng.integers(0, len(s)))[:n]) for s, (_, pos, _) in zip(sigs, TALKERS)]
+        talkers = heard(x, y, th, sources, n)
+        sd = np.sqrt(np.mean(talkers ** 2) / 10 ** (snr / 10))
+        sd0 = sd if sd0 is None else sd0
+        sig = talkers
+        if fan_gain is not None:
+            sig = sig + heard(x, y, th, [(None, fan_gain * pink(n, rng))], n)
+        sig = sig + rng.normal(0, sd, sig.shape)
+        if fan_gain is None:
+            sig = 0.5 * sig / np.max(np.abs(sig))
+        clips.append(sig)
+    if fan_gain is not None:
+        m = int(ALONE_S * FS)
+        x, y, th = poses[0]
+        alone = heard(x, y, th, [(None, fan_gain * pink(m, rng))], m)
+        alone = alone + rng.normal(0, sd0, alone.shape)
+        scale = 0.5 / max(np.max(np.abs(c)) for c in clips + [alone])
+        clips = [c * scale for c in clips]
+        os.makedirs(out + "/noise", exist_ok=True)
+        wavfile.write(f"{out}/noise/robot.wav", FS, (alone.T * scale * 32767).astype(np.int16))
+    for k, sig in enumerate(clips):
         wavfile.write(f"{out}/audio/sub{k + 1:02d}.wav", FS, (sig.T * 32767).astype(np.int16))
     with open(out + "/pose/poses.csv", "w") as f:
         f.write("x,y,theta_deg\n" + "".join(f"{x:.4f},{y:.4f},{th:.4f}\n" for x, y, th in poses))

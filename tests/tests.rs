@@ -5,6 +5,7 @@ mod cli;
 mod compare;
 mod map;
 mod near;
+mod noise;
 mod regression;
 mod settings;
 mod simulate;

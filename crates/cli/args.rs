@@ -280,7 +280,8 @@ pub struct CompareArgs {
 #[derive(Debug, Clone, Default, Args)]
 pub struct SettingsArgs {
     /// A settings file (TOML): `[ssl]` (the `ssl::SslConfig` fields), `[iasm]` (the
-    /// `asm::IasmConfig` fields), `array` and `channels`. Flags given here override it.
+    /// `asm::IasmConfig` fields), `array`, `channels` and `noise`. Flags given here
+    /// override it.
     #[arg(long, value_name = "FILE")]
     pub config: Option<PathBuf>,
     /// Microphone array: a preset (iasm6, respeaker4, respeaker6, uma8) or a TOML/JSON
@@ -293,6 +294,12 @@ pub struct SettingsArgs {
     /// channel, or the settings file's `channels`].
     #[arg(long, value_name = "LIST", value_parser = parse_channels)]
     pub channels: Option<ChannelList>,
+    /// A recording of the robot alone (WAV: its fans running, no other source, a few
+    /// seconds, the same microphones and channels as the recordings): the robot's own
+    /// noise is subtracted from every statistic of the SSL (see `ssl::noise`) [default:
+    /// the settings file's `noise`, or the one WAV in the data set's noise/ folder].
+    #[arg(long, value_name = "WAV")]
+    pub noise: Option<PathBuf>,
     /// Angular-spectrum method: gcc-phat, mvdr, srp-phat, music or normmusic [default:
     /// mvdr, or the settings file's].
     #[arg(long)]
@@ -352,6 +359,9 @@ impl SettingsArgs {
         }
         if let Some(ChannelList(c)) = &self.channels {
             s.channels = Some(c.clone());
+        }
+        if let Some(n) = &self.noise {
+            s.noise = Some(n.clone());
         }
         if let Some(m) = self.method {
             s.ssl.method = m;
@@ -466,7 +476,8 @@ impl InputArgs {
         let mut s = self
             .settings
             .settings()?
-            .with_dataset_array(self.dataset.as_deref());
+            .with_dataset_array(self.dataset.as_deref())
+            .with_dataset_noise(self.dataset.as_deref())?;
         s.iasm.refine |= self.refine;
         Ok(s)
     }

@@ -179,6 +179,7 @@ pub fn compare(
             };
             b.with_doas(table, source, cut)
         };
+    let noise = crate::pipeline::RobotNoise::of(settings)?;
     let mut rows = Vec::new();
     for &method in &opts.methods {
         tell(format!(
@@ -187,7 +188,13 @@ pub fn compare(
         ));
         let mut s = settings.clone();
         s.ssl.method = method;
-        let files = localise_files(&ds.audio, &array, s.channels.as_deref(), &s.ssl)?;
+        let files = localise_files(
+            &ds.audio,
+            &array,
+            s.channels.as_deref(),
+            &s.ssl,
+            noise.as_ref(),
+        )?;
         if Some(&method) == opts.methods.first() {
             crate::pipeline::warn_faulty_channels(&files);
         }
@@ -203,6 +210,7 @@ pub fn compare(
                 &ds.audio,
                 &array,
                 s.channels.as_deref(),
+                noise.as_ref(),
                 &s.ssl,
                 &files,
                 &survey.poses,

@@ -16,6 +16,8 @@
 //! - [`compare`]: every SSL method side by side on one data set, DoAs to maps.
 //! - [`figure`]: every figure (the map picture, the comparison's plots), PNG or SVG.
 //! - [`online`]: mapping while the robot records (a session, a folder follower).
+//! - [`robot_noise`]: the recording of the robot alone that the SSL subtracts, and a note
+//!   when the DoAs show the robot's own noise.
 //! - [`output`]: files and folders written whole (temporary name, then rename).
 //! - [`args`]: the command line, and its conversion into settings and inputs.
 //!
@@ -32,6 +34,7 @@ pub mod figure;
 pub mod online;
 pub mod output;
 pub mod pipeline;
+pub mod robot_noise;
 pub mod rules;
 pub mod scenes;
 pub mod score;

@@ -52,6 +52,8 @@ pub struct Session {
     /// ([`Settings::channels`]).
     channels: Option<Vec<usize>>,
     ssl: SslConfig,
+    /// The robot's own noise, subtracted by the SSL ([`Settings::noise`]).
+    noise: Option<crate::pipeline::RobotNoise>,
     localizers: Vec<Localizer>,
     scratch: Scratch,
     mapper: OnlineMapper,
@@ -67,7 +69,8 @@ impl Session {
     /// m, order `ospa_p`) against `truth` when given.
     ///
     /// # Errors
-    /// Refused settings or a map with no room for particles.
+    /// Refused settings, an unreadable recording of the robot alone, or a map with no
+    /// room for particles.
     pub fn new(
         map: &OccupancyMap,
         settings: &Settings,
@@ -85,6 +88,7 @@ impl Session {
             array,
             channels: settings.channels.clone(),
             ssl: settings.ssl.clone(),
+            noise: crate::pipeline::RobotNoise::of(settings)?,
             localizers: Vec::new(),
             scratch: Scratch::default(),
             mapper: OnlineMapper::new(Mapper::new(map, &config)?, seed),
@@ -135,10 +139,12 @@ impl Session {
         let i = match self.localizers.iter().position(|l| l.sample_rate() == fs) {
             Some(i) => i,
             None => {
-                self.localizers.push(
-                    Localizer::new(&self.array, fs, &self.ssl)
-                        .with_context(|| format!("[ssl] settings at {fs} Hz"))?,
-                );
+                self.localizers.push(crate::pipeline::localizer(
+                    &self.array,
+                    fs,
+                    &self.ssl,
+                    self.noise.as_ref(),
+                )?);
                 self.localizers.len() - 1
             }
         };

@@ -34,6 +34,7 @@ use ssl::{Audio, Doa, Localizer, Located, MicArray, Scratch, SslConfig};
 use crate::dataset::read_timed_poses;
 use crate::dataset::{Dataset, Table, first_with_ext, list_files, load_map, read_poses};
 use crate::dataset::{read_sources, read_table};
+pub use crate::robot_noise::RobotNoise;
 use crate::score::{DoaScore, score_doas};
 use crate::settings::Settings;
 
@@ -225,7 +226,35 @@ pub(crate) fn with_channel_hint(e: ssl::Error, channels: Option<&[usize]>) -> an
     }
 }
 
-/// Localises every file with one localizer per sample rate, in parallel, keeping order.
+/// The localizer of `array` at `fs` Hz with `config`, subtracting the robot's `noise` when
+/// given.
+///
+/// # Errors
+/// Settings the SSL refuses, or a noise recording of another sample rate, channel count
+/// or too short; named.
+pub fn localizer(
+    array: &MicArray,
+    fs: u32,
+    config: &SslConfig,
+    noise: Option<&RobotNoise>,
+) -> Result<Localizer> {
+    let l =
+        Localizer::new(array, fs, config).with_context(|| format!("[ssl] settings at {fs} Hz"))?;
+    let Some(n) = noise else {
+        return Ok(l);
+    };
+    let got = n.audio.sample_rate();
+    ensure!(
+        got == fs,
+        "the recording of the robot alone {} is sampled at {got} Hz, the recordings at {fs} Hz",
+        n.path.display()
+    );
+    l.with_noise(&n.audio)
+        .with_context(|| format!("the recording of the robot alone {}", n.path.display()))
+}
+
+/// Localises every file with one localizer per sample rate, in parallel, keeping order;
+/// the robot's `noise` subtracted when given.
 ///
 /// # Errors
 /// The first file that cannot be read or localised, named.
@@ -234,6 +263,7 @@ pub fn localise_files(
     array: &MicArray,
     channels: Option<&[usize]>,
     config: &SslConfig,
+    noise: Option<&RobotNoise>,
 ) -> Result<Vec<FileDoas>> {
     let bar = crate::progress(files.len() as u64, "localising");
     let cache: Mutex<Vec<Arc<Localizer>>> = Mutex::default();
@@ -247,15 +277,8 @@ pub fn localise_files(
                 match c.iter().find(|l| l.sample_rate() == audio.sample_rate()) {
                     Some(l) => l.clone(),
                     None => {
-                        let l = Localizer::new(array, audio.sample_rate(), config).with_context(
-                            || {
-                                format!(
-                                    "[ssl] settings for {} ({} Hz)",
-                                    f.display(),
-                                    audio.sample_rate()
-                                )
-                            },
-                        )?;
+                        let l = localizer(array, audio.sample_rate(), config, noise)
+                            .with_context(|| format!("localising {}", f.display()))?;
                         let l = Arc::new(l);
                         c.push(l.clone());
                         l
@@ -330,7 +353,8 @@ pub fn cut_windows(audio: &Audio, times: &[f64], window_s: f64) -> Result<Vec<Au
         .collect()
 }
 
-/// The DoAs of each of `windows` (in order, in parallel), with one localizer; `channels`
+/// The DoAs of each of `windows` (in order, in parallel), with one localizer (the robot's
+/// `noise` subtracted when given); `channels`
 /// are the ones picked from the recording (`None`: every channel), for the hint that a
 /// channel count the array does not match gets, as in [`localise_files`].
 ///
@@ -341,12 +365,12 @@ pub fn localise_audio(
     array: &MicArray,
     channels: Option<&[usize]>,
     config: &SslConfig,
+    noise: Option<&RobotNoise>,
 ) -> Result<Vec<Located>> {
     let Some(first) = windows.first() else {
         return Ok(Vec::new());
     };
-    let loc = Localizer::new(array, first.sample_rate(), config)
-        .with_context(|| format!("[ssl] settings at {} Hz", first.sample_rate()))?;
+    let loc = localizer(array, first.sample_rate(), config, noise)?;
     windows
         .par_iter()
         .enumerate()
@@ -524,6 +548,7 @@ impl Survey {
                 &array,
                 settings.channels.as_deref(),
                 &settings.ssl,
+                RobotNoise::of(settings)?.as_ref(),
             )
             .with_context(|| format!("localising {}", rec.display()))?;
             let names: Vec<String> = (1..=rows.len()).map(|k| format!("window {k}")).collect();
@@ -572,6 +597,7 @@ impl Survey {
                 &settings.mic_array()?,
                 settings.channels.as_deref(),
                 &settings.ssl,
+                RobotNoise::of(settings)?.as_ref(),
             )?;
             warn_faulty_channels(&rows);
             cut = Some(rows.iter().map(|r| r.cut).collect());
@@ -874,6 +900,10 @@ pub struct Simulated {
     pub truth: Vec<[f64; 2]>,
     /// The scene's occupancy map.
     pub map: OccupancyMap,
+    /// For a scene with sources on the robot: the robot alone, rendered at the first stop
+    /// ([`sim::scene::PreparedScene::render_robot_alone`]), which the SSL subtracts as a user's
+    /// recording of their robot.
+    pub noise: Option<RobotNoise>,
 }
 
 /// One run of the pipeline on a [`Simulated`] scene.
@@ -912,13 +942,21 @@ impl Simulated {
             })
             .collect::<Result<_>>()?;
         let array = MicArray::new(name.clone(), scene.mics.clone())?;
-        let truth = scene
-            .scene
-            .sources
-            .iter()
-            .map(|s| [s.pos[0], s.pos[1]])
-            .collect();
+        let truth = scene.room_sources().map(|s| [s.pos[0], s.pos[1]]).collect();
         let map = crate::scenes::scene_map(&scene);
+        let noise = scene
+            .render_robot_alone(0)
+            .map(|ch| -> Result<RobotNoise> {
+                let ch = ch
+                    .into_iter()
+                    .map(|c| c.into_iter().map(|v| v as f32).collect())
+                    .collect();
+                Ok(RobotNoise {
+                    path: PathBuf::from(format!("{name} (the robot alone, rendered)")),
+                    audio: Audio::new(fs, ch)?,
+                })
+            })
+            .transpose()?;
         Ok(Self {
             name,
             scene,
@@ -926,6 +964,7 @@ impl Simulated {
             array,
             truth,
             map,
+            noise,
         })
     }
 
@@ -934,17 +973,14 @@ impl Simulated {
         &self.scene.stops
     }
 
-    /// Localises every stop with `ssl` (the scene's own array, whatever `ssl` says).
+    /// Localises every stop with `ssl` (the scene's own array, whatever `ssl` says; the
+    /// robot's noise subtracted when the scene has some).
     ///
     /// # Errors
     /// Settings refused for this array and rate.
     pub fn survey(&self, ssl: &SslConfig) -> Result<Survey> {
-        let loc = Localizer::new(&self.array, self.scene.scene.fs, ssl).with_context(|| {
-            format!(
-                "[ssl] settings for scene {} ({} Hz)",
-                self.scene.scene.name, self.scene.scene.fs
-            )
-        })?;
+        let loc = localizer(&self.array, self.scene.scene.fs, ssl, self.noise.as_ref())
+            .with_context(|| format!("scene {}", self.name))?;
         let rows: Vec<Located> = self
             .audio
             .par_iter()

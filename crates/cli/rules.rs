@@ -338,7 +338,7 @@ pub fn census(stops: &[Stop], config: &SslConfig, tol_deg: f64) -> RuleCensus {
 }
 
 /// The census of a data set: `rows` are its recordings' DoAs found with `config` (in the
-/// order of `files`), heard at `poses`, scored against `sources` (m); each recording is
+/// order of `files`, the robot's `noise` subtracted when given), heard at `poses`, scored against `sources` (m); each recording is
 /// localised again with [`without`] no rule, each rule in turn and every rule. For a linear array
 /// at `mirror_axis_deg`, DoAs and bearings are folded as the score folds them.
 ///
@@ -349,6 +349,7 @@ pub fn run_census(
     files: &[PathBuf],
     array: &MicArray,
     channels: Option<&[usize]>,
+    noise: Option<&crate::pipeline::RobotNoise>,
     config: &SslConfig,
     rows: &[FileDoas],
     poses: &[Pose],
@@ -371,12 +372,12 @@ pub fn run_census(
     let azimuths =
         |r: &FileDoas| -> Vec<f64> { r.doas.iter().map(|d| fold(d.azimuth_deg)).collect() };
     // N raised with every rule on, then each rule off in turn, then all of them off.
-    let wide = localise_files(files, array, channels, &without(config, &[]))?;
+    let wide = localise_files(files, array, channels, &without(config, &[]), noise)?;
     let released = Rule::ALL
         .iter()
-        .map(|&rule| localise_files(files, array, channels, &without(config, &[rule])))
+        .map(|&rule| localise_files(files, array, channels, &without(config, &[rule]), noise))
         .collect::<Result<Vec<_>>>()?;
-    let peaks = localise_files(files, array, channels, &without(config, &Rule::ALL))?;
+    let peaks = localise_files(files, array, channels, &without(config, &Rule::ALL), noise)?;
     let stops: Vec<Stop> = (0..rows.len())
         .map(|k| {
             let pose = &poses[k];

@@ -3,8 +3,8 @@
 //! A settings file is TOML with an `[ssl]` table (the fields of [`ssl::SslConfig`]), an
 //! `[iasm]` table (the fields of [`asm::IasmConfig`]), an optional top-level `array`
 //! (a preset name or an array file) and `channels` (which channels of each file are the
-//! array's microphones, [`Settings::channels`]); every key is optional and defaults as documented on
-//! those types. Flags given on the command line override the file, and only flags that
+//! array's microphones, [`Settings::channels`]) and `noise` (a recording of the robot alone,
+//! [`Settings::noise`]); every key is optional and defaults as documented on those types. Flags given on the command line override the file, and only flags that
 //! were given do: a flag's absence never overwrites a value from the file.
 //!
 //! ```toml
@@ -41,6 +41,10 @@ pub const DEFAULT_ARRAY: &str = "iasm6";
 /// `array.toml`.
 pub const DATASET_ARRAY_FILES: [&str; 2] = ["array.toml", "array.json"];
 
+/// The folder of a data set that holds the recording of the robot alone
+/// ([`Settings::noise`]).
+pub const DATASET_NOISE_DIR: &str = "noise";
+
 /// Every setting of the pipeline.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -53,6 +57,11 @@ pub struct Settings {
     /// firmware records its processed beam and its playback beside the microphones.
     /// Default: every channel, in the file's order.
     pub channels: Option<Vec<usize>>,
+    /// A recording of the robot alone (a WAV: its fans running, no other source, a few
+    /// seconds, with the same microphones and channels as the recordings): the robot's own
+    /// noise, subtracted from every statistic of the SSL ([`ssl::noise`]). Default: none,
+    /// or the data set's `noise/` recording ([`Settings::with_dataset_noise`]).
+    pub noise: Option<std::path::PathBuf>,
     /// The SSL front end.
     pub ssl: SslConfig,
     /// The mapper.
@@ -155,6 +164,32 @@ impl Settings {
             self.array = Some(file.display().to_string());
         }
         self
+    }
+
+    /// These settings, with the data set `dir`'s recording of the robot alone (the one WAV
+    /// in its `noise/` folder, which `iasm simulate` writes for a scene with sources on the
+    /// robot) when no `noise` was given.
+    ///
+    /// # Errors
+    /// A `noise/` folder that holds no WAV or several.
+    pub fn with_dataset_noise(mut self, dir: Option<&Path>) -> Result<Self> {
+        if self.noise.is_none()
+            && let Some(dir) = dir
+            && dir.join(DATASET_NOISE_DIR).is_dir()
+        {
+            let folder = dir.join(DATASET_NOISE_DIR);
+            let wavs = crate::dataset::list_files(&folder, "wav")?;
+            match wavs.as_slice() {
+                [one] => self.noise = Some(one.clone()),
+                [] => bail!("{}: no WAV of the robot alone", folder.display()),
+                _ => bail!(
+                    "{}: {} WAVs; the robot alone is one recording (or name it with --noise)",
+                    folder.display(),
+                    wavs.len()
+                ),
+            }
+        }
+        Ok(self)
     }
 
     /// The array these settings name.

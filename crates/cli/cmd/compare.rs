@@ -11,7 +11,11 @@ use crate::compare::{CompareOptions, Report, compare, parse_methods, to_csv};
 /// # Errors
 /// Bad arguments, a data set without truth, or a failure of the pipeline.
 pub fn run(a: &CompareArgs) -> Result<Outcome> {
-    let settings = a.settings.settings()?.with_dataset_array(Some(&a.dataset));
+    let settings = a
+        .settings
+        .settings()?
+        .with_dataset_array(Some(&a.dataset))
+        .with_dataset_noise(Some(&a.dataset))?;
     let opts = CompareOptions {
         methods: parse_methods(&a.methods)?,
         runs: a.runs,

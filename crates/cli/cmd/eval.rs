@@ -35,6 +35,7 @@ pub fn run(a: &EvalArgs) -> Result<Outcome> {
     if let Some(note) = survey.map_note() {
         eprintln!("{note}");
     }
+    crate::robot_noise::tell(&settings, &survey);
     let base = settings.iasm;
     let t0 = std::time::Instant::now();
     let stats = evaluate(

@@ -77,6 +77,7 @@ pub fn run(a: &MapArgs) -> Result<Outcome> {
     if let Some(note) = survey.map_note() {
         eprintln!("{note}");
     }
+    crate::robot_noise::tell(&settings, &survey);
     if localised && let Some(note) = crate::pipeline::linear_array_note(&settings.mic_array()?) {
         eprintln!("{note}");
     }

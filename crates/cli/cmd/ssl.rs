@@ -49,15 +49,23 @@ pub fn run(args: &SslArgs) -> Result<Outcome> {
     let settings = args
         .settings
         .settings()?
-        .with_dataset_array(args.dataset.as_deref());
+        .with_dataset_array(args.dataset.as_deref())
+        .with_dataset_noise(args.dataset.as_deref())?;
     let array = settings.mic_array()?;
-    let config = settings.ssl;
+    let config = settings.ssl.clone();
+    let noise = crate::pipeline::RobotNoise::of(&settings)?;
     let mirror = array.mirror_axis_deg();
     if let Some(note) = crate::pipeline::linear_array_note(&array) {
         eprintln!("{note}");
     }
     let Some(dir) = &args.dataset else {
-        let rows = localise_files(&args.files, &array, settings.channels.as_deref(), &config)?;
+        let rows = localise_files(
+            &args.files,
+            &array,
+            settings.channels.as_deref(),
+            &config,
+            noise.as_ref(),
+        )?;
         crate::pipeline::warn_faulty_channels(&rows);
         print_rows(&rows, &config, &array, args.json)?;
         return Ok(Outcome::Success);
@@ -70,7 +78,13 @@ pub fn run(args: &SslArgs) -> Result<Outcome> {
         dir.join("audio").display()
     );
     let t0 = Instant::now();
-    let rows = localise_files(&ds.audio, &array, settings.channels.as_deref(), &config)?;
+    let rows = localise_files(
+        &ds.audio,
+        &array,
+        settings.channels.as_deref(),
+        &config,
+        noise.as_ref(),
+    )?;
     let elapsed = t0.elapsed().as_secs_f64();
     crate::pipeline::warn_faulty_channels(&rows);
     eprintln!(
@@ -140,6 +154,7 @@ pub fn run(args: &SslArgs) -> Result<Outcome> {
             &ds.audio,
             &array,
             settings.channels.as_deref(),
+            noise.as_ref(),
             &config,
             &rows,
             &poses,

@@ -136,7 +136,11 @@ pub fn run(a: &WatchArgs) -> Result<Outcome> {
     for p in a.png.iter().chain(&a.plot) {
         Format::of(p)?;
     }
-    let mut settings = a.settings.settings()?.with_dataset_array(Some(&a.dir));
+    let mut settings = a
+        .settings
+        .settings()?
+        .with_dataset_array(Some(&a.dir))
+        .with_dataset_noise(Some(&a.dir))?;
     settings.iasm.refine |= a.refine;
     let ds = Dataset::open(&a.dir)?;
     let map_yaml = first_with_ext(&a.dir.join("map"), "yaml").with_context(|| {

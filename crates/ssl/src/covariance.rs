@@ -46,6 +46,10 @@
 //! against a louder talker 0.69-0.72 at 2.1-2.3 m, in the range of that row's reflections
 //! (0.61-0.79), so its low peaks are taken for copies.
 //!
+//! With the robot's noise known ([`crate::noise`]), the covariance is the recording's less
+//! the noise's over as many frames (and the frames' energies, which choose them, less the
+//! noise's): the two waves are fitted to the sources' field.
+//!
 //! Bins where the steering vectors are nearly parallel (the array does not resolve the
 //! directions there: low frequencies, small arrays, close directions) give an
 //! ill-conditioned fit and are left out; with none left the statistic is undefined.
@@ -86,12 +90,15 @@ impl SpatialCovariance {
         let bins = spec.bins();
         let nb = bins.len();
         let nf = spec.num_frames();
+        // What the robot's own noise adds to each frame's energy ([`crate::noise`]).
+        let noise_energy = spec.noise().map_or(0.0, |n| n.frame_energy(bins.clone()));
         let energy: Vec<f64> = (0..nf)
             .map(|f| {
-                (0..m)
+                let e: f64 = (0..m)
                     .flat_map(|c| spec.frame(f, c))
                     .map(|x| f64::from(x.norm_sqr()))
-                    .sum()
+                    .sum();
+                (e - noise_energy).max(0.0)
             })
             .collect();
         let loudest = energy.iter().copied().fold(0.0, f64::max);
@@ -107,6 +114,7 @@ impl SpatialCovariance {
             .into_iter()
             .filter(|&f| f < nf && energy[f] > 0.0 && energy[f] >= floor)
             .collect();
+        let kept = frames.len() as f64;
         for f in frames {
             for (p, &(i, j)) in pairs.iter().enumerate() {
                 let (xi, xj) = (spec.frame(f, i), spec.frame(f, j));
@@ -117,6 +125,16 @@ impl SpatialCovariance {
                     // x_i x_j^*
                     *sr += f64::from(a.re * b.re + a.im * b.im);
                     *si += f64::from(a.im * b.re - a.re * b.im);
+                }
+            }
+        }
+        if let Some(field) = spec.noise() {
+            // Less the robot's noise over the frames summed.
+            for (p, &(i, j)) in pairs.iter().enumerate() {
+                for (k, b) in bins.clone().enumerate() {
+                    let n = field.cross(b, i, j);
+                    pr[p * nb + k] -= kept * f64::from(n.re);
+                    pi[p * nb + k] -= kept * f64::from(n.im);
                 }
             }
         }

@@ -140,6 +140,29 @@ impl BlockCovariances {
                     }
                 }
             }
+            if let Some(field) = spec.noise() {
+                // Less the robot's noise over the block's frames ([`crate::noise`]); the
+                // powers kept at least a share of what was heard.
+                let t = frames.len() as f64;
+                let mut pair = 0;
+                for i in 0..m {
+                    for j in i..m {
+                        let at = block + pair * bins;
+                        for (k, b) in spec.bins().enumerate() {
+                            let n = field.cross(b, i, j);
+                            if i == j {
+                                let heard = re[at + k];
+                                let floor = f64::from(crate::noise::RESIDUAL_FLOOR) * heard;
+                                re[at + k] = (heard - t * f64::from(n.re)).max(floor);
+                            } else {
+                                re[at + k] -= t * f64::from(n.re);
+                                im[at + k] -= t * f64::from(n.im);
+                            }
+                        }
+                        pair += 1;
+                    }
+                }
+            }
             trace.iter_mut().for_each(|t| *t = 0.0);
             for i in 0..m {
                 let at = block + diagonal(i, m) * bins;

@@ -266,6 +266,17 @@ pub enum Error {
         /// Frame length.
         frame_len: usize,
     },
+    /// A recording of the robot's noise too short to estimate it from
+    /// ([`crate::noise::MIN_NOISE_FRAMES`]).
+    #[error(
+        "the noise recording holds {frames} STFT frames, fewer than {min}: record the robot alone for a few seconds"
+    )]
+    NoiseTooShort {
+        /// Its frames.
+        frames: usize,
+        /// The fewest taken.
+        min: usize,
+    },
     /// The audio's sample rate is not the one the localizer was built for.
     #[error("audio sample rate {got} Hz differs from the localizer's {expected} Hz")]
     SampleRateMismatch {

@@ -13,7 +13,9 @@
 //! pooled spectrum as [`Doa`]s, each max-pooled one placed where the mean of the blocks
 //! that heard it best peaks ([`SslConfig::placement_share`]). On a compact array
 //! (a ReSpeaker), each weaker DoA of a row is then refined with the stronger ones
-//! projected out ([`deflate`], [`SslConfig::deflates`]).
+//! projected out ([`deflate`], [`SslConfig::deflates`]). Given a recording of the robot
+//! alone ([`Localizer::with_noise`]), every statistic subtracts the robot's own noise
+//! ([`noise`]).
 //!
 //! # Example
 //!
@@ -53,6 +55,7 @@ pub mod error;
 pub mod grid;
 mod localizer;
 pub mod method;
+pub mod noise;
 pub mod spectrum;
 pub mod steady;
 pub mod stft;
@@ -65,5 +68,6 @@ pub use error::{ArrayError, ConfigError, Error, Result};
 pub use grid::{DirectionGrid, ElevationRange};
 pub use localizer::{Localizer, Located, Scratch, SpectrumEstimator};
 pub use method::{gcc_phat, music, mvdr, srp_phat};
+pub use noise::NoiseField;
 pub use spectrum::{AngularSpectrum, Doa, wrap_deg};
 pub use stft::{Spectrogram, Stft};

@@ -13,6 +13,7 @@ use crate::covariance::SpatialCovariance;
 use crate::error::{ConfigError, Error, Result};
 use crate::grid::{DirectionGrid, ElevationRange, PairScratch, unit_vector};
 use crate::method::music::SubspaceScratch;
+use crate::noise::NoiseField;
 use crate::spectrum::{AngularSpectrum, Doa, wrap_deg};
 use crate::stft::{Spectrogram, Stft};
 
@@ -295,6 +296,8 @@ pub struct Localizer {
     /// ([`SslConfig::screen_channels`]); `None` where those channels cannot localise by
     /// themselves (see [`Located::microphones`]).
     subsets: Mutex<Vec<Subset>>,
+    /// The robot's own noise, subtracted from every statistic ([`Localizer::with_noise`]).
+    noise: Option<Arc<NoiseField>>,
 }
 
 impl std::fmt::Debug for Localizer {
@@ -418,7 +421,46 @@ impl Localizer {
             mirror_axis_deg: array.mirror_axis_deg(),
             deflate: config.deflates(array, sample_rate),
             subsets: Mutex::default(),
+            noise: None,
         })
+    }
+
+    /// This localizer, subtracting the robot's own noise as heard in `noise`, a recording
+    /// of the robot alone (its fans running, no other source; a few seconds), from every
+    /// statistic it measures ([`crate::noise`]).
+    ///
+    /// # Errors
+    /// A recording of another channel count or sample rate than this localizer's, or
+    /// shorter than [`crate::noise::MIN_NOISE_FRAMES`] STFT frames.
+    pub fn with_noise(self, noise: &Audio) -> Result<Self> {
+        let mut scratch = Scratch::default();
+        self.analyse(noise, &mut scratch)?;
+        let field = NoiseField::of(&scratch.spec)?;
+        Ok(self.with_noise_field(Arc::new(field)))
+    }
+
+    /// This localizer with `field` as the robot's noise ([`Localizer::with_noise`]).
+    ///
+    /// # Panics
+    /// If `field` was estimated with another channel count or band.
+    pub fn with_noise_field(mut self, field: Arc<NoiseField>) -> Self {
+        assert_eq!(
+            field.num_channels(),
+            self.array.len(),
+            "one channel per microphone"
+        );
+        assert!(
+            field.bins().start <= self.bins.start && self.bins.end <= field.bins().end,
+            "the noise field holds the band"
+        );
+        self.subsets = Mutex::default();
+        self.noise = Some(field);
+        self
+    }
+
+    /// The robot's noise this localizer subtracts, if any.
+    pub fn noise(&self) -> Option<&NoiseField> {
+        self.noise.as_deref()
     }
 
     /// The localizer of this one's microphones `keep` (ascending, fewer than all), built
@@ -449,6 +491,10 @@ impl Localizer {
             .ok()
             .filter(|a| a.linear_axis().is_none() || self.array.linear_axis().is_some())
             .and_then(|a| Localizer::new(&a, self.sample_rate, &config).ok())
+            .map(|l| match &self.noise {
+                Some(n) => l.with_noise_field(Arc::new(n.subset(keep))),
+                None => l,
+            })
             .map(Arc::new);
         subsets.push((keep.to_vec(), l.clone()));
         l
@@ -552,7 +598,9 @@ impl Localizer {
             });
         }
         self.stft
-            .analyze_into(audio, self.bins.clone(), &mut scratch.spec)
+            .analyze_into(audio, self.bins.clone(), &mut scratch.spec)?;
+        scratch.spec.noise = self.noise.clone();
+        Ok(())
     }
 
     /// The pooled spectrum of the STFT in `scratch.spec` ([`Localizer::analyse`]), the
@@ -1248,6 +1296,25 @@ impl Localizer {
         // parts apart, bins contiguous, so that the sums vectorise.
         let (mut gr, mut gi) = (vec![0.0f32; np * nb], vec![0.0f32; np * nb]);
         let (mut ur, mut ui) = (vec![0.0f32; m * nb], vec![0.0f32; m * nb]);
+        // With the robot's noise ([`crate::noise`]): per pair and bin, its coherence
+        // `N_ij / sqrt(N_ii N_jj)` and `sqrt(N_ii N_jj)`; per channel and bin, `1 / |x|`.
+        let noise: Option<(Vec<Complex32>, Vec<f32>)> = spec.noise().map(|field| {
+            let mut gamma = Vec::with_capacity(np * nb);
+            let mut own = Vec::with_capacity(np * nb);
+            for &(i, j) in &pairs {
+                for b in bins.clone() {
+                    let o = (field.power(b, i) * field.power(b, j)).sqrt();
+                    own.push(o);
+                    gamma.push(if o > f32::MIN_POSITIVE {
+                        field.cross(b, i, j) / o
+                    } else {
+                        Complex32::default()
+                    });
+                }
+            }
+            (gamma, own)
+        });
+        let mut inv_mag = vec![0.0f32; if noise.is_some() { m * nb } else { 0 }];
         for f in 0..nf {
             for i in 0..m {
                 let x = spec.frame(f, i);
@@ -1258,6 +1325,12 @@ impl Localizer {
                     let inv = if n2 > 0.0 { n2.sqrt().recip() } else { 0.0 };
                     *r = v.re * inv;
                     *im = v.im * inv;
+                }
+                if noise.is_some() {
+                    for (w, v) in inv_mag[i * nb..(i + 1) * nb].iter_mut().zip(x) {
+                        let n2 = v.re * v.re + v.im * v.im;
+                        *w = if n2 > 0.0 { n2.sqrt().recip() } else { 0.0 };
+                    }
                 }
             }
             for (p, &(i, j)) in pairs.iter().enumerate() {
@@ -1270,6 +1343,28 @@ impl Localizer {
                 {
                     *sr += ar * br + ai * bi;
                     *si += ai * br - ar * bi;
+                }
+            }
+            if let Some((gamma, own)) = &noise {
+                // Less the robot's noise: its coherence, in proportion to its share of the
+                // frame's `|x_i| |x_j|` (at most all of it). Each term stays a phasor's
+                // size, so the statistic's spread under independent noise stays what the
+                // test assumes.
+                for (p, &(i, j)) in pairs.iter().enumerate() {
+                    let (wi, wj) = (
+                        &inv_mag[i * nb..(i + 1) * nb],
+                        &inv_mag[j * nb..(j + 1) * nb],
+                    );
+                    let at = p * nb..(p + 1) * nb;
+                    let terms = gamma[at.clone()]
+                        .iter()
+                        .zip(&own[at])
+                        .zip(wi.iter().zip(wj));
+                    for (k, ((g, o), (a, b))) in terms.enumerate() {
+                        let share = (o * a * b).min(1.0);
+                        gr[p * nb + k] -= g.re * share;
+                        gi[p * nb + k] -= g.im * share;
+                    }
                 }
             }
         }
@@ -1346,9 +1441,12 @@ fn block_energies(
     n_blocks: usize,
     frames: &dyn Fn(usize) -> Range<usize>,
 ) -> Vec<f64> {
+    // Less the robot's own noise ([`crate::noise`]), kept at least a share of what was
+    // heard: the gates compare the sources' levels.
+    let noise = spec.noise().map_or(0.0, |n| n.frame_energy(spec.bins()));
     (0..n_blocks)
         .map(|b| {
-            frames(b)
+            let heard: f64 = frames(b)
                 .flat_map(|f| (0..spec.num_channels()).map(move |c| (f, c)))
                 .map(|(f, c)| {
                     spec.frame(f, c)
@@ -1356,7 +1454,9 @@ fn block_energies(
                         .map(|x| f64::from(x.norm_sqr()))
                         .sum::<f64>()
                 })
-                .sum()
+                .sum();
+            let floor = f64::from(crate::noise::RESIDUAL_FLOOR) * heard;
+            (heard - noise * frames(b).len() as f64).max(floor)
         })
         .collect()
 }

@@ -147,6 +147,14 @@ impl Octaves {
                     }
                 }
             }
+            if let Some(field) = spec.noise() {
+                // The sources' levels: less the robot's own noise ([`crate::noise`]).
+                let t = frames(b).len() as f32;
+                for (p, k) in block.iter_mut().zip(spec.bins()) {
+                    let n: f32 = (0..spec.num_channels()).map(|c| field.power(k, c)).sum();
+                    *p = f64::from(crate::noise::residual_power(*p as f32, n, t));
+                }
+            }
             for (o, r) in octaves.iter().enumerate() {
                 levels[o * n_blocks + b] = block[r.clone()].iter().sum();
             }

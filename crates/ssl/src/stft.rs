@@ -115,6 +115,7 @@ impl Stft {
         let n_frames = self.num_frames(audio.num_samples());
         out.data.clear();
         out.num_frames = 0;
+        out.noise = None;
         if n_frames == 0 {
             return Err(Error::TooShort {
                 samples: audio.num_samples(),
@@ -158,9 +159,17 @@ pub struct Spectrogram {
     num_channels: usize,
     bins: Range<usize>,
     data: Vec<Complex32>,
+    /// The robot's noise to subtract from this recording's statistics, when known
+    /// ([`crate::noise`]).
+    pub(crate) noise: Option<std::sync::Arc<crate::noise::NoiseField>>,
 }
 
 impl Spectrogram {
+    /// The robot's noise that the statistics of this spectrogram subtract, if any.
+    pub fn noise(&self) -> Option<&crate::noise::NoiseField> {
+        self.noise.as_deref()
+    }
+
     /// Number of frames.
     pub fn num_frames(&self) -> usize {
         self.num_frames
@@ -191,6 +200,7 @@ impl Spectrogram {
             num_channels,
             bins,
             data,
+            noise: None,
         }
     }
 
@@ -212,6 +222,7 @@ impl Spectrogram {
         out.num_frames = self.num_frames;
         out.num_channels = self.num_channels;
         out.bins = bins;
+        out.noise = self.noise.clone();
     }
 
     /// The kept bins of one channel in one frame.

@@ -15,6 +15,17 @@
 //!    the block's frames.
 //! 2. Evaluate its correlation at the pair's lag grid, normalised by bins.
 //! 3. Add each pair's correlation, interpolated at each direction's delay; divide by pairs.
+//!
+//! ## With the robot's noise ([`crate::noise`])
+//! Step 1 becomes PHAT of the block's cross-spectrum less the noise's,
+//! `T (Σ_t X_i X_j^* - T N_ij) / |Σ_t X_i X_j^* - T N_ij|` (the same scale as `T` unit
+//! phasors): the noise's mean can be taken out of a sum, not out of a frame's phasor. Tried
+//! and not kept (`BENCHMARKS.md`, session 32): each frame's `X_i X_j^* - N_ij` over
+//! `|X_i| |X_j|` subtracts many times the noise's mean phasor, since `1 / |X|` of a
+//! Gaussian bin has a heavy tail (a fan's two talkers 0.26-0.71 m against 0.02-0.04); the
+//! noise's coherence subtracted from each phasor in proportion to its share of the frame,
+//! 0.07-0.41 m; spectral-subtraction gains on each phasor, which silence the bins where the
+//! fan is heard with the sources, lost them (0.08-1.0 m).
 
 use std::ops::Range;
 use std::sync::Arc;
@@ -22,6 +33,7 @@ use std::sync::Arc;
 use crate::Scratch;
 use crate::grid::{PairLags, Pairwise, Target};
 use crate::localizer::zeroed;
+use crate::noise::NoiseField;
 use crate::stft::Spectrogram;
 
 /// The GCC-PHAT estimator for one array, grid, band and sample rate.
@@ -33,6 +45,38 @@ pub struct GccPhat {
 impl GccPhat {
     pub(crate) fn new(lags: Arc<PairLags>) -> Self {
         Self { lags }
+    }
+}
+
+impl GccPhat {
+    /// [`Pairwise::spectrum`] with the robot's noise `field` subtracted from each pair's
+    /// block cross-spectrum before its PHAT weighting (see the module docs).
+    fn less_noise(
+        &self,
+        stft: &Spectrogram,
+        frames: Range<usize>,
+        target: Target<'_>,
+        scratch: &mut Scratch,
+        field: &NoiseField,
+        norm: f32,
+    ) {
+        let l = &*self.lags;
+        let nb = l.band_of(stft);
+        let t = frames.len() as f32;
+        let Scratch { cross, pairs, .. } = scratch;
+        let cross = zeroed(cross, nb);
+        let coefficients = |_, pair, gr: &mut [f32], gi: &mut [f32], _: &mut [f32]| {
+            super::block_cross(stft, frames.clone(), pair, cross);
+            let noise_cross = field.row(stft.bins(), pair);
+            for (b, (c, n)) in cross.iter().zip(noise_cross).enumerate() {
+                let u = super::unit_phasor(c - n * t) * t;
+                gr[b] = u.re;
+                gi[b] = u.im;
+            }
+        };
+        l.pairwise_spectrum(target, norm, pairs, coefficients, |gr, gi, _, c, s| {
+            gr * c - gi * s
+        });
     }
 }
 
@@ -56,6 +100,9 @@ impl Pairwise for GccPhat {
         // PHAT factorises: X_i X_j^* / |X_i X_j^*| = (X_i / |X_i|) (X_j / |X_j|)^*, so each
         // channel's bins are normalised once per frame instead of once per pair.
         let n_ch = stft.num_channels();
+        if let Some(field) = stft.noise() {
+            return self.less_noise(stft, frames, target, scratch, field, norm);
+        }
         let Scratch { unit, pairs, .. } = scratch;
         let unit = zeroed(unit, frames.len() * n_ch * nb);
         for (k, f) in frames.clone().enumerate() {

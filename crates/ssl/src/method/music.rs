@@ -1175,8 +1175,30 @@ fn accumulate_portable(
 }
 
 /// The upper triangle of `cov` (the rest left as it was) = `sum x x^H` over `frames` and
-/// the band-relative bins `bins`, `x` a bin's value at every microphone.
+/// the band-relative bins `bins`, `x` a bin's value at every microphone; less the robot's
+/// noise over as many frames and bins when it is known ([`crate::noise`]).
 fn covariance(
+    stft: &Spectrogram,
+    frames: Range<usize>,
+    bins: Range<usize>,
+    cov: &mut DMatrix<Complex32>,
+) {
+    let t = frames.len() as f32;
+    covariance_sums(stft, frames, bins.clone(), cov);
+    if let Some(field) = stft.noise() {
+        let m = stft.num_channels();
+        let start = stft.bins().start;
+        for i in 0..m {
+            for j in i..m {
+                let n: Complex32 = bins.clone().map(|b| field.cross(start + b, i, j)).sum();
+                cov[(i, j)] -= n * t;
+            }
+        }
+    }
+}
+
+/// [`covariance`] without the noise.
+fn covariance_sums(
     stft: &Spectrogram,
     frames: Range<usize>,
     bins: Range<usize>,

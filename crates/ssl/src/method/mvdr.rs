@@ -21,6 +21,10 @@
 //! 2. Smooth them over `±F` bins; form the coherence `g_b = R_ij / sqrt(R_ii R_jj)`.
 //! 3. Evaluate `sum_b P_b(tau)` on the pair's lag grid; read it off at each direction's
 //!    delay and average over pairs.
+//!
+//! With the robot's noise known ([`crate::noise`]), step 1 subtracts `T N` from the
+//! block's sums of `T` frames (each power kept at least
+//! [`crate::noise::RESIDUAL_FLOOR`] of what was heard), and `|g|` is kept at most 1.
 
 use std::ops::Range;
 use std::sync::Arc;
@@ -89,6 +93,8 @@ impl Pairwise for Mvdr {
         let l = &*self.lags;
         let nb = l.band_of(stft);
         let n_ch = stft.num_channels();
+        let noise = stft.noise();
+        let t = frames.len() as f32;
         let Scratch {
             power,
             power_sum,
@@ -108,6 +114,11 @@ impl Pairwise for Mvdr {
                     *acc += x.norm_sqr();
                 }
             }
+            if let Some(field) = noise {
+                for (acc, n) in tmp.iter_mut().zip(field.row(stft.bins(), (c, c))) {
+                    *acc = crate::noise::residual_power(*acc, n.re, t);
+                }
+            }
             box_smooth(tmp, self.smoothing, pw, prefix_real);
             tmp.fill(0.0);
         }
@@ -118,15 +129,28 @@ impl Pairwise for Mvdr {
         // Bins past the band keep num = 0 and so add nothing.
         let coefficients = |_, (i, j), gr: &mut [f32], gi: &mut [f32], num: &mut [f32]| {
             super::block_cross(stft, frames.clone(), (i, j), cross);
+            if let Some(field) = noise {
+                let noise_cross = field.row(stft.bins(), (i, j));
+                for (c, n) in cross.iter_mut().zip(noise_cross) {
+                    *c -= n * t;
+                }
+            }
             box_smooth(cross, self.smoothing, smooth, prefix_complex);
             let (pi, pj) = (&power[i * nb..(i + 1) * nb], &power[j * nb..(j + 1) * nb]);
             for b in 0..nb {
                 let d = (pi[b] * pj[b]).sqrt();
-                let g = if d > f32::MIN_POSITIVE {
+                let mut g = if d > f32::MIN_POSITIVE {
                     smooth[b] / d
                 } else {
                     Complex32::default()
                 };
+                if noise.is_some() {
+                    // A residual cross-spectrum may exceed its floored powers.
+                    let r = g.norm();
+                    if r > 1.0 {
+                        g /= r;
+                    }
+                }
                 gr[b] = g.re;
                 gi[b] = g.im;
                 num[b] = 0.5 * (a * a - g.norm_sqr());
