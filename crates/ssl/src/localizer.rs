@@ -1271,9 +1271,10 @@ impl Localizer {
             })
             .collect();
         let audio = Audio::new(self.sample_rate, channels)?;
-        let (profile, _) = self
-            .spectrum_with_scratch(&audio, scratch)?
-            .azimuth_profile();
+        self.analyse(&audio, scratch)?;
+        // The method's own response to the wave: the robot's noise is no part of it.
+        scratch.spec.noise = None;
+        let (profile, _) = self.pooled(scratch, Blocks::Estimate).azimuth_profile();
         let median = crate::spectrum::median(&profile);
         let top = profile.iter().copied().fold(f32::MIN, f32::max);
         let span = (top - median).max(f32::MIN_POSITIVE);
