@@ -169,10 +169,60 @@ fn write_bag(path: &Path, messages: &mut [(i64, u32, Vec<u8>)], connections: &[(
     std::fs::write(path, out).unwrap();
 }
 
-#[test]
-fn a_run_recorded_in_a_bag_is_mapped_from_the_stops_it_finds() {
-    let (scene, _) = iasm::scenes::parse_scene(SCENE).unwrap();
-    let scene = iasm::scenes::prepare(scene).unwrap();
+/// Asserts that channel `channel` of `wav` holds `clip` (Pa) from `from_s` on, scaled by
+/// `gain` and rounded to 16 bits as the bag holds it, at the samples `at`.
+fn assert_clip_from(
+    wav: &ssl::Audio,
+    clip: &[f64],
+    channel: usize,
+    gain: f64,
+    from_s: f64,
+    at: &[usize],
+) {
+    let first = (from_s * 16_000.0).round() as usize;
+    for &i in at {
+        let want = (clip[first + i] * gain * 32767.0).round() / 32768.0;
+        let got = f64::from(wav.channels()[channel][i]);
+        assert!(
+            (got - want).abs() < 1e-6,
+            "sample {i}: {got} against {want}"
+        );
+    }
+}
+
+/// Asserts that `map` (`iasm map --json`) holds the scene's two talkers, each within
+/// `tol` m, and no other source.
+fn assert_talkers(map: &serde_json::Value, tol: f64) {
+    let found = sources_of(map);
+    assert_eq!(found.len(), 2, "{found:?}");
+    for truth in [[2.0, 4.0], [4.5, 1.0]] {
+        let d = found
+            .iter()
+            .map(|f| (f[0] - truth[0]).hypot(f[1] - truth[1]))
+            .fold(f64::INFINITY, f64::min);
+        assert!(
+            d < tol,
+            "talker at {truth:?}: nearest source {d:.3} m away ({found:?})"
+        );
+    }
+}
+
+/// A simulated run written as a bag (see the module docs), and what went into it.
+struct SimulatedBag {
+    dir: tempfile::TempDir,
+    bag: std::path::PathBuf,
+    /// Each stop's clip (channel-major, Pa).
+    clips: Vec<Vec<Vec<f64>>>,
+    /// Pa to full scale.
+    gain: f64,
+}
+
+/// The scene's stops as a robot records them; with `lead_in` (a clip and a pose), the
+/// robot first stands there for the clip's length, then drives to the first stop.
+fn simulated_bag(
+    scene: &sim::scene::PreparedScene,
+    lead_in: Option<(&[Vec<f64>], geom::Pose)>,
+) -> SimulatedBag {
     let fs = 16_000usize;
     let clips: Vec<Vec<Vec<f64>>> = (0..scene.stops.len())
         .map(|i| scene.render_stop(i))
@@ -180,23 +230,33 @@ fn a_run_recorded_in_a_bag_is_mapped_from_the_stops_it_finds() {
     let peak = clips
         .iter()
         .flatten()
+        .chain(lead_in.iter().flat_map(|(c, _)| c.iter()))
         .flatten()
         .fold(0.0f64, |m, v| m.max(v.abs()));
     let gain = 0.5 / peak;
 
-    // The run: stop k's clip from k * (STILL + DRIVE) s, silence while driving; it ends
-    // with the last stop.
+    // The run: the lead-in, a drive, then stop k's clip from lead + k * (STILL + DRIVE)
+    // s, silence while driving; it ends with the last stop.
+    let lead = lead_in.map_or(0.0, |(c, _)| c[0].len() as f64 / fs as f64 + DRIVE_S);
     let period = STILL_S + DRIVE_S;
-    let total = (scene.stops.len() - 1) as f64 * period + STILL_S;
+    let total = lead + (scene.stops.len() - 1) as f64 * period + STILL_S;
     let frames = (total * fs as f64).round() as usize;
     let mut pcm = vec![0i16; frames * 6];
-    for (k, clip) in clips.iter().enumerate() {
-        let at = (k as f64 * period * fs as f64).round() as usize;
+    let mut put = |at: usize, clip: &[Vec<f64>]| {
         for (c, ch) in clip.iter().enumerate() {
             for (i, v) in ch.iter().enumerate() {
                 pcm[(at + i) * 6 + c] = (v * gain * 32767.0).round() as i16;
             }
         }
+    };
+    if let Some((clip, _)) = lead_in {
+        put(0, clip);
+    }
+    for (k, clip) in clips.iter().enumerate() {
+        put(
+            ((lead + k as f64 * period) * fs as f64).round() as usize,
+            clip,
+        );
     }
     let mut messages = Vec::new();
     let mut info = vec![6u8];
@@ -216,15 +276,26 @@ fn a_run_recorded_in_a_bag_is_mapped_from_the_stops_it_finds() {
     }
     for j in 0..=(total * 20.0) as usize {
         let t = j as f64 / 20.0;
-        let k = ((t / period) as usize).min(scene.stops.len() - 1);
-        let u = ((t - k as f64 * period - STILL_S) / DRIVE_S).clamp(0.0, 1.0);
-        let (a, b) = (
-            scene.stops[k],
-            scene.stops[(k + 1).min(scene.stops.len() - 1)],
-        );
+        let pose = match lead_in {
+            Some((_, at)) if t < lead => {
+                // Standing, then driving to the first stop.
+                let u = ((t - (lead - DRIVE_S)) / DRIVE_S).clamp(0.0, 1.0);
+                let b = scene.stops[0];
+                geom::Pose::new(at.x + u * (b.x - at.x), at.y + u * (b.y - at.y), at.theta)
+            }
+            _ => {
+                let t = t - lead;
+                let k = ((t / period) as usize).min(scene.stops.len() - 1);
+                let u = ((t - k as f64 * period - STILL_S) / DRIVE_S).clamp(0.0, 1.0);
+                let (a, b) = (
+                    scene.stops[k],
+                    scene.stops[(k + 1).min(scene.stops.len() - 1)],
+                );
+                geom::Pose::new(a.x + u * (b.x - a.x), a.y + u * (b.y - a.y), a.theta)
+            }
+        };
         let ns = T0 + (t * 1e9).round() as i64;
-        let pose = odometry(ns, a.x + u * (b.x - a.x), a.y + u * (b.y - a.y), a.theta);
-        messages.push((ns + 1_000_000, 2, pose));
+        messages.push((ns + 1_000_000, 2, odometry(ns, pose.x, pose.y, pose.theta)));
     }
     let dir = tempfile::tempdir().unwrap();
     let bag = dir.path().join("run.bag");
@@ -237,6 +308,25 @@ fn a_run_recorded_in_a_bag_is_mapped_from_the_stops_it_finds() {
             ("/odom", "nav_msgs/Odometry"),
         ],
     );
+    SimulatedBag {
+        dir,
+        bag,
+        clips,
+        gain,
+    }
+}
+
+#[test]
+fn a_run_recorded_in_a_bag_is_mapped_from_the_stops_it_finds() {
+    let (scene, _) = iasm::scenes::parse_scene(SCENE).unwrap();
+    let scene = iasm::scenes::prepare(scene).unwrap();
+    let fs = 16_000usize;
+    let SimulatedBag {
+        dir,
+        bag,
+        clips,
+        gain,
+    } = simulated_bag(&scene, None);
 
     let data = dir.path().join("run");
     let out = iasm(&["bag", arg(&bag), "--out", arg(&data), "--array", "iasm6"]);
@@ -260,14 +350,8 @@ fn a_run_recorded_in_a_bag_is_mapped_from_the_stops_it_finds() {
             (0.9 * fs as f64).round() as usize,
             "stop {k}"
         );
-        let first = (0.3 * fs as f64).round() as usize;
-        for i in [0, 1000, 9000, wav.num_samples() - 1] {
-            let want = (clips[k][3][first + i] * gain * 32767.0).round() / 32768.0;
-            assert!(
-                (f64::from(wav.channels()[3][i]) - want).abs() < 1e-6,
-                "stop {k} sample {i}"
-            );
-        }
+        let last = wav.num_samples() - 1;
+        assert_clip_from(&wav, &clips[k][3], 3, gain, 0.3, &[0, 1000, 9000, last]);
     }
 
     // And the data set maps the two talkers.
@@ -282,18 +366,93 @@ fn a_run_recorded_in_a_bag_is_mapped_from_the_stops_it_finds() {
         "--json",
     ]);
     let v = json(&map);
-    let found = sources_of(&v);
-    assert_eq!(found.len(), 2, "{found:?}");
-    for truth in [[2.0, 4.0], [4.5, 1.0]] {
-        let d = found
-            .iter()
-            .map(|f| (f[0] - truth[0]).hypot(f[1] - truth[1]))
-            .fold(f64::INFINITY, f64::min);
-        assert!(
-            d < 0.1,
-            "talker at {truth:?}: nearest source {d:.3} m away ({found:?})"
-        );
+    assert_talkers(&v, 0.1);
+}
+
+/// A robot with a fan (60 dB SPL at 1 m, 0.36 m from the array: 9 dB above the talkers
+/// there) first stands 4 s alone, then drives the scene's stops: `--noise-window` takes
+/// the robot alone out of the bag as `noise/robot.wav`, and the map subtracts it.
+#[test]
+fn the_robot_alone_is_cut_from_the_bag_and_subtracted() {
+    let fan = "[[sources]]\non_robot = true\npos = [-0.2, 0.0, -0.3]\nsignal = \"pink_noise\"\nlevel_db = 60.0\n";
+    let text = SCENE.replace("[trajectory]", &format!("{fan}[trajectory]"));
+    let (scene, _) = iasm::scenes::parse_scene(&text).unwrap();
+    let scene = iasm::scenes::prepare(scene).unwrap();
+    let alone = scene.render_robot_alone(0).unwrap();
+    assert_eq!(alone[0].len(), 4 * 16_000);
+    let at = geom::Pose::new(0.4, 2.5, 0.0);
+    let SimulatedBag { dir, bag, gain, .. } = simulated_bag(&scene, Some((&alone, at)));
+    let n = scene.stops.len();
+
+    // Listed, the robot alone is a stop like the others.
+    let out = iasm(&["bag", arg(&bag)]);
+    assert!(out.status.success(), "{}", show(&out));
+    assert!(String::from_utf8_lossy(&out.stdout).contains(&format!("{} stops", n + 1)));
+
+    let data = dir.path().join("run");
+    let out = iasm(&[
+        "bag",
+        arg(&bag),
+        "--out",
+        arg(&data),
+        "--array",
+        "iasm6",
+        "--noise-window",
+        "0.3-3.8",
+    ]);
+    assert!(out.status.success(), "{}", show(&out));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains("the robot alone: 0.30 - 3.80 s (3.5 s"),
+        "{stdout}"
+    );
+    assert!(stdout.contains("the stop within it left out"), "{stdout}");
+    assert!(stdout.contains(&format!("{n} stops")), "{stdout}");
+    // noise/robot.wav is the robot alone from 0.3 s to 3.8 s, sample for sample.
+    let wav = ssl::read_wav(&data.join("noise/robot.wav")).unwrap();
+    assert_eq!((wav.num_channels(), wav.num_samples()), (6, 56_000));
+    assert_clip_from(&wav, &alone[2], 2, gain, 0.3, &[0, 777, 30_000, 55_999]);
+    // The map subtracts it and finds both talkers.
+    let map = iasm(&[
+        "map",
+        "--dataset",
+        arg(&data),
+        "--method",
+        "gcc-phat",
+        "--num",
+        "3",
+        "--json",
+    ]);
+    let v = json(&map);
+    assert!(
+        v["noise"]
+            .as_str()
+            .is_some_and(|p| p.ends_with("noise/robot.wav")),
+        "{v}"
+    );
+    assert_talkers(&v, 0.25);
+
+    // Windows that do not fit are clear errors.
+    for (window, why) in [
+        ("1.0-1.5", "at least 1 s"),
+        ("30-34", "no continuous audio holds it"),
+    ] {
+        let out = iasm(&[
+            "bag",
+            arg(&bag),
+            "--out",
+            arg(&data),
+            "--force",
+            "--noise-window",
+            window,
+        ]);
+        assert_eq!(out.status.code(), Some(2), "{}", show(&out));
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains("--noise-window") && err.contains(why), "{err}");
     }
+    let out = iasm(&["bag", arg(&bag), "--noise-window", "5-2"]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("must end after it starts"));
 }
 
 #[test]

@@ -87,7 +87,13 @@ fn the_robots_fan_is_subtracted_with_the_recording_of_the_robot_alone() {
     std::fs::rename(out.join("noise/robot.wav"), &elsewhere).unwrap();
     std::fs::remove_dir(out.join("noise")).unwrap();
     let o = map(&out, "gcc-phat", &["--noise", arg(&elsewhere)]);
-    assert_eq!(sources_of(&json(&o)), sources_of(&with_noise[0]));
+    let v = json(&o);
+    assert_eq!(sources_of(&v), sources_of(&with_noise[0]));
+    assert_eq!(
+        v["noise"].as_str(),
+        Some(arg(&elsewhere)),
+        "the map says which: {v}"
+    );
     // Without it the fan takes the talkers' place: a talker missed by 0.3 m or more, or
     // a third source, by both methods.
     for method in ["gcc-phat", "mvdr"] {

@@ -171,6 +171,33 @@ pub struct BagArgs {
     /// The shortest stop kept (s of audio after the margins).
     #[arg(long, value_name = "S", default_value_t = bag::StopOptions::default().min_listen_s)]
     pub min_listen: f64,
+    /// When the robot stood alone, its fans running and nobody else making a sound: from
+    /// START to END seconds in the bag (as the stop table counts them, `3.0-8.5`). That
+    /// audio is written as noise/robot.wav, the recording of the robot's own noise that
+    /// every command then subtracts (see `ssl::noise`), and no stop is taken from it.
+    #[arg(long, value_name = "START-END", value_parser = parse_window)]
+    pub noise_window: Option<(f64, f64)>,
+}
+
+/// A `--noise-window`: two times in seconds, `START-END` (or `START,END`), START before END.
+fn parse_window(text: &str) -> Result<(f64, f64), String> {
+    let (a, b) = text
+        .split_once(',')
+        .or_else(|| text.split_once('-'))
+        .ok_or_else(|| format!("{text:?} is not START-END (seconds in the bag)"))?;
+    let num = |v: &str| {
+        v.trim()
+            .parse::<f64>()
+            .ok()
+            .filter(|x| x.is_finite())
+            .ok_or_else(|| format!("{v:?} is not a time in seconds"))
+    };
+    let (a, b) = (num(a)?, num(b)?);
+    if a < b {
+        Ok((a, b))
+    } else {
+        Err(format!("{text:?}: the window must end after it starts"))
+    }
 }
 
 /// `iasm watch`.

@@ -21,6 +21,53 @@ pub struct BagRun {
     pub run: bag::Run,
     /// Its stops, in time order.
     pub stops: Vec<bag::Stop>,
+    /// The robot alone ([`BagRun::set_noise_window`]): a segment of the run's audio and
+    /// its frames.
+    pub noise: Option<(usize, std::ops::Range<usize>)>,
+    /// Stops left out because they lay within the robot alone's window.
+    pub dropped: usize,
+}
+
+/// The shortest recording of the robot alone taken (s): its covariance is a mean over its
+/// frames.
+pub const MIN_NOISE_S: f64 = 1.0;
+
+impl BagRun {
+    /// Takes the audio from `from` to `to` (s in the bag, as the stops count them) as the
+    /// recording of the robot alone, and leaves out the stops whose listening window
+    /// overlaps it (they hear the robot alone, no source).
+    ///
+    /// # Errors
+    /// A window shorter than [`MIN_NOISE_S`], or that no one continuous stretch of the
+    /// audio holds.
+    pub fn set_noise_window(&mut self, (from, to): (f64, f64)) -> Result<()> {
+        ensure!(
+            to - from >= MIN_NOISE_S,
+            "the robot alone must be heard for at least {MIN_NOISE_S} s (a few seconds are best)"
+        );
+        let Some(w) = self.run.window((from, to)) else {
+            let spans: Vec<String> = self
+                .run
+                .segments
+                .iter()
+                .map(|s| {
+                    let end = s.start_s + s.frames as f64 / f64::from(self.run.format.sample_rate);
+                    format!("{:.2}-{:.2}", s.start_s, end)
+                })
+                .collect();
+            bail!(
+                "no continuous audio holds it: the audio of {} runs {} s",
+                self.run.audio_topic,
+                spans.join(", ")
+            );
+        };
+        let before = self.stops.len();
+        self.stops
+            .retain(|s| s.listen_s.1 <= from || s.listen_s.0 >= to);
+        self.dropped = before - self.stops.len();
+        self.noise = Some(w);
+        Ok(())
+    }
 }
 
 /// Reads the run in the bag at `path` and finds its stops.
@@ -31,7 +78,12 @@ pub fn read_bag(path: &Path, read: &bag::ReadOptions, stops: &bag::StopOptions) 
     let ctx = || format!("reading the bag {}", path.display());
     let run = bag::read_file(path, read).with_context(ctx)?;
     let stops = run.stops(stops).with_context(ctx)?;
-    Ok(BagRun { run, stops })
+    Ok(BagRun {
+        run,
+        stops,
+        noise: None,
+        dropped: 0,
+    })
 }
 
 /// Checks `channels` (counted from 1) against the run's audio and `array`, and returns them
@@ -77,6 +129,7 @@ pub fn picked_channels(
 
 /// Writes the stops of `run` into the folder `out` (which must exist): `audio/stopNN.wav`
 /// (the channels `picked`, counted from 0), `pose/poses.csv` (x, y, theta in degrees),
+/// `noise/robot.wav` (the robot alone, when [`BagRun::set_noise_window`] set it),
 /// `stops.csv`, `map/map.pgm` and `map/map.yaml` when the bag holds the robot's map in the
 /// poses' frame ([`bag::Run::map`]), and `array.toml` when `array` is given.
 ///
@@ -125,6 +178,13 @@ pub fn write_dataset(
         ));
     }
     crate::output::write_atomic(&out.join("pose/poses.csv"), poses.as_bytes())?;
+    if let Some((seg, frames)) = &run.noise {
+        let audio = run.run.samples(*seg, frames.clone());
+        let channels: Vec<&[f32]> = picked.iter().map(|&c| audio[c].as_slice()).collect();
+        let dir = out.join(crate::settings::DATASET_NOISE_DIR);
+        std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+        crate::output::write_float_wav(&dir.join("robot.wav"), &channels, fs)?;
+    }
     crate::output::write_atomic(&out.join("stops.csv"), table.as_bytes())?;
     if let Some(grid) = &run.run.map {
         std::fs::create_dir_all(out.join("map"))

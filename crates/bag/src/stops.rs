@@ -23,7 +23,7 @@
 use geom::{Pose, wrap_rad};
 
 use crate::error::{Error, Result};
-use crate::run::{Run, TimedPose};
+use crate::run::{AudioSegment, Run, TimedPose};
 
 /// How stops are found (module docs).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -178,10 +178,33 @@ fn relative(a: Pose, b: Pose) -> Pose {
     )
 }
 
+/// The frames of `segment` within `(from, to)` (s); a bound that falls on a frame (to within
+/// a thousandth of one: times in seconds carry rounding) takes it.
+fn frames_within(segment: &AudioSegment, (from, to): (f64, f64), fs: f64) -> (usize, usize) {
+    let first =
+        (((from - segment.start_s) * fs - 1e-3).ceil().max(0.0) as usize).min(segment.frames);
+    let last = (((to - segment.start_s) * fs + 1e-3).floor() as usize).min(segment.frames);
+    (first, last.max(first))
+}
+
 impl Run {
     /// The audio of `stop`'s listening window, one vector per channel, full scale at 1.
     pub fn stop_audio(&self, stop: &Stop) -> Vec<Vec<f32>> {
         self.samples(stop.segment, stop.frames.clone())
+    }
+
+    /// The segment and its frames that hold the audio from `from` to `to` (s from the
+    /// run's start), or `None` when no one continuous segment holds all of it (the audio
+    /// starts later, ends sooner, or has a gap there).
+    pub fn window(&self, (from, to): (f64, f64)) -> Option<(usize, std::ops::Range<usize>)> {
+        let fs = f64::from(self.format.sample_rate);
+        // Half a frame of slack at either end: times in seconds carry rounding.
+        let slack = 0.5 / fs;
+        let k = self.segments.iter().position(|s| {
+            s.start_s - slack <= from && to <= s.start_s + s.frames as f64 / fs + slack
+        })?;
+        let (first, last) = frames_within(&self.segments[k], (from, to), fs);
+        (first < last).then_some((k, first..last))
     }
 
     /// The stops of the run, in time order, each with its pose and audio (module docs).
@@ -223,11 +246,7 @@ impl Run {
                 continue;
             }
             let segment = &self.segments[k];
-            // The frames within the window; a bound that falls on a frame (to within a
-            // thousandth of one: times in seconds carry rounding) takes it.
-            let first = (((from - segment.start_s) * fs - 1e-3).ceil().max(0.0) as usize)
-                .min(segment.frames);
-            let last = (((to - segment.start_s) * fs + 1e-3).floor() as usize).min(segment.frames);
+            let (first, last) = frames_within(segment, (from, to), fs);
             let pose = if self.odometry.is_empty() {
                 mean_pose(&track[i..=j])
             } else {

@@ -43,7 +43,11 @@ pub fn run(a: &BagArgs) -> Result<Outcome> {
         .map(ssl::MicArray::from_spec)
         .transpose()
         .context("--array")?;
-    let got = read_bag(&a.bag, &read, &stops)?;
+    let mut got = read_bag(&a.bag, &read, &stops)?;
+    if let Some(w) = a.noise_window {
+        got.set_noise_window(w)
+            .with_context(|| format!("--noise-window {}-{} in {}", w.0, w.1, a.bag.display()))?;
+    }
     let picked = picked_channels(
         &got.run,
         a.channels.as_ref().map(|c| c.0.as_slice()),
@@ -110,6 +114,21 @@ pub fn run(a: &BagArgs) -> Result<Outcome> {
     for n in &run.notes {
         println!("note: {n}");
     }
+    if let Some((seg, frames)) = &got.noise {
+        let start = run.segments[*seg].start_s;
+        let fs = f64::from(run.format.sample_rate);
+        println!(
+            "the robot alone: {:.2} - {:.2} s ({:.1} s; noise/robot.wav, subtracted by every command){}",
+            start + frames.start as f64 / fs,
+            start + frames.end as f64 / fs,
+            frames.len() as f64 / fs,
+            match got.dropped {
+                0 => String::new(),
+                1 => "; the stop within it left out".to_string(),
+                k => format!("; the {k} stops within it left out"),
+            }
+        );
+    }
     println!("stop  listen (s in the bag)  pose (x m, y m, theta deg)");
     for (i, s) in got.stops.iter().enumerate() {
         println!(
@@ -156,13 +175,18 @@ pub fn run(a: &BagArgs) -> Result<Outcome> {
         write_dataset(&got, &picked, array.as_ref(), dir)
     })?;
     println!(
-        "written to {} (audio/, pose/poses.csv, stops.csv{}); next: iasm map --dataset {} --png map.png",
+        "written to {} (audio/, pose/poses.csv, stops.csv{}{}); next: iasm map --dataset {} --png map.png",
         out.display(),
         match (run.map.is_some(), array.is_some()) {
             (true, true) => ", map/, array.toml",
             (true, false) => ", map/",
             (false, true) => ", array.toml",
             (false, false) => "",
+        },
+        if got.noise.is_some() {
+            ", noise/robot.wav"
+        } else {
+            ""
         },
         out.display()
     );

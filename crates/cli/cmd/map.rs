@@ -31,6 +31,9 @@ struct MapReport<'a> {
     ssl: Option<&'a SslConfig>,
     #[serde(skip_serializing_if = "Option::is_none")]
     array: Option<&'a str>,
+    /// The recording of the robot alone whose noise the SSL subtracted (`ssl::noise`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    noise: Option<&'a Path>,
     rounds: usize,
     particles: usize,
     unexplained_doas: usize,
@@ -114,6 +117,7 @@ pub fn run(a: &MapArgs) -> Result<Outcome> {
         params: config,
         ssl: localised.then_some(&settings.ssl),
         array: localised.then(|| settings.array.as_deref().unwrap_or(DEFAULT_ARRAY)),
+        noise: settings.noise.as_deref().filter(|_| localised),
         rounds: result.rounds,
         particles: result.particles,
         unexplained_doas: result.unexplained,

@@ -88,13 +88,17 @@ pub fn run(args: &SslArgs) -> Result<Outcome> {
     let elapsed = t0.elapsed().as_secs_f64();
     crate::pipeline::warn_faulty_channels(&rows);
     eprintln!(
-        "{}: {} recordings localised with {} in {:.2} s ({:.1} ms per recording){}",
+        "{}: {} recordings localised with {} in {:.2} s ({:.1} ms per recording){}{}",
         dir.display(),
         rows.len(),
         config.method,
         elapsed,
         1e3 * elapsed / rows.len() as f64,
-        pooling_note(&rows, config.pooling)
+        pooling_note(&rows, config.pooling),
+        match &settings.noise {
+            Some(p) => format!("; the robot's own noise in {} subtracted", p.display()),
+            None => String::new(),
+        }
     );
     let table = doa_table(rows.iter().map(|r| &r.doas[..]), config.num_peaks);
     if let Some(out) = &args.out {
