@@ -101,6 +101,14 @@ pub fn run(args: &SslArgs) -> Result<Outcome> {
         }
     );
     let table = doa_table(rows.iter().map(|r| &r.doas[..]), config.num_peaks);
+    // Without a recording of the robot alone: does the robot's own noise show?
+    if settings.noise.is_none()
+        && let Some(p) = &ds.poses
+        && let Ok(poses) = read_poses(p, false)
+        && let Some(note) = crate::robot_noise::note(&poses, &table)
+    {
+        eprintln!("{note}");
+    }
     if let Some(out) = &args.out {
         write_doa_csv(out, &table, args.header)?;
         eprintln!("wrote {}", out.display());
