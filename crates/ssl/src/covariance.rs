@@ -129,12 +129,19 @@ impl SpatialCovariance {
             }
         }
         if let Some(field) = spec.noise() {
-            // Less the robot's noise over the frames summed.
+            // Less the robot's noise over the frames summed; a power kept at least a share
+            // of what was heard, as the spectra keep it.
+            let floor = f64::from(crate::noise::RESIDUAL_FLOOR);
             for (p, &(i, j)) in pairs.iter().enumerate() {
                 for (k, b) in bins.clone().enumerate() {
                     let n = field.cross(b, i, j);
-                    pr[p * nb + k] -= kept * f64::from(n.re);
-                    pi[p * nb + k] -= kept * f64::from(n.im);
+                    let at = p * nb + k;
+                    if i == j {
+                        pr[at] = (pr[at] - kept * f64::from(n.re)).max(floor * pr[at]);
+                    } else {
+                        pr[at] -= kept * f64::from(n.re);
+                        pi[at] -= kept * f64::from(n.im);
+                    }
                 }
             }
         }
