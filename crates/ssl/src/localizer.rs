@@ -1321,16 +1321,13 @@ impl Localizer {
                 let x = spec.frame(f, i);
                 let r = ur[i * nb..(i + 1) * nb].iter_mut();
                 let im = ui[i * nb..(i + 1) * nb].iter_mut();
-                for ((v, r), im) in x.iter().zip(r).zip(im) {
+                for (k, ((v, r), im)) in x.iter().zip(r).zip(im).enumerate() {
                     let n2 = v.re * v.re + v.im * v.im;
                     let inv = if n2 > 0.0 { n2.sqrt().recip() } else { 0.0 };
                     *r = v.re * inv;
                     *im = v.im * inv;
-                }
-                if noise.is_some() {
-                    for (w, v) in inv_mag[i * nb..(i + 1) * nb].iter_mut().zip(x) {
-                        let n2 = v.re * v.re + v.im * v.im;
-                        *w = if n2 > 0.0 { n2.sqrt().recip() } else { 0.0 };
+                    if let Some(w) = inv_mag.get_mut(i * nb + k) {
+                        *w = inv;
                     }
                 }
             }

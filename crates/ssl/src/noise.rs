@@ -19,14 +19,18 @@
 //! sources' (the HARK toolkit's GEVD/GSVD-MUSIC whitens by the same matrix; pairwise
 //! methods cannot whiten, they subtract):
 //!
-//! - GCC-PHAT (per frame): `(x_i x_j^* - N_ij) / (|x_i| |x_j|)`: each bin keeps PHAT's
-//!   weight, and the noise's mean phasor is taken out where the noise is what the bin
-//!   holds (where a source dominates, `|x_i| |x_j|` is large and the term small).
 //! - MVDR, SRP-PHAT, MUSIC (block sums): `Σ x_i x_j^* - T N_ij`, and the powers alike,
 //!   each power kept at least [`RESIDUAL_FLOOR`] of what was heard (a block of noise alone
 //!   leaves a residual of its own fluctuations, not a negative power).
-//! - The source coherence ([`crate::SpatialCovariance`]), the significance of a peak, the
-//!   blocks' levels (gates, pooling choice): the same subtraction.
+//! - GCC-PHAT, which averages per-frame phasors: PHAT of the block's cross-spectrum less
+//!   `T N_ij` instead. A mean cannot be taken out of a frame's phasor: each frame's
+//!   `(x_i x_j^* - N_ij) / (|x_i| |x_j|)` subtracts several times the noise's mean phasor,
+//!   since `1 / |x|` of a Gaussian bin has a heavy tail (measured, [`crate::gcc_phat`]).
+//! - The source coherence ([`crate::SpatialCovariance`]) and the blocks' levels (gates,
+//!   pooling choice): the same subtraction from their sums, powers floored alike.
+//! - The significance of a peak, a sum of per-frame phasor products: from each, the
+//!   noise's coherence `N_ij / sqrt(N_ii N_jj)` in proportion to its share of
+//!   `|x_i| |x_j|` (at most all of it), so that each term stays a phasor's size.
 //!
 //! The subtraction assumes the noise as loud and as placed as when it was recorded: a fan
 //! that speeds up leaves part of itself, and a noise recorded in another room carries that

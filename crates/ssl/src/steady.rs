@@ -138,6 +138,12 @@ impl Octaves {
         let mut levels = vec![0.0f64; octaves.len() * n_blocks];
         let mut powers = vec![0.0f64; bins.len()];
         let mut block = vec![0.0f64; bins.len()];
+        // The robot's noise per frame and bin, all channels ([`crate::noise`]).
+        let noise: Option<Vec<f32>> = spec.noise().map(|field| {
+            bins.clone()
+                .map(|k| (0..spec.num_channels()).map(|c| field.power(k, c)).sum())
+                .collect()
+        });
         for b in 0..n_blocks {
             block.fill(0.0);
             for f in frames(b) {
@@ -147,11 +153,10 @@ impl Octaves {
                     }
                 }
             }
-            if let Some(field) = spec.noise() {
-                // The sources' levels: less the robot's own noise ([`crate::noise`]).
+            if let Some(noise) = &noise {
+                // The sources' levels: less the robot's own noise.
                 let t = frames(b).len() as f32;
-                for (p, k) in block.iter_mut().zip(spec.bins()) {
-                    let n: f32 = (0..spec.num_channels()).map(|c| field.power(k, c)).sum();
+                for (p, &n) in block.iter_mut().zip(noise) {
                     *p = f64::from(crate::noise::residual_power(*p as f32, n, t));
                 }
             }

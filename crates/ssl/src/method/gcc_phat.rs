@@ -33,7 +33,6 @@ use std::sync::Arc;
 use crate::Scratch;
 use crate::grid::{PairLags, Pairwise, Target};
 use crate::localizer::zeroed;
-use crate::noise::NoiseField;
 use crate::stft::Spectrogram;
 
 /// The GCC-PHAT estimator for one array, grid, band and sample rate.
@@ -49,15 +48,15 @@ impl GccPhat {
 }
 
 impl GccPhat {
-    /// [`Pairwise::spectrum`] with the robot's noise `field` subtracted from each pair's
-    /// block cross-spectrum before its PHAT weighting (see the module docs).
+    /// [`Pairwise::spectrum`] of a spectrogram that carries the robot's noise: subtracted
+    /// from each pair's block cross-spectrum before its PHAT weighting (see the module
+    /// docs).
     fn less_noise(
         &self,
         stft: &Spectrogram,
         frames: Range<usize>,
         target: Target<'_>,
         scratch: &mut Scratch,
-        field: &NoiseField,
         norm: f32,
     ) {
         let l = &*self.lags;
@@ -66,10 +65,10 @@ impl GccPhat {
         let Scratch { cross, pairs, .. } = scratch;
         let cross = zeroed(cross, nb);
         let coefficients = |_, pair, gr: &mut [f32], gi: &mut [f32], _: &mut [f32]| {
+            // The block's cross-spectrum less the noise's (`block_cross` subtracts it).
             super::block_cross(stft, frames.clone(), pair, cross);
-            let noise_cross = field.row(stft.bins(), pair);
-            for (b, (c, n)) in cross.iter().zip(noise_cross).enumerate() {
-                let u = super::unit_phasor(c - n * t) * t;
+            for (b, c) in cross.iter().enumerate() {
+                let u = super::unit_phasor(*c) * t;
                 gr[b] = u.re;
                 gi[b] = u.im;
             }
@@ -100,8 +99,8 @@ impl Pairwise for GccPhat {
         // PHAT factorises: X_i X_j^* / |X_i X_j^*| = (X_i / |X_i|) (X_j / |X_j|)^*, so each
         // channel's bins are normalised once per frame instead of once per pair.
         let n_ch = stft.num_channels();
-        if let Some(field) = stft.noise() {
-            return self.less_noise(stft, frames, target, scratch, field, norm);
+        if stft.noise().is_some() {
+            return self.less_noise(stft, frames, target, scratch, norm);
         }
         let Scratch { unit, pairs, .. } = scratch;
         let unit = zeroed(unit, frames.len() * n_ch * nb);

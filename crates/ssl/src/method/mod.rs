@@ -27,7 +27,8 @@ use crate::stft::Spectrogram;
 
 /// Writes the cross-spectrum of channels `i` and `j` summed over `frames`,
 /// `out[b] = sum_f X_i(f, b) X_j(f, b)^*` (MVDR before its smoothing, SRP-PHAT before its
-/// whitening).
+/// whitening, GCC-PHAT with the robot's noise before its), less `T N_ij(b)` over the `T`
+/// frames when the spectrogram carries the robot's noise ([`crate::noise`]).
 pub(crate) fn block_cross(
     stft: &Spectrogram,
     frames: Range<usize>,
@@ -35,10 +36,16 @@ pub(crate) fn block_cross(
     out: &mut [Complex32],
 ) {
     out.fill(Complex32::default());
+    let t = frames.len() as f32;
     for f in frames {
         let (xi, xj) = (stft.frame(f, i), stft.frame(f, j));
         for ((c, a), b) in out.iter_mut().zip(xi).zip(xj) {
             *c += a * b.conj();
+        }
+    }
+    if let Some(field) = stft.noise() {
+        for (c, n) in out.iter_mut().zip(field.row(stft.bins(), (i, j))) {
+            *c -= n * t;
         }
     }
 }

@@ -128,13 +128,8 @@ impl Pairwise for Mvdr {
         let smooth = zeroed(smooth, nb);
         // Bins past the band keep num = 0 and so add nothing.
         let coefficients = |_, (i, j), gr: &mut [f32], gi: &mut [f32], num: &mut [f32]| {
+            // Less the robot's noise when known.
             super::block_cross(stft, frames.clone(), (i, j), cross);
-            if let Some(field) = noise {
-                let noise_cross = field.row(stft.bins(), (i, j));
-                for (c, n) in cross.iter_mut().zip(noise_cross) {
-                    *c -= n * t;
-                }
-            }
             box_smooth(cross, self.smoothing, smooth, prefix_complex);
             let (pi, pj) = (&power[i * nb..(i + 1) * nb], &power[j * nb..(j + 1) * nb]);
             for b in 0..nb {

@@ -54,17 +54,10 @@ impl Pairwise for SrpPhat {
         let norm = 1.0 / (nb * l.pairs.len()) as f32;
         let Scratch { cross, pairs, .. } = scratch;
         let cross = zeroed(cross, nb);
-        let t = frames.len() as f32;
         // Bins past the band stay 0 and so add nothing.
         let coefficients = |_, pair, gr: &mut [f32], gi: &mut [f32], _: &mut [f32]| {
+            // Less the robot's noise when known (`crate::noise`), before the whitening.
             super::block_cross(stft, frames.clone(), pair, cross);
-            if let Some(field) = stft.noise() {
-                // The robot's noise subtracted before the whitening (`crate::noise`).
-                let noise_cross = field.row(stft.bins(), pair);
-                for (c, n) in cross.iter_mut().zip(noise_cross) {
-                    *c -= n * t;
-                }
-            }
             for (b, c) in cross.iter().enumerate() {
                 let u = super::unit_phasor(*c);
                 gr[b] = u.re;
