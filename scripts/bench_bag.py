@@ -6,13 +6,18 @@
     rosbags-convert --src /tmp/big10.bag --dst /tmp/big10_ros2 --dst-storage mcap
     rosbags-convert --src /tmp/big10.bag --dst /tmp/big10_db3 --dst-storage sqlite3
     python3 scripts/bench_bag.py zstd /tmp/big10_ros2/big10_ros2.mcap /tmp/big10_zstd.mcap
+    # compressed as `ros2 bag record --compression-format zstd` does (session 33):
+    mkdir /tmp/mz /tmp/dz && zstd -3 /tmp/big10_ros2/big10_ros2.mcap -o /tmp/mz/big10.mcap.zstd
+    zstd -3 /tmp/big10_db3/big10_db3.db3 -o /tmp/dz/big10.db3.zstd      # --compression-mode file
+    python3 scripts/bench_bag.py message /tmp/big10.bag /tmp/big10_msgz  # --compression-mode message
     /usr/bin/time -f "%e s %M KB" iasm bag /tmp/big10.bag      # and the two MCAP stores
     python3 scripts/bench_bag.py read /tmp/big10.bag            # the rosbags baseline
 
 `make`: 6 channels at 48 kHz of white noise (S16LE AudioData in 0.1-s buffers, AudioInfo
 beside them), odometry at 50 Hz of a robot that stands 5 s and drives 0.4 m in 3 s, over
 and over. `zstd`: the messages rewritten in 64-kB zstd chunks by Foxglove's MCAP writer.
-`read`: rosbags iterating every raw message, decoding none.
+`read`: rosbags iterating every raw message, decoding none. `message`: the ROS 1 bag
+rewritten as a ROS 2 MCAP bag whose messages are each a zstd frame (rosbags' writer).
 """
 
 import math
@@ -82,12 +87,33 @@ def read(path):
     print(f"{time.perf_counter() - t:.2f} s in the loop, {n} bytes")
 
 
+def message(src, dst):
+    import shutil
+
+    from rosbags.highlevel import AnyReader
+    from rosbags.rosbag2 import CompressionFormat, CompressionMode
+    from rosbags.rosbag2 import Writer as Writer2
+    from rosbags.typesys import Stores
+
+    shutil.rmtree(dst, ignore_errors=True)
+    ts = typestore(Stores.ROS2_JAZZY)
+    with AnyReader([Path(src)], default_typestore=typestore(Stores.ROS1_NOETIC)) as r:
+        w = Writer2(Path(dst), version=9)
+        w.set_compression(CompressionMode.MESSAGE, CompressionFormat.ZSTD)
+        with w:
+            conns = {c.id: w.add_connection(c.topic, c.msgtype, typestore=ts) for c in r.connections}
+            for c, t, raw in r.messages():
+                w.write(conns[c.id], t, ts.serialize_cdr(r.deserialize(raw, c.msgtype), c.msgtype))
+
+
 if __name__ == "__main__":
     cmd = sys.argv[1]
     if cmd == "make":
         make(sys.argv[2], float(sys.argv[3]))
     elif cmd == "zstd":
         recompress(Path(sys.argv[2]), Path(sys.argv[3]))
+    elif cmd == "message":
+        message(sys.argv[2], sys.argv[3])
     elif cmd == "read":
         read(sys.argv[2])
     else:

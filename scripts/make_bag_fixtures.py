@@ -35,6 +35,17 @@ can be checked.
 
 - `run_db3/`: the same ROS 2 bag in rosbag2's SQLite storage (`.db3`, Humble's default).
 
+- `run_db3_zstd/`: run_db3 compressed as `ros2 bag record --compression-mode file
+  --compression-format zstd` writes it: the whole `.db3` file as `run_db3_zstd.db3.zstd`,
+  metadata.yaml naming the mode and format.
+
+- `run_mcap_zstd_msg/`: run_ros2 compressed message by message (`--compression-mode
+  message`): each message's CDR bytes a zstd frame of their own, in an MCAP file.
+
+- `run_mcap_zstd_file/`: run_ros2 compressed file by file, its `.mcap.zstd` rewritten as
+  two zstd frames (the file's first 100000 bytes, then the rest), as a compressor may
+  write a large file: a reader must go on past the first frame.
+
 - `run_zstd.mcap`: run_ros2's messages but /odom's and /robot_pose's, rewritten by
   Foxglove's own MCAP writer (the `mcap` package) in zstd-compressed chunks of 64 kB, as
   `ros2 bag record` compresses them by default: a bag whose poses are only in /tf.
@@ -56,7 +67,7 @@ from pathlib import Path
 
 import numpy as np
 from rosbags.rosbag1 import Writer
-from rosbags.rosbag2 import StoragePlugin
+from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin
 from rosbags.rosbag2 import Writer as Writer2
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
@@ -134,7 +145,8 @@ def odometry(ts, t):
     return ns, T["nav_msgs/msg/Odometry"](header=header(ts, ns, "odom"), child_frame_id="base_link", pose=pwc, twist=twc)
 
 
-def write(path, compression, stamped, fmt, topic, info_topic, pose_stamped, ros2=False, storage=StoragePlugin.MCAP):
+def write(path, compression, stamped, fmt, topic, info_topic, pose_stamped, ros2=False, storage=StoragePlugin.MCAP,
+          ros2_compression=None):
     ts = typestore(Stores.ROS2_JAZZY if ros2 else Stores.ROS1_NOETIC)
     T = ts.types
     ser = ts.serialize_cdr if ros2 else ts.serialize_ros1
@@ -149,6 +161,8 @@ def write(path, compression, stamped, fmt, topic, info_topic, pose_stamped, ros2
     dtype = {"S16LE": "<i2", "S32LE": "<i4"}[fmt]
     if ros2:
         w = Writer2(path, version=9, storage_plugin=storage)
+        if ros2_compression is not None:
+            w.set_compression(ros2_compression, CompressionFormat.ZSTD)
     else:
         w = Writer(path)
         w.set_compression(compression)
@@ -315,6 +329,17 @@ def split(src, dst, at_ns):
             w.close()
 
 
+def two_frames(path, at):
+    """Rewrites the zstd-compressed file `path` as two frames, split at byte `at` of its
+    content."""
+    try:
+        from compression import zstd
+    except ImportError:
+        from backports import zstd
+    data = zstd.decompress(path.read_bytes())
+    path.write_bytes(zstd.compress(data[:at]) + zstd.compress(data[at:]))
+
+
 def main():
     out = Path(sys.argv[1] if len(sys.argv) > 1 else "fixtures/bags")
     out.mkdir(parents=True, exist_ok=True)
@@ -324,6 +349,13 @@ def main():
     write(out / "run_ros2", None, True, "S16LE", "/mic/audio", "/mic/audio_info", True, ros2=True)
     write(out / "run_db3", None, True, "S16LE", "/mic/audio", "/mic/audio_info", True, ros2=True,
           storage=StoragePlugin.SQLITE3)
+    write(out / "run_db3_zstd", None, True, "S16LE", "/mic/audio", "/mic/audio_info", True, ros2=True,
+          storage=StoragePlugin.SQLITE3, ros2_compression=CompressionMode.FILE)
+    write(out / "run_mcap_zstd_msg", None, True, "S16LE", "/mic/audio", "/mic/audio_info", True, ros2=True,
+          ros2_compression=CompressionMode.MESSAGE)
+    write(out / "run_mcap_zstd_file", None, True, "S16LE", "/mic/audio", "/mic/audio_info", True, ros2=True,
+          ros2_compression=CompressionMode.FILE)
+    two_frames(out / "run_mcap_zstd_file" / "run_mcap_zstd_file.mcap.zstd", 100000)
     recompress(out / "run_ros2" / "run_ros2.mcap", out / "run_zstd.mcap", drop=("/odom", "/robot_pose"))
     write_audiostamped(out / "run_audiostamped.mcap")
     for p in sorted(list(out.glob("*.bag")) + list(out.glob("*.mcap")) + list(out.glob("run_*/*"))):

@@ -562,10 +562,18 @@ fn the_robots_map_is_written_as_a_ros_map_file_and_reads_back() {
     assert_eq!(c(20.0, 15.0), Cell::Unknown);
     assert_eq!(c(5.0, 5.0), Cell::Free);
     assert_eq!(c(15.0, 13.0), Cell::Free);
-    // The same run as a ROS 2 bag in MCAP and in SQLite (their folders): the same poses
-    // and map as the ROS 1 bag's, and the same audio as each other (both stamped S16LE;
-    // the ROS 1 bag's is S32LE, timed by receipt).
-    for ros2 in ["run_ros2", "run_db3"] {
+    // The same run as a ROS 2 bag in MCAP and in SQLite (their folders), uncompressed and
+    // as `ros2 bag record --compression-format zstd` compresses them (file by file, message
+    // by message): the same poses and map as the ROS 1 bag's, and the same audio as each
+    // other (all stamped S16LE; the ROS 1 bag's is S32LE, timed by receipt).
+    let ros2_bags = [
+        "run_ros2",
+        "run_db3",
+        "run_db3_zstd",
+        "run_mcap_zstd_file",
+        "run_mcap_zstd_msg",
+    ];
+    for ros2 in ros2_bags {
         let r = iasm(&[
             "bag",
             arg(&fixtures.join(ros2)),
@@ -584,11 +592,13 @@ fn the_robots_map_is_written_as_a_ros_map_file_and_reads_back() {
     }
     for stop in ["audio/stop01.wav", "audio/stop02.wav"] {
         let mcap = std::fs::read(dir.path().join("run_ros2").join(stop)).unwrap();
-        assert_eq!(
-            mcap,
-            std::fs::read(dir.path().join("run_db3").join(stop)).unwrap(),
-            "{stop}"
-        );
+        for other in &ros2_bags[1..] {
+            assert_eq!(
+                mcap,
+                std::fs::read(dir.path().join(other).join(stop)).unwrap(),
+                "{other}: {stop}"
+            );
+        }
     }
     // A bag whose poses are only in /tf: the chain map -> odom -> base_link, with the map.
     let out3 = dir.path().join("d3");

@@ -95,9 +95,10 @@ pub enum Command {
 #[derive(Debug, Clone, Args)]
 pub struct BagArgs {
     /// The bag: a ROS 1 .bag (format 2.0; chunks uncompressed, bz2 or lz4), or a ROS 2
-    /// bag stored in MCAP (chunks uncompressed, zstd or lz4) or SQLite (.db3): its folder or
-    /// one of its files; a folder of ROS 1 bags that `rosbag record --split` wrote is read
-    /// as one run.
+    /// bag stored in MCAP (chunks uncompressed, zstd or lz4) or SQLite (.db3), compressed
+    /// with zstd file by file (.mcap.zstd, .db3.zstd) or message by message or not at all:
+    /// its folder or one of its files; a folder of ROS 1 bags that `rosbag record --split`
+    /// wrote is read as one run.
     pub bag: PathBuf,
     /// The data set folder to write: audio/ (a WAV per stop), pose/poses.csv, stops.csv
     /// (each stop's times in the bag), map/ (the robot's map, when the bag holds one in the

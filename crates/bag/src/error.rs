@@ -8,9 +8,9 @@ pub enum Error {
     /// The file could not be read.
     #[error("{0}")]
     Io(#[from] std::io::Error),
-    /// The file is not a bag this crate reads (ROS 1 format 2.0, or ROS 2 in MCAP); `what`
-    /// says what it looks like instead.
-    #[error("not a ROS bag that iasm reads (ROS 1, or ROS 2 in MCAP): {what}")]
+    /// The file is not a bag this crate reads (ROS 1 format 2.0, or ROS 2 in MCAP or
+    /// SQLite, compressed or not); `what` says what it looks like instead.
+    #[error("not a ROS bag that iasm reads (ROS 1, or ROS 2 in MCAP or SQLite): {what}")]
     NotABag {
         /// What the file looks like.
         what: String,
@@ -43,6 +43,15 @@ pub enum Error {
     /// or a sample format not supported.
     #[error("{0}")]
     Audio(String),
+    /// A file of a bag compressed file by file (`.db3.zstd`, `.mcap.zstd`) that does not
+    /// decompress: cut off, or not zstd.
+    #[error("{path}: a zstd-compressed file that does not decompress ({what}); `zstd -t` tests it")]
+    Decompress {
+        /// The file.
+        path: std::path::PathBuf,
+        /// What the decoder said.
+        what: String,
+    },
     /// A ROS 2 SQLite bag that SQLite cannot read as rosbag2's tables.
     #[error("the SQLite database: {0}")]
     Database(String),

@@ -410,7 +410,7 @@ pub(crate) fn read_bounded(r: impl Read, size: u64) -> std::io::Result<Vec<u8>> 
 }
 
 /// Reads into `buf` until it is full or the input ends; the number of bytes read.
-fn read_up_to<R: Read>(r: &mut R, buf: &mut [u8]) -> Result<usize> {
+pub(crate) fn read_up_to<R: Read>(r: &mut R, buf: &mut [u8]) -> Result<usize> {
     let mut got = 0;
     while got < buf.len() {
         match r.read(&mut buf[got..]) {

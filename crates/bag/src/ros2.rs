@@ -18,16 +18,27 @@
 //! rosbag2 stored them in SQLite instead (`.db3`: a `topics` table and a `messages` table
 //! of topic, time stamp and CDR bytes), read through SQLite itself ([`scan_sqlite`]:
 //! rusqlite, SQLite built in), in time order.
+//!
+//! `ros2 bag record --compression-format zstd` compresses a bag in one of two ways, both
+//! read here: `--compression-mode file` compresses each finished file whole
+//! (`run_0.db3.zstd`, `run_0.mcap.zstd`), and `--compression-mode message` each message's
+//! bytes as a zstd frame of their own. Compressed files are told by their first bytes (the
+//! zstd frame's magic number) and read through a streaming decoder: an MCAP file front to
+//! back as it decompresses; a SQLite file, which SQLite can only open as a file, first
+//! decompressed into a temporary file that is removed after it is read ([`scan_files`]).
+//! Compressed messages are told the same way, since a CDR message never begins with
+//! that number (its first two bytes are its encapsulation, `00 00` or `00 01`).
 
+use std::borrow::Cow;
 use std::collections::HashMap;
-use std::io::Read;
+use std::io::{BufRead, BufReader, Read, Write};
 use std::path::Path;
 
 use mcap::records::Record;
 use mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader, LinearReaderOptions};
 
 use crate::error::{Error, Result};
-use crate::format::{Connection, Message, Summary, read_bounded};
+use crate::format::{Connection, Message, Summary, read_bounded, read_up_to};
 use crate::msg::Encoding;
 
 /// The longest record read (bytes): a camera image is a few megabytes; a length beyond this
@@ -167,6 +178,7 @@ impl State {
                 })?;
                 let time_ns = i64::try_from(header.log_time).unwrap_or(i64::MAX);
                 summary.count(id, time_ns);
+                let data = message_bytes(&data, connection, summary)?;
                 visit(Message {
                     connection,
                     time_ns,
@@ -262,19 +274,20 @@ pub enum Storage {
 }
 
 /// The files of a ROS 2 bag (a folder of `.mcap` or `.db3` files, split by size or
-/// duration, in their order: `_0`, `_1`, ...), or of a ROS 1 bag split by `rosbag record
-/// --split` (a folder of `.bag` files), or a lone file told by its first bytes.
+/// duration, in their order: `_0`, `_1`, ...; or of the same compressed file by file,
+/// `.mcap.zstd` or `.db3.zstd`), or of a ROS 1 bag split by `rosbag record --split` (a
+/// folder of `.bag` files), or a lone file told by its first bytes (decompressed, if it is
+/// a zstd frame).
 ///
 /// # Errors
-/// A folder with neither; a folder of compressed files (`.db3.zstd`), named with the way
-/// to decompress them.
+/// A folder with none of these files; a file that cannot be read, or a compressed one
+/// whose first bytes do not decompress.
 pub fn bag_files(path: &Path) -> Result<(Storage, Vec<std::path::PathBuf>)> {
     if !path.is_dir() {
-        let mut head = [0u8; 16];
-        let n = std::fs::File::open(path)?.read(&mut head)?;
-        let storage = if head[..n].starts_with(b"\x89MCAP") {
+        let head = decompressed_head(path)?;
+        let storage = if head.starts_with(b"\x89MCAP") {
             Storage::Mcap
-        } else if head[..n].starts_with(b"SQLite format 3") {
+        } else if head.starts_with(b"SQLite format 3") {
             Storage::Sqlite
         } else {
             // A ROS 1 bag, or what its reader will name as not one.
@@ -282,22 +295,32 @@ pub fn bag_files(path: &Path) -> Result<(Storage, Vec<std::path::PathBuf>)> {
         };
         return Ok((storage, vec![path.to_path_buf()]));
     }
-    let (mut mcaps, mut db3s, mut bags, mut zstd) = (Vec::new(), Vec::new(), Vec::new(), false);
+    let (mut mcaps, mut db3s, mut bags) = (Vec::new(), Vec::new(), Vec::new());
     for entry in std::fs::read_dir(path)? {
         let p = entry?.path();
         let name = p
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default();
-        match p.extension().and_then(|e| e.to_str()) {
-            Some("mcap") => mcaps.push(p),
-            Some("db3") => db3s.push(p),
-            Some("bag") => bags.push(p),
-            Some("zstd") if name.ends_with(".db3.zstd") || name.ends_with(".mcap.zstd") => {
-                zstd = true
-            }
-            _ => {}
+        let name = name.strip_suffix(".zstd").unwrap_or(&name);
+        if name.ends_with(".mcap") {
+            mcaps.push(p);
+        } else if name.ends_with(".db3") {
+            db3s.push(p);
+        } else if name.ends_with(".bag") {
+            bags.push(p);
         }
+    }
+    // A file decompressed beside its compressed original (`zstd -d` keeps it) is read once.
+    for files in [&mut mcaps, &mut db3s, &mut bags] {
+        let plain: Vec<std::path::PathBuf> = files
+            .iter()
+            .filter(|p| p.extension().is_none_or(|e| e != "zstd"))
+            .cloned()
+            .collect();
+        files.retain(|p| {
+            !plain.contains(&p.with_extension("")) || p.extension().is_none_or(|e| e != "zstd")
+        });
     }
     let (storage, mut files) = match (mcaps.is_empty(), db3s.is_empty(), bags.is_empty()) {
         (false, _, _) => (Storage::Mcap, mcaps),
@@ -305,22 +328,19 @@ pub fn bag_files(path: &Path) -> Result<(Storage, Vec<std::path::PathBuf>)> {
         (true, true, false) => (Storage::Ros1, bags),
         (true, true, true) => {
             return Err(Error::NotABag {
-                what: if zstd {
-                    "a ROS 2 bag compressed file by file (.zstd): decompress them (zstd -d) and \
-                     give the folder"
-                        .into()
-                } else {
-                    "a folder without .mcap, .db3 or .bag files".into()
-                },
+                what: "a folder without .mcap, .db3 or .bag files (nor .mcap.zstd or .db3.zstd)"
+                    .into(),
             });
         }
     };
-    // Natural order: run_0, run_1, ..., run_10.
+    // Natural order: run_0, run_1, ..., run_10 (of the name without its extensions).
     files.sort_by_key(|p| {
         let name = p
-            .file_stem()
+            .file_name()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_default();
+        let name = name.strip_suffix(".zstd").unwrap_or(&name);
+        let name = name.rsplit_once('.').map_or(name, |(stem, _)| stem);
         let digits: String = name
             .chars()
             .rev()
@@ -341,11 +361,142 @@ pub fn bag_files(path: &Path) -> Result<(Storage, Vec<std::path::PathBuf>)> {
     Ok((storage, files))
 }
 
-/// Scans the files of a bag ([`bag_files`]: a ROS 1 bag, or a folder or file of a ROS 2
-/// bag or of a split ROS 1 run) as one run.
+/// The first bytes of a zstd frame (RFC 8878), little-endian `0xFD2FB528`.
+const ZSTD_MAGIC: [u8; 4] = [0x28, 0xB5, 0x2F, 0xFD];
+
+/// Whether the file at `path` is zstd-compressed (begins with a zstd frame).
+fn is_zstd(path: &Path) -> Result<bool> {
+    let mut head = [0u8; 4];
+    let n = read_up_to(&mut std::fs::File::open(path)?, &mut head)?;
+    Ok(head[..n] == ZSTD_MAGIC)
+}
+
+/// The first 16 bytes of the file at `path`, decompressed if it is zstd-compressed (fewer
+/// if it is shorter).
+fn decompressed_head(path: &Path) -> Result<Vec<u8>> {
+    let mut head = [0u8; 16];
+    let n = if is_zstd(path)? {
+        let f = BufReader::new(std::fs::File::open(path)?);
+        read_up_to(&mut zstd_reader(f, path)?, &mut head).map_err(|e| decompress_error(e, path))?
+    } else {
+        read_up_to(&mut std::fs::File::open(path)?, &mut head)?
+    };
+    Ok(head[..n].to_vec())
+}
+
+/// The decompressed stream of a zstd-compressed file: its frames one after another (a
+/// compressor may write a large file as several).
+struct ZstdFrames<R: BufRead> {
+    frame: Option<ruzstd::decoding::StreamingDecoder<R, ruzstd::decoding::FrameDecoder>>,
+}
+
+/// A reader of the zstd-compressed `r` (the file at `path`, for its error).
+fn zstd_reader<R: BufRead>(r: R, path: &Path) -> Result<ZstdFrames<R>> {
+    let frame = ruzstd::decoding::StreamingDecoder::new(r).map_err(|e| Error::Decompress {
+        path: path.to_path_buf(),
+        what: e.to_string(),
+    })?;
+    Ok(ZstdFrames { frame: Some(frame) })
+}
+
+/// A decoder's error inside [`ZstdFrames`]' I/O errors, told from the file's own I/O
+/// errors by [`decompress_error`].
+#[derive(Debug)]
+struct Undecodable(String);
+
+impl std::fmt::Display for Undecodable {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for Undecodable {}
+
+/// `e`, or [`Error::Decompress`] naming `path` when `e` is a decoder's error.
+fn decompress_error(e: impl Into<Error>, path: &Path) -> Error {
+    match e.into() {
+        Error::Io(io) if io.get_ref().is_some_and(|i| i.is::<Undecodable>()) => Error::Decompress {
+            path: path.to_path_buf(),
+            what: io.to_string(),
+        },
+        e => e,
+    }
+}
+
+impl<R: BufRead> Read for ZstdFrames<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        loop {
+            let Some(frame) = self.frame.as_mut() else {
+                return Ok(0);
+            };
+            let n = frame
+                .read(buf)
+                .map_err(|e| std::io::Error::other(Undecodable(e.to_string())))?;
+            if n > 0 || buf.is_empty() {
+                return Ok(n);
+            }
+            // The frame ended: another may follow.
+            let mut rest = self.frame.take().expect("a frame").into_inner();
+            if rest.fill_buf()?.is_empty() {
+                return Ok(0);
+            }
+            self.frame = Some(
+                ruzstd::decoding::StreamingDecoder::new(rest)
+                    .map_err(|e| std::io::Error::other(Undecodable(e.to_string())))?,
+            );
+        }
+    }
+}
+
+/// A message's bytes as its type serialises them: those of a bag compressed message by
+/// message (`ros2 bag record --compression-mode message`) are each a zstd frame,
+/// decompressed here (to at most [`MAX_RECORD_BYTES`]); others are handed on as they are.
+/// `summary` has counted the message already (its number on the topic, for the error).
 ///
 /// # Errors
-/// As [`bag_files`], [`scan`] and [`scan_sqlite`]; a file that cannot be opened.
+/// A frame that does not decompress, or decompresses to more than the bound.
+fn message_bytes<'a>(
+    data: &'a [u8],
+    connection: &Connection,
+    summary: &Summary,
+) -> Result<Cow<'a, [u8]>> {
+    if !data.starts_with(&ZSTD_MAGIC) {
+        return Ok(Cow::Borrowed(data));
+    }
+    let error = |what: String| Error::Message {
+        topic: connection.topic.clone(),
+        msg_type: connection.msg_type.clone(),
+        index: summary.counts.get(&connection.id).copied().unwrap_or(0),
+        what,
+    };
+    let out = ZstdFrames {
+        frame: Some(ruzstd::decoding::StreamingDecoder::new(data).map_err(|e| {
+            error(format!(
+                "a zstd-compressed message that does not decompress ({e})"
+            ))
+        })?),
+    };
+    let out = read_bounded(out, MAX_RECORD_BYTES as u64).map_err(|e| {
+        error(format!(
+            "a zstd-compressed message that does not decompress ({e})"
+        ))
+    })?;
+    if out.len() > MAX_RECORD_BYTES {
+        return Err(error(format!(
+            "a zstd-compressed message of more than {MAX_RECORD_BYTES} bytes"
+        )));
+    }
+    Ok(Cow::Owned(out))
+}
+
+/// Scans the files of a bag ([`bag_files`]: a ROS 1 bag, or a folder or file of a ROS 2
+/// bag or of a split ROS 1 run) as one run; files compressed whole with zstd are
+/// decompressed as they are read (a SQLite file into a temporary file first).
+///
+/// # Errors
+/// As [`bag_files`], [`scan`] and [`scan_sqlite`]; a file that cannot be opened; a
+/// compressed file that does not decompress, or a SQLite one that cannot be written out
+/// to the temporary folder.
 pub fn scan_files(
     path: &Path,
     mut visit: impl FnMut(Message<'_>) -> Result<()>,
@@ -354,32 +505,71 @@ pub fn scan_files(
     let (storage, files) = bag_files(path)?;
     for (k, file) in files.iter().enumerate() {
         let k = u32::try_from(k).map_err(|_| Error::Config("more than 2^16 files".into()))?;
-        match storage {
-            Storage::Mcap => {
-                let f = std::fs::File::open(file)?;
-                scan(
-                    std::io::BufReader::with_capacity(1 << 20, f),
-                    k,
-                    &mut summary,
-                    &mut visit,
-                )?;
+        let open = || -> Result<Box<dyn Read>> {
+            let f = BufReader::with_capacity(1 << 20, std::fs::File::open(file)?);
+            Ok(if is_zstd(file)? {
+                Box::new(zstd_reader(f, file)?)
+            } else {
+                Box::new(f)
+            })
+        };
+        let read = match storage {
+            Storage::Mcap => scan(
+                BufReader::with_capacity(1 << 20, open()?),
+                k,
+                &mut summary,
+                &mut visit,
+            ),
+            Storage::Sqlite if is_zstd(file)? => {
+                let tmp = decompressed_copy(open()?, file)?;
+                scan_sqlite(tmp.path(), k, &mut summary, &mut visit)
             }
-            Storage::Sqlite => scan_sqlite(file, k, &mut summary, &mut visit)?,
-            Storage::Ros1 => {
-                let f = std::fs::File::open(file)?;
-                crate::format::scan_into(
-                    std::io::BufReader::with_capacity(1 << 20, f),
-                    k,
-                    &mut summary,
-                    &mut visit,
-                )?;
-            }
-        }
+            Storage::Sqlite => scan_sqlite(file, k, &mut summary, &mut visit),
+            Storage::Ros1 => crate::format::scan_into(
+                BufReader::with_capacity(1 << 20, open()?),
+                k,
+                &mut summary,
+                &mut visit,
+            ),
+        };
+        read.map_err(|e| decompress_error(e, file))?;
         if summary.truncated.is_some() {
             break;
         }
     }
     Ok(summary)
+}
+
+/// The decompressed stream `from` (of the file `file`) in a temporary file, removed when
+/// it is dropped: SQLite opens files only.
+///
+/// # Errors
+/// A stream that does not decompress ([`Error::Decompress`]); the temporary file cannot be
+/// made or written (the temporary folder full), named.
+fn decompressed_copy(mut from: impl Read, file: &Path) -> Result<tempfile::NamedTempFile> {
+    let mut tmp = tempfile::Builder::new()
+        .prefix("iasm-bag-")
+        .suffix(".db3")
+        .tempfile()?;
+    let mut buf = vec![0u8; 1 << 16];
+    loop {
+        let n = match from.read(&mut buf) {
+            Ok(0) => return Ok(tmp),
+            Ok(n) => n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(decompress_error(e, file)),
+        };
+        tmp.as_file_mut().write_all(&buf[..n]).map_err(|e| {
+            std::io::Error::new(
+                e.kind(),
+                format!(
+                    "writing {} decompressed to {}: {e}",
+                    file.display(),
+                    tmp.path().display()
+                ),
+            )
+        })?;
+    }
 }
 
 /// Reads the messages of one rosbag2 SQLite file (`topics`: id, name, type,
@@ -446,10 +636,11 @@ pub fn scan_sqlite(
             ))
         })?;
         summary.count(connection.id, time_ns);
+        let data = message_bytes(data, connection, summary)?;
         visit(Message {
             connection,
             time_ns,
-            data,
+            data: &data,
         })?;
     }
     Ok(())

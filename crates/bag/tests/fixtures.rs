@@ -309,12 +309,20 @@ fn the_robots_map_in_the_poses_frame_is_read_cell_for_cell() {
 #[test]
 fn the_ros2_mcap_bag_gives_the_same_run_in_cdr() {
     // The folder, and its .mcap file alone.
-    // (And the same bag in rosbag2's SQLite storage, Humble's default.)
+    // (And the same bag in rosbag2's SQLite storage, Humble's default; and both as
+    // `ros2 bag record --compression-format zstd` compresses them: the SQLite file whole,
+    // the MCAP file whole in two zstd frames, and the MCAP bag message by message.)
     for path in [
         fixture("run_ros2"),
         fixture("run_ros2/run_ros2.mcap"),
         fixture("run_db3"),
         fixture("run_db3/run_db3.db3"),
+        fixture("run_db3_zstd"),
+        fixture("run_db3_zstd/run_db3_zstd.db3.zstd"),
+        fixture("run_mcap_zstd_file"),
+        fixture("run_mcap_zstd_file/run_mcap_zstd_file.mcap.zstd"),
+        fixture("run_mcap_zstd_msg"),
+        fixture("run_mcap_zstd_msg/run_mcap_zstd_msg.mcap"),
     ] {
         let run = bag::read_file(&path, &ReadOptions::default()).unwrap();
         assert_eq!(run.audio_topic, "/mic/audio");
@@ -363,6 +371,67 @@ fn the_ros2_mcap_bag_gives_the_same_run_in_cdr() {
 }
 
 #[test]
+fn a_compressed_bag_that_does_not_decompress_is_named_and_leaves_no_file_behind() {
+    let dir = std::env::temp_dir().join(format!("iasm-bag-zstd-{}", std::process::id()));
+    let temporaries = || {
+        std::fs::read_dir(std::env::temp_dir())
+            .unwrap()
+            .filter_map(|e| e.ok())
+            .filter(|e| e.file_name().to_string_lossy().ends_with(".db3"))
+            .filter(|e| e.file_name().to_string_lossy().starts_with("iasm-bag-"))
+            .count()
+    };
+    let before = temporaries();
+    std::fs::create_dir_all(&dir).unwrap();
+    // Decompressed beside its compressed original (as `zstd -d` leaves it): read once.
+    let both = dir.join("both");
+    std::fs::create_dir_all(&both).unwrap();
+    let zstd = std::fs::read(fixture("run_db3_zstd/run_db3_zstd.db3.zstd")).unwrap();
+    std::fs::write(both.join("run_db3_zstd.db3.zstd"), zstd).unwrap();
+    std::fs::copy(
+        fixture("run_db3/run_db3.db3"),
+        both.join("run_db3_zstd.db3"),
+    )
+    .unwrap();
+    let run = bag::read_file(&both, &ReadOptions::default()).unwrap();
+    let audio = run.topics.iter().find(|t| t.topic == "/mic/audio").unwrap();
+    assert_eq!(audio.messages, 30);
+    // A whole SQLite file read once more: its temporary copy is gone after.
+    bag::read_file(&fixture("run_db3_zstd"), &ReadOptions::default()).unwrap();
+    assert_eq!(temporaries(), before);
+    for (name, len) in [
+        ("run_db3_zstd/run_db3_zstd.db3.zstd", 10_000),
+        ("run_mcap_zstd_file/run_mcap_zstd_file.mcap.zstd", 20_000),
+    ] {
+        let bytes = std::fs::read(fixture(name)).unwrap();
+        let file = name.split('/').next_back().unwrap();
+        // Cut off inside its (first) frame, and a zstd header over bytes that are not.
+        for (k, damaged) in [
+            bytes[..len].to_vec(),
+            [&bytes[..4], b"not a zstd frame at all".as_slice()].concat(),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let sub = dir.join(format!("{k}"));
+            std::fs::create_dir_all(&sub).unwrap();
+            let p = sub.join(file);
+            std::fs::write(&p, damaged).unwrap();
+            for path in [&p, &sub] {
+                let e = bag::read_file(path, &ReadOptions::default()).unwrap_err();
+                let text = e.to_string();
+                assert!(
+                    text.contains(&p.display().to_string()) && text.contains("zstd"),
+                    "{file} ({k}): {text}"
+                );
+            }
+        }
+    }
+    assert_eq!(temporaries(), before);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
 fn a_ros2_bag_cut_off_is_read_up_to_the_cut() {
     let bytes = std::fs::read(fixture("run_zstd.mcap")).unwrap();
     let dir = std::env::temp_dir().join(format!("iasm-bag-cut-{}", std::process::id()));
@@ -394,14 +463,17 @@ fn a_ros2_sqlite_bag_that_is_not_one_or_is_compressed_says_so() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("SQLite database"), "{e}");
-    // A bag compressed file by file.
+    // A bag compressed file by file, whose file is a zstd frame's magic alone.
     std::fs::remove_file(dir.join("run_0.db3")).unwrap();
     std::fs::write(dir.join("run_0.db3.zstd"), b"(\xb5/\xfd").unwrap();
     let e = bag::read_file(&dir, &ReadOptions::default())
         .unwrap_err()
         .to_string();
     std::fs::remove_dir_all(&dir).unwrap();
-    assert!(e.contains("zstd -d"), "{e}");
+    assert!(
+        e.contains("run_0.db3.zstd: a zstd-compressed file that does not decompress"),
+        "{e}"
+    );
 }
 
 #[test]
@@ -483,6 +555,8 @@ fn a_bag_with_bytes_changed_anywhere_is_read_or_refused_never_a_panic() {
         "run_ros2/run_ros2.mcap",
         "run_audiostamped.mcap",
         "run_db3/run_db3.db3",
+        "run_db3_zstd/run_db3_zstd.db3.zstd",
+        "run_mcap_zstd_msg/run_mcap_zstd_msg.mcap",
     ] {
         let bytes = std::fs::read(fixture(name)).unwrap();
         for _ in 0..400 {
