@@ -429,6 +429,60 @@ fn a_dead_microphone_is_named_and_left_out() {
     }
 }
 
+/// A stop whose recorder wrote no sound (every sample zero) and one recorded at another
+/// rate (32 kHz, its file saying so, the sources' bearings rendered at that rate): the run
+/// names both on stderr, localises the second at its own rate, and the map still finds
+/// both sources.
+#[test]
+fn a_silent_recording_and_one_at_another_rate_are_named() {
+    let dir = tempdir();
+    let root = path(&dir, "ds");
+    audio_dataset(&root, &AUDIO_TRUTH);
+    rewrite_wav(&root.join("audio/sub7.wav"), |c| {
+        c.iter_mut().flatten().for_each(|v| *v = 0.0);
+    });
+    // Stop 9 (from 1) at 32 kHz: the same bearings as audio_dataset renders.
+    let (x, y, th) = drive()[8];
+    let waves: Vec<sim::farfield::PlaneWave> = AUDIO_TRUTH
+        .iter()
+        .map(|s| sim::farfield::PlaneWave {
+            azimuth_deg: ssl::wrap_deg((s[1] - y).atan2(s[0] - x).to_degrees() - th),
+            elevation_deg: 0.0,
+            signal: sim::signal::Signal::Noise,
+        })
+        .collect();
+    let mut a = sim::farfield::render(&iasm6(), &waves, 32_000, 16_000, 343.0, Some(30.0), 9);
+    a.iter_mut().flatten().for_each(|v| *v *= 0.1);
+    write_wav(&root.join("audio/sub9.wav"), &a, 32_000);
+    let out = mvdr_n2(&root, "map");
+    let err = String::from_utf8_lossy(&out.stderr);
+    for needle in [
+        "warning: no sound at all in 1 of 20 recordings, every sample zero (sub7.wav)",
+        "warning: the recordings are sampled at 2 rates: 19 at 48000 Hz (sub1.wav, sub2.wav, \
+         sub3.wav and 16 more); 1 at 32000 Hz (sub9.wav)",
+    ] {
+        assert!(err.contains(needle), "{needle}: {}", show(&out));
+    }
+    let v = json(&out);
+    assert_eq!(v["sources"].as_array().unwrap().len(), 2, "{v}");
+    assert!(v["ospa"]["total"].as_f64().unwrap() < 0.2, "{v}");
+    // Stop 9's DoAs are the bearings at 32 kHz too; stop 7 has none.
+    let rows = json(&mvdr_n2(&root, "ssl"));
+    let files = rows["files"].as_array().unwrap();
+    assert_eq!(files[6]["silent"], true, "{}", files[6]);
+    assert!(files[6]["doas"].as_array().unwrap().is_empty());
+    assert!(files[8]["silent"].is_null(), "{}", files[8]);
+    for s in AUDIO_TRUTH {
+        let want = ssl::wrap_deg((s[1] - y).atan2(s[0] - x).to_degrees() - th);
+        let near = files[8]["doas"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|d| ssl::wrap_deg(d["azimuth_deg"].as_f64().unwrap() - want).abs() < 2.0);
+        assert!(near, "{want}: {}", files[8]);
+    }
+}
+
 /// Recordings that hold another channel before the microphones' (a ReSpeaker's firmware
 /// records its processed beam first): without `--channels` the run stops with a hint
 /// that names the option; with `--channels 2-7` (or `channels` in the settings file) the

@@ -196,7 +196,7 @@ pub fn compare(
             noise.as_ref(),
         )?;
         if Some(&method) == opts.methods.first() {
-            crate::pipeline::warn_faulty_channels(&files);
+            crate::pipeline::warn_recordings(&files);
         }
         let ms = 1e3 * files.iter().map(|f| f.seconds).sum::<f64>() / files.len() as f64;
         let table = mapped_table(files.iter().map(|f| (&f.doas[..], &f.extra[..])), n);

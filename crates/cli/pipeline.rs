@@ -63,6 +63,13 @@ pub struct FileDoas {
     /// DoA output stays the same from run to run.
     #[serde(skip)]
     pub seconds: f64,
+    /// Its sample rate (Hz). Not serialised.
+    #[serde(skip)]
+    pub sample_rate: u32,
+    /// Whether every sample of its channels is zero: a recorder that wrote no sound (a
+    /// quiet room still gives the microphones' own noise). Such a recording has no DoAs.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub silent: bool,
 }
 
 /// A channel of a recording that does not hear the room ([`ssl::channels`]).
@@ -142,15 +149,10 @@ pub fn faulty_channel_warnings<'a>(
                 names,
                 ..
             } = g;
-            let shown: Vec<&str> = names.iter().take(3).copied().collect();
-            let more = match names.len().saturating_sub(3) {
-                0 => String::new(),
-                n => format!(" and {n} more"),
-            };
             format!(
-                "warning: channel {channel} in {} of {total} recordings ({}{more}): {}; {}",
+                "warning: channel {channel} in {} of {total} recordings ({}): {}; {}",
                 names.len(),
-                shown.join(", "),
+                listed(&names),
                 first.fault,
                 if left_out {
                     "localised without it (a microphone that does not hear the room; \
@@ -164,8 +166,63 @@ pub fn faulty_channel_warnings<'a>(
         .collect()
 }
 
-/// Prints [`faulty_channel_warnings`] of `rows` to standard error.
-pub fn warn_faulty_channels(rows: &[FileDoas]) {
+/// The warnings about a set of recordings as a whole (`rows`, with their `names`): those
+/// that hold no sound at all, and recordings at more than one sample rate (each is
+/// localised at its own, which is right only if the files say their rates truly: a survey
+/// is recorded at one).
+pub fn recording_warnings(names: &[&str], rows: &[FileDoas]) -> Vec<String> {
+    let mut out = Vec::new();
+    let silent: Vec<&str> = names
+        .iter()
+        .zip(rows)
+        .filter(|(_, r)| r.silent)
+        .map(|(n, _)| *n)
+        .collect();
+    if !silent.is_empty() {
+        out.push(format!(
+            "warning: no sound at all in {} of {} recordings, every sample zero ({}): a \
+             recorder that wrote none (even a quiet room gives the microphones' own noise); \
+             no DoAs from them, as from stops that heard nothing",
+            silent.len(),
+            rows.len(),
+            listed(&silent)
+        ));
+    }
+    let mut rates: Vec<(u32, Vec<&str>)> = Vec::new();
+    for (n, r) in names.iter().zip(rows) {
+        match rates.iter_mut().find(|(fs, _)| *fs == r.sample_rate) {
+            Some((_, v)) => v.push(n),
+            None => rates.push((r.sample_rate, vec![n])),
+        }
+    }
+    if rates.len() > 1 {
+        rates.sort_by_key(|(fs, v)| (std::cmp::Reverse(v.len()), *fs));
+        let each: Vec<String> = rates
+            .iter()
+            .map(|(fs, v)| format!("{} at {fs} Hz ({})", v.len(), listed(v)))
+            .collect();
+        out.push(format!(
+            "warning: the recordings are sampled at {} rates: {}; each is localised at its \
+             own rate, which is right only if its file gives the rate it was recorded at",
+            rates.len(),
+            each.join("; ")
+        ));
+    }
+    out
+}
+
+/// The first three of `names` and how many more: `a, b, c and 4 more`.
+fn listed(names: &[&str]) -> String {
+    let shown = names.iter().take(3).copied().collect::<Vec<_>>().join(", ");
+    match names.len().saturating_sub(3) {
+        0 => shown,
+        n => format!("{shown} and {n} more"),
+    }
+}
+
+/// Prints the warnings about `rows` to standard error: [`faulty_channel_warnings`] and
+/// [`recording_warnings`].
+pub fn warn_recordings(rows: &[FileDoas]) {
     let names: Vec<String> = rows
         .iter()
         .map(|r| {
@@ -181,6 +238,10 @@ pub fn warn_faulty_channels(rows: &[FileDoas]) {
             .zip(rows)
             .map(|(n, r)| (n.as_str(), &r.faulty_channels[..])),
     ) {
+        eprintln!("{w}");
+    }
+    let names: Vec<&str> = names.iter().map(String::as_str).collect();
+    for w in recording_warnings(&names, rows) {
         eprintln!("{w}");
     }
 }
@@ -272,6 +333,7 @@ pub fn localise_files(
         .map_init(Scratch::default, |scratch, f| {
             let t0 = std::time::Instant::now();
             let audio = read_recording(f, channels)?;
+            let silent = audio.channels().iter().flatten().all(|&v| v == 0.0);
             let loc = {
                 let mut c = cache.lock().expect("no panics while locked");
                 match c.iter().find(|l| l.sample_rate() == audio.sample_rate()) {
@@ -306,6 +368,8 @@ pub fn localise_files(
                 pooling,
                 faulty_channels,
                 seconds: t0.elapsed().as_secs_f64(),
+                sample_rate: audio.sample_rate(),
+                silent,
             })
         })
         .collect::<Result<Vec<_>>>();
@@ -599,7 +663,7 @@ impl Survey {
                 &settings.ssl,
                 RobotNoise::of(settings)?.as_ref(),
             )?;
-            warn_faulty_channels(&rows);
+            warn_recordings(&rows);
             cut = Some(rows.iter().map(|r| r.cut).collect());
             (
                 mapped_table(

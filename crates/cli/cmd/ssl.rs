@@ -66,7 +66,7 @@ pub fn run(args: &SslArgs) -> Result<Outcome> {
             &config,
             noise.as_ref(),
         )?;
-        crate::pipeline::warn_faulty_channels(&rows);
+        crate::pipeline::warn_recordings(&rows);
         print_rows(&rows, &config, &array, args.json)?;
         return Ok(Outcome::Success);
     };
@@ -86,7 +86,7 @@ pub fn run(args: &SslArgs) -> Result<Outcome> {
         noise.as_ref(),
     )?;
     let elapsed = t0.elapsed().as_secs_f64();
-    crate::pipeline::warn_faulty_channels(&rows);
+    crate::pipeline::warn_recordings(&rows);
     eprintln!(
         "{}: {} recordings localised with {} in {:.2} s ({:.1} ms per recording){}{}",
         dir.display(),
