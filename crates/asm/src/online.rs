@@ -337,7 +337,15 @@ impl OnlineMapper {
                     }
                     break;
                 }
-                Round::NoCluster | Round::NothingExplained | Round::Clutter => break,
+                // Clutter where this draw settled; the vote below judges its DoAs anew,
+                // as the batch mapper's does.
+                Round::Clutter(rays) if self.mapper.config().vote_min_stops > 0 => {
+                    for r in rays {
+                        r.give_back(&mut self.pool);
+                    }
+                    break;
+                }
+                Round::NoCluster | Round::NothingExplained | Round::Clutter(_) => break,
             }
         }
         // Then the vote, as the batch mapper runs it after its rounds: deterministic, and
