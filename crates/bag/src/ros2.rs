@@ -460,7 +460,8 @@ fn message_bytes<'a>(
     connection: &Connection,
     summary: &Summary,
 ) -> Result<Cow<'a, [u8]>> {
-    if !data.starts_with(&ZSTD_MAGIC) {
+    // rosbag2 compresses CDR messages; a ROS 1 message in MCAP begins with its own fields.
+    if connection.encoding != Encoding::Cdr || !data.starts_with(&ZSTD_MAGIC) {
         return Ok(Cow::Borrowed(data));
     }
     let error = |what: String| Error::Message {
@@ -644,4 +645,48 @@ pub fn scan_sqlite(
         })?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn connection(encoding: Encoding) -> Connection {
+        Connection {
+            id: 1,
+            topic: "/audio".into(),
+            msg_type: "audio_common_msgs/msg/AudioData".into(),
+            encoding,
+        }
+    }
+
+    #[test]
+    fn a_compressed_cdr_message_is_decompressed_and_a_ros1_one_left_as_it_is() {
+        // A CDR message (encapsulation 00 01 00 00, then its fields), as rosbag2's
+        // message mode stores it: one zstd frame.
+        let cdr: Vec<u8> = [0u8, 1, 0, 0].into_iter().chain(0..=200).collect();
+        let frame = ruzstd::encoding::compress_to_vec(
+            &cdr[..],
+            ruzstd::encoding::CompressionLevel::Fastest,
+        );
+        assert!(frame.starts_with(&ZSTD_MAGIC));
+        let summary = Summary::default();
+        let got = message_bytes(&frame, &connection(Encoding::Cdr), &summary).unwrap();
+        assert_eq!(&got[..], &cdr[..]);
+        // Uncompressed CDR passes through untouched.
+        let got = message_bytes(&cdr, &connection(Encoding::Cdr), &summary).unwrap();
+        assert!(matches!(got, Cow::Borrowed(_)));
+        // A ROS 1 message whose first field happens to hold the magic is its own bytes.
+        let got = message_bytes(&frame, &connection(Encoding::Ros1), &summary).unwrap();
+        assert_eq!(&got[..], &frame[..]);
+        // A frame cut short is an error naming the topic.
+        let e = message_bytes(
+            &frame[..frame.len() / 2],
+            &connection(Encoding::Cdr),
+            &summary,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("/audio") && e.contains("zstd"), "{e}");
+    }
 }
