@@ -1047,15 +1047,12 @@ impl Mapper {
                 }
                 // One retry policy for every round that finds no source: each is one
                 // random draw's bad luck until `retries + 1` happen in a row (see the
-                // module documentation). A clutter round has at least used its DoAs up.
-                Round::NoCluster | Round::NothingExplained => {
-                    failed += 1;
-                    if failed > c.retries {
-                        break;
+                // module documentation). A clutter round has at least taken its DoAs out
+                // of the rounds; they are kept for the vote.
+                failure => {
+                    if let Round::Clutter(rays) = failure {
+                        clutter.extend(rays);
                     }
-                }
-                Round::Clutter(rays) => {
-                    clutter.extend(rays);
                     failed += 1;
                     if failed > c.retries {
                         break;

@@ -506,10 +506,12 @@ pub fn scan_files(
     let (storage, files) = bag_files(path)?;
     for (k, file) in files.iter().enumerate() {
         let k = u32::try_from(k).map_err(|_| Error::Config("more than 2^16 files".into()))?;
+        // The file's bytes, decompressed if they are compressed; the caller buffers them.
+        let compressed = is_zstd(file)?;
         let open = || -> Result<Box<dyn Read>> {
-            let f = BufReader::with_capacity(1 << 20, std::fs::File::open(file)?);
-            Ok(if is_zstd(file)? {
-                Box::new(zstd_reader(f, file)?)
+            let f = std::fs::File::open(file)?;
+            Ok(if compressed {
+                Box::new(zstd_reader(BufReader::new(f), file)?)
             } else {
                 Box::new(f)
             })
@@ -521,7 +523,7 @@ pub fn scan_files(
                 &mut summary,
                 &mut visit,
             ),
-            Storage::Sqlite if is_zstd(file)? => {
+            Storage::Sqlite if compressed => {
                 let tmp = decompressed_copy(open()?, file)?;
                 scan_sqlite(tmp.path(), k, &mut summary, &mut visit)
             }
