@@ -66,6 +66,7 @@ min_range_m = 0.25
 beyond_map_m = 0.7
 share_gate_sigmas = 0.4
 reassociate = false
+rank_gain = 0.8
 "#;
 
 // See: issue 8

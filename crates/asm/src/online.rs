@@ -320,10 +320,13 @@ impl OnlineMapper {
         while update.rounds < max_rounds {
             update.rounds += 1;
             self.rounds += 1;
-            match self
-                .mapper
-                .round(&self.poses, &mut self.pool, self.rounds, &mut self.rng)
-            {
+            match self.mapper.round(
+                &self.poses,
+                &mut self.pool,
+                &self.bearings,
+                self.rounds,
+                &mut self.rng,
+            ) {
                 // Everything the earlier stops' DoAs could show was searched at those stops:
                 // a source new at this stop explains one of its DoAs. One that does not is
                 // another draw landing on old clutter; its DoAs go back, and the round failed.

@@ -146,6 +146,12 @@ impl ParticleFilter {
             *w *= l;
             total += *w;
         }
+        self.normalise(total);
+    }
+
+    /// Divides the weights by their `total`; if every weight underflowed, no particle is
+    /// preferred.
+    fn normalise(&mut self, total: f64) {
         if total > 0.0 && total.is_finite() {
             self.weights.iter_mut().for_each(|w| *w /= total);
         } else {
@@ -153,6 +159,54 @@ impl ParticleFilter {
             let u = 1.0 / self.weights.len() as f64;
             self.weights.iter_mut().for_each(|w| *w = u);
         }
+    }
+
+    /// [`ParticleFilter::update`] with a gain per DoA (`gains[j]` for `bearings[j]`, in
+    /// `(0, 1]`): the DoA is a source with probability `g` and clutter otherwise, so its
+    /// likelihood is the mixture `lambda + g (L - lambda)` of the paper's `L = max(lambda,
+    /// f(dtheta) exp(-d / beta))` and the floor `lambda` (clutter explains any bearing
+    /// alike), and a particle takes the largest over the DoAs. A DoA of gain `g` lifts a
+    /// particle above the floor `g` times as far as one of gain 1, and never below it
+    /// (see `IasmConfig::rank_gain`). With every gain 1 it is the paper's update.
+    ///
+    /// # Panics
+    /// If `gains` and `bearings` differ in length.
+    pub fn update_gained(
+        &mut self,
+        robot: [f64; 2],
+        bearings: &[f64],
+        gains: &[f64],
+        lik: &Likelihood,
+    ) {
+        assert_eq!(bearings.len(), gains.len(), "one gain per DoA");
+        if bearings.is_empty() {
+            return;
+        }
+        let dirs: Vec<(f64, f64, f64)> = bearings
+            .iter()
+            .zip(gains)
+            .map(|(b, &g)| (b.cos(), b.sin(), g))
+            .collect();
+        let mut total = 0.0;
+        for (p, w) in self.particles.iter().zip(self.weights.iter_mut()) {
+            let (dx, dy) = (p[0] - robot[0], p[1] - robot[1]);
+            let d = (dx * dx + dy * dy).sqrt();
+            let gate = d * lik.gate_cos;
+            // Only the DoAs within `2 sigma` of the particle's bearing can lift it off the
+            // floor: one dot product each tells them.
+            let floor = lik.floor;
+            let mut l = floor;
+            for &(c, s, g) in &dirs {
+                let dot = dx * c + dy * s;
+                if dot > gate {
+                    let cross = dx * s - dy * c;
+                    l = l.max(floor + g * (lik.eval(cross.abs().atan2(dot), d) - floor));
+                }
+            }
+            *w *= l;
+            total += *w;
+        }
+        self.normalise(total);
     }
 
     /// The effective sample size `1 / sum w^2`, in `[1, M]`.
@@ -297,6 +351,50 @@ mod tests {
             raw.iter().filter(|&&r| r > l.floor()).count() > 20,
             "some particles above the floor"
         );
+    }
+
+    #[test]
+    fn a_gained_doa_lifts_a_particle_above_the_floor_by_its_gain() {
+        // Robot at the origin; DoAs towards +x (gain 1) and +y (gain 0.5). Particles on +x
+        // (1 m), on +y (1 m), 3 degrees off +y (2 m), and at -x (no DoA): the floor plus
+        // the gain times what the paper's likelihood lifts them above it.
+        let sigma = 5f64.to_radians();
+        let l = Likelihood::new(sigma, Some(2.5));
+        let off = 93f64.to_radians();
+        let pts = vec![
+            [1.0, 0.0],
+            [0.0, 1.0],
+            [2.0 * off.cos(), 2.0 * off.sin()],
+            [-1.0, 0.0],
+        ];
+        let mut pf = ParticleFilter::from_parts(pts.clone(), vec![1.0; 4]);
+        pf.update_gained(
+            [0.0, 0.0],
+            &[0.0, std::f64::consts::FRAC_PI_2],
+            &[1.0, 0.5],
+            &l,
+        );
+        let lam = l.floor();
+        let raw = [
+            l.eval(0.0, 1.0),
+            lam + 0.5 * (l.eval(0.0, 1.0) - lam),
+            lam + 0.5 * (l.eval(3f64.to_radians(), 2.0) - lam),
+            lam,
+        ];
+        let s: f64 = raw.iter().sum();
+        for (w, r) in pf.weights().iter().zip(raw) {
+            assert_abs_diff_eq!(*w, r / s, epsilon = 1e-12);
+        }
+        // Every gain 1: the paper's update.
+        // Two of the three DoAs within 3 degrees of a particle's bearing.
+        let bearings = [0.25, 1.6, -2.0];
+        let mut a = ParticleFilter::from_parts(pts.clone(), vec![1.0; 4]);
+        let mut b = ParticleFilter::from_parts(pts, vec![1.0; 4]);
+        a.update([0.1, -0.2], &bearings, &l);
+        b.update_gained([0.1, -0.2], &bearings, &[1.0; 3], &l);
+        for (x, y) in a.weights().iter().zip(b.weights()) {
+            assert_abs_diff_eq!(*x, *y, epsilon = 1e-15);
+        }
     }
 
     #[test]
