@@ -1383,7 +1383,7 @@ impl Mapper {
             .map(|i| {
                 if self.misplaced(at[i], &sources[i].rays, poses) {
                     Some(Refusal::Misplaced)
-                } else if self.thinly_heard(&sources[i].rays, said_cut, heard) {
+                } else if self.thinly_heard(&sources[i].rays, poses, said_cut, heard) {
                     Some(Refusal::ThinlyHeard)
                 } else {
                     None
@@ -1459,7 +1459,7 @@ impl Mapper {
         loop {
             let thin: Vec<usize> = (0..sources.len())
                 .filter(|&i| {
-                    self.thinly_heard(&sources[i].rays, said_cut, heard)
+                    self.thinly_heard(&sources[i].rays, poses, said_cut, heard)
                         && !self.misplaced([sources[i].x, sources[i].y], &sources[i].rays, poses)
                 })
                 .collect();
@@ -1489,7 +1489,7 @@ impl Mapper {
                         }
                     }
                     if best.iter().any(|r| r.miss(p) > gate)
-                        || self.thinly_heard(&best, said_cut, heard)
+                        || self.thinly_heard(&best, poses, said_cut, heard)
                         || self.misplaced(p, &best, poses)
                     {
                         continue;
@@ -1548,21 +1548,21 @@ impl Mapper {
     /// cut row whose strongest DoA (in `heard`) is the ray's too (see
     /// [`IasmConfig::vote_min_thresholded_stops`]). Never with the vote off (the paper
     /// profile).
-    fn thinly_heard(&self, rays: &[Ray], said_cut: &[bool], heard: &[Vec<f64>]) -> bool {
+    fn thinly_heard(
+        &self,
+        rays: &[Ray],
+        poses: &[Pose],
+        said_cut: &[bool],
+        heard: &[Vec<f64>],
+    ) -> bool {
         let Some(rate) = self.cut_rate() else {
             return false;
         };
-        // A cut row's strongest DoA counts in full (see `IasmConfig::rank_gain` for how
-        // often the first DoA of a row is a source's).
-        let strongest = |r: &Ray| {
-            heard[r.stop]
-                .first()
-                .is_some_and(|&h| h == r.bearing || r.twin == Some(h))
+        let cut = |r: &Ray| {
+            said_cut[r.stop] && !self.strongest(&poses[r.stop], &heard[r.stop], r.bearing)
         };
-        let mut stops: Vec<(usize, bool, bool)> = rays
-            .iter()
-            .map(|r| (r.stop, r.shared, said_cut[r.stop] && !strongest(r)))
-            .collect();
+        let mut stops: Vec<(usize, bool, bool)> =
+            rays.iter().map(|r| (r.stop, r.shared, cut(r))).collect();
         stops.sort_unstable_by_key(|s| s.0);
         stops.dedup_by_key(|s| s.0);
         let share = self.share_rate();

@@ -187,6 +187,7 @@ impl ParticleFilter {
             .zip(gains)
             .map(|(b, &g)| (b.cos(), b.sin(), g))
             .collect();
+        let floor = lik.floor;
         let mut total = 0.0;
         for (p, w) in self.particles.iter().zip(self.weights.iter_mut()) {
             let (dx, dy) = (p[0] - robot[0], p[1] - robot[1]);
@@ -194,7 +195,6 @@ impl ParticleFilter {
             let gate = d * lik.gate_cos;
             // Only the DoAs within `2 sigma` of the particle's bearing can lift it off the
             // floor: one dot product each tells them.
-            let floor = lik.floor;
             let mut l = floor;
             for &(c, s, g) in &dirs {
                 let dot = dx * c + dy * s;
