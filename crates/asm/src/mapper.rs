@@ -1563,7 +1563,10 @@ impl Mapper {
         };
         let mut stops: Vec<(usize, bool, bool)> =
             rays.iter().map(|r| (r.stop, r.shared, cut(r))).collect();
-        stops.sort_unstable_by_key(|s| s.0);
+        // One entry per stop: where a stop has two rays, its strongest evidence (not
+        // shared before shared, then not cut before cut), as the rule read before the cut
+        // rows' strongest DoAs counted in full.
+        stops.sort_unstable();
         stops.dedup_by_key(|s| s.0);
         let share = self.share_rate();
         let evidence: f64 = stops
