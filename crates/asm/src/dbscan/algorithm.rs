@@ -39,13 +39,72 @@ enum Index {
     },
 }
 
+/// The bounding box of a set of points, for bounds on the distances to its points that
+/// hold exactly in floating point: the distance between two points (as `near` computes it,
+/// `(p - q)^2` summed over the axes) is never below the gap nor above the span that the
+/// boxes give, since rounding is monotone. A cell's box is at most its square (members
+/// that rounding put just across an edge included), and in a settled cloud much smaller,
+/// so that more cells are counted whole or passed over.
+#[derive(Clone, Copy, Debug)]
+struct BBox {
+    lo: [f64; 2],
+    hi: [f64; 2],
+}
+
+impl BBox {
+    /// No point: every gap is infinite.
+    const EMPTY: Self = Self {
+        lo: [f64::INFINITY; 2],
+        hi: [f64::NEG_INFINITY; 2],
+    };
+
+    fn of(points: impl IntoIterator<Item = [f64; 2]>) -> Self {
+        let mut b = Self::EMPTY;
+        points.into_iter().for_each(|p| b.add(p));
+        b
+    }
+
+    fn add(&mut self, p: [f64; 2]) {
+        for (k, v) in p.into_iter().enumerate() {
+            self.lo[k] = self.lo[k].min(v);
+            self.hi[k] = self.hi[k].max(v);
+        }
+    }
+
+    /// The squared distances from `p` to the box's nearest and furthest points.
+    fn reach2(&self, p: [f64; 2]) -> (f64, f64) {
+        let (mut near, mut far) = (0.0, 0.0);
+        for (k, v) in p.into_iter().enumerate() {
+            let n = (self.lo[k] - v).max(v - self.hi[k]).max(0.0);
+            let f = (v - self.lo[k]).max(self.hi[k] - v);
+            near += n * n;
+            far += f * f;
+        }
+        (near, far)
+    }
+
+    /// The squared smallest and largest distances between a point of `self` and one of
+    /// `other`.
+    fn between2(&self, other: &Self) -> (f64, f64) {
+        let (mut gap, mut span) = (0.0, 0.0);
+        for k in 0..2 {
+            let g = (other.lo[k] - self.hi[k])
+                .max(self.lo[k] - other.hi[k])
+                .max(0.0);
+            let s = (self.hi[k] - other.lo[k]).max(other.hi[k] - self.lo[k]);
+            gap += g * g;
+            span += s * s;
+        }
+        (gap, span)
+    }
+}
+
 /// Points binned into square cells, as compressed rows: the points of cell `c` are
 /// `order[start[c]..start[c + 1]]`.
 struct Grid {
     index: Index,
-    /// The corner of cell `(0, 0)` and the cells' side.
-    origin: [f64; 2],
-    side: f64,
+    /// The bounding box of each cell's points (see [`BBox`]).
+    boxes: Vec<BBox>,
     start: Vec<u32>,
     order: Vec<u32>,
     cell_of: Vec<u32>,
@@ -116,10 +175,13 @@ impl Grid {
             order[fill[c as usize] as usize] = i as u32;
             fill[c as usize] += 1;
         }
+        let mut boxes = vec![BBox::EMPTY; n_cells];
+        for (p, &c) in points.iter().zip(&cell_of) {
+            boxes[c as usize].add(*p);
+        }
         Self {
             index,
-            origin: [x0, y0],
-            side,
+            boxes,
             start,
             order,
             cell_of,
@@ -132,24 +194,6 @@ impl Grid {
             Index::Dense { nx, .. } => (c as i64 % nx, c as i64 / nx),
             Index::Sparse { coords, .. } => coords[c],
         }
-    }
-
-    /// The squared distances from `p` to the nearest and to the furthest point of cell
-    /// `c`'s square, widened by a relative margin so that rounding in the cell assignment
-    /// cannot put a member outside it.
-    fn reach2(&self, p: [f64; 2], c: usize) -> (f64, f64) {
-        let (cx, cy) = self.coords(c);
-        let pad = 1e-9 * self.side;
-        let axis = |v: f64, o: f64, k: i64| {
-            let lo = o + k as f64 * self.side - pad;
-            let hi = lo + self.side + 2.0 * pad;
-            let near = (lo - v).max(v - hi).max(0.0);
-            let far = (v - lo).max(hi - v);
-            (near, far)
-        };
-        let (nx, fx) = axis(p[0], self.origin[0], cx);
-        let (ny, fy) = axis(p[1], self.origin[1], cy);
-        (nx * nx + ny * ny, fx * fx + fy * fy)
     }
 
     fn members(&self, c: usize) -> &[u32] {
@@ -195,35 +239,59 @@ pub fn dbscan(points: &[[f64; 2]], eps: f64, min_pts: usize) -> Vec<Label> {
 
     // 1. Core points.
     let mut core = vec![false; n];
+    let mut partial: Vec<usize> = Vec::with_capacity(24);
+    let mut cut: Vec<usize> = Vec::with_capacity(24);
     for c in 0..n_cells {
         let members = grid.members(c);
         if members.is_empty() {
             continue;
         }
-        if members.len() >= min_pts {
+        // Bounds for the whole cell first: the cells within `eps` of all its points count
+        // for each of them, and those beyond `eps` of all of them for none. In a settled
+        // cloud they decide most cells; the rest is counted point by point below.
+        let own = &grid.boxes[c];
+        let mut whole = members.len();
+        let mut reachable = whole;
+        partial.clear();
+        for other in grid.around(c).filter(|&o| o != c) {
+            let k = grid.members(other).len();
+            if k == 0 {
+                continue;
+            }
+            let (gap2, span2) = own.between2(&grid.boxes[other]);
+            if span2 <= eps2 {
+                whole += k;
+            } else if gap2 <= eps2 {
+                partial.push(other);
+            } else {
+                continue;
+            }
+            reachable += k;
+        }
+        if whole >= min_pts {
             members.iter().for_each(|&i| core[i as usize] = true);
             continue;
         }
+        if reachable < min_pts {
+            continue;
+        }
         for &i in members {
-            // A cell wholly within eps counts whole, one wholly beyond it not at all (in
-            // a settled cloud most are one or the other); only the cells that the eps
-            // circle cuts are then counted point by point, until the count is reached.
-            // The same counts as a point-by-point search: the margin of `reach2` only
-            // sends a cell to the exact count.
+            // A cell wholly within eps counts whole, one wholly beyond it not at all; only
+            // the cells that the eps circle cuts are then counted point by point, until
+            // the count is reached. The same counts as a point-by-point search: the
+            // boxes' bounds are exact (see `BBox`).
             let p = points[i as usize];
-            let mut count = members.len();
-            let mut cut = [0usize; 24];
-            let mut n_cut = 0;
-            for other in grid.around(c).filter(|&o| o != c) {
-                let (near2, far2) = grid.reach2(p, other);
-                if far2 < eps2 {
+            let mut count = whole;
+            cut.clear();
+            for &other in &partial {
+                let (near2, far2) = grid.boxes[other].reach2(p);
+                if far2 <= eps2 {
                     count += grid.members(other).len();
                 } else if near2 <= eps2 {
-                    cut[n_cut] = other;
-                    n_cut += 1;
+                    cut.push(other);
                 }
             }
-            for &other in &cut[..n_cut] {
+            for &other in &cut {
                 if count >= min_pts {
                     break;
                 }
@@ -247,6 +315,10 @@ pub fn dbscan(points: &[[f64; 2]], eps: f64, min_pts: usize) -> Vec<Label> {
                 .collect()
         })
         .collect();
+    let core_boxes: Vec<BBox> = cores
+        .iter()
+        .map(|m| BBox::of(m.iter().map(|&i| points[i as usize])))
+        .collect();
     let mut parent: Vec<usize> = (0..n_cells).collect();
     fn find(parent: &mut [usize], mut x: usize) -> usize {
         while parent[x] != x {
@@ -263,9 +335,15 @@ pub fn dbscan(points: &[[f64; 2]], eps: f64, min_pts: usize) -> Vec<Label> {
             if b <= a || cores[b].is_empty() || find(&mut parent, a) == find(&mut parent, b) {
                 continue;
             }
-            if cores[a]
-                .iter()
-                .any(|&i| cores[b].iter().any(|&j| near(i as usize, j as usize)))
+            // The core points' boxes settle most pairs; otherwise only the points of `a`
+            // within `eps` of `b`'s box can be near one of `b`'s.
+            let (gap2, span2) = core_boxes[a].between2(&core_boxes[b]);
+            if gap2 <= eps2
+                && (span2 <= eps2
+                    || cores[a].iter().any(|&i| {
+                        core_boxes[b].reach2(points[i as usize]).0 <= eps2
+                            && cores[b].iter().any(|&j| near(i as usize, j as usize))
+                    }))
             {
                 let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
                 parent[ra] = rb;
@@ -285,7 +363,12 @@ pub fn dbscan(points: &[[f64; 2]], eps: f64, min_pts: usize) -> Vec<Label> {
             Some(find(&mut parent, c))
         } else {
             grid.around(c)
-                .find(|&b| cores[b].iter().any(|&j| near(i, j as usize)))
+                .find(|&b| {
+                    let (near2, far2) = core_boxes[b].reach2(points[i]);
+                    !cores[b].is_empty()
+                        && near2 <= eps2
+                        && (far2 <= eps2 || cores[b].iter().any(|&j| near(i, j as usize)))
+                })
                 .map(|b| find(&mut parent, b))
         };
         if let Some(r) = root {
