@@ -445,8 +445,12 @@ fn pooling_note(rows: &[crate::pipeline::FileDoas], set: ssl::Pooling) -> String
         .iter()
         .filter(|r| r.pooling == ssl::Pooling::Mean)
         .count();
-    format!(
-        "; {mean} of {} steady, pooled by their mean (ssl::Pooling::Auto)",
-        rows.len()
-    )
+    let n = rows.len();
+    match mean {
+        0 => "; none steady, every one pooled by its blocks' max (ssl::Pooling::Auto)".into(),
+        m if m == n => "; every one steady, pooled by its blocks' mean (ssl::Pooling::Auto)".into(),
+        m => format!(
+            "; {m} of {n} steady, pooled by their blocks' mean, the rest by the max (ssl::Pooling::Auto)"
+        ),
+    }
 }
