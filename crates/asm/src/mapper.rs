@@ -1923,11 +1923,11 @@ impl Mapper {
         for step in 0..c.passes * k_stops {
             let k = step % k_stops;
             pf.predict(c.sigma_p_m, rng);
-            match &gains {
+            let neff = match &gains {
                 Some(g) => pf.update_gained(poses[k].position(), &bearings[k], &g[k], &self.lik),
                 None => pf.update(poses[k].position(), &bearings[k], &self.lik),
-            }
-            if pf.neff() < self.resample_below {
+            };
+            if neff < self.resample_below {
                 pf.resample(rng);
                 resampled = true;
             }

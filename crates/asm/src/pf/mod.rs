@@ -10,7 +10,7 @@ mod resample;
 
 use rand::Rng;
 use rand::seq::index::sample;
-use rand_distr::{Distribution, Normal};
+use rand_distr::StandardNormal;
 
 pub use resample::low_variance;
 
@@ -106,23 +106,29 @@ impl ParticleFilter {
 
     /// Random-walk state update: every coordinate moves by `N(0, sigma_p^2)`.
     pub fn predict(&mut self, sigma_p: f64, rng: &mut impl Rng) {
-        let n = Normal::new(0.0, sigma_p).expect("sigma_p validated positive");
+        assert!(
+            sigma_p.is_finite() && sigma_p > 0.0,
+            "sigma_p validated positive"
+        );
+        // `sigma_p z` for standard normal `z`: the numbers `Normal::new(0, sigma_p)` draws
+        // (it adds its mean, 0, to them), without a call per draw.
         for p in &mut self.particles {
-            p[0] += n.sample(rng);
-            p[1] += n.sample(rng);
+            p[0] += sigma_p * rng.sample::<f64, _>(StandardNormal);
+            p[1] += sigma_p * rng.sample::<f64, _>(StandardNormal);
         }
     }
 
     /// Weight update with the DoAs (world bearings, rad) seen from `robot`; a stop with no
-    /// DoA left carries no information and changes nothing.
+    /// DoA left carries no information and changes nothing. Returns the effective sample
+    /// size after it ([`ParticleFilter::neff`]), found in the normalising pass.
     ///
     /// This is the filter's hot loop (particles x stops x rounds). A particle more than
     /// `2 sigma` from every DoA gets the floor whatever its distance, and most particles
     /// are such: they are recognised with one dot product per DoA (`cos(dtheta) <=
     /// cos(2 sigma)`), and only the rest pay for an `atan2` and an `exp`.
-    pub fn update(&mut self, robot: [f64; 2], bearings: &[f64], lik: &Likelihood) {
+    pub fn update(&mut self, robot: [f64; 2], bearings: &[f64], lik: &Likelihood) -> f64 {
         if bearings.is_empty() {
-            return;
+            return self.neff();
         }
         let dirs: Vec<(f64, f64)> = bearings.iter().map(|b| (b.cos(), b.sin())).collect();
         let mut total = 0.0;
@@ -146,19 +152,30 @@ impl ParticleFilter {
             *w *= l;
             total += *w;
         }
-        self.normalise(total);
+        self.normalise(total)
     }
 
     /// Divides the weights by their `total`; if every weight underflowed, no particle is
     /// preferred.
-    fn normalise(&mut self, total: f64) {
+    /// Returns the effective sample size of the weights it leaves, summed in the same
+    /// pass ([`ParticleFilter::neff`] to the last bit: the same squares, added in the same
+    /// order).
+    fn normalise(&mut self, total: f64) -> f64 {
+        let mut squares = 0.0;
         if total > 0.0 && total.is_finite() {
-            self.weights.iter_mut().for_each(|w| *w /= total);
+            for w in &mut self.weights {
+                *w /= total;
+                squares += *w * *w;
+            }
         } else {
             // Every weight underflowed: no particle is preferred.
             let u = 1.0 / self.weights.len() as f64;
-            self.weights.iter_mut().for_each(|w| *w = u);
+            for w in &mut self.weights {
+                *w = u;
+                squares += u * u;
+            }
         }
+        1.0 / squares
     }
 
     /// [`ParticleFilter::update`] with a gain per DoA (`gains[j]` for `bearings[j]`, in
@@ -167,7 +184,8 @@ impl ParticleFilter {
     /// f(dtheta) exp(-d / beta))` and the floor `lambda` (clutter explains any bearing
     /// alike), and a particle takes the largest over the DoAs. A DoA of gain `g` lifts a
     /// particle above the floor `g` times as far as one of gain 1, and never below it
-    /// (see `IasmConfig::rank_gain`). With every gain 1 it is the paper's update.
+    /// (see `IasmConfig::rank_gain`). With every gain 1 it is the paper's update. Returns
+    /// the effective sample size after it, as [`ParticleFilter::update`].
     ///
     /// # Panics
     /// If `gains` and `bearings` differ in length.
@@ -177,10 +195,10 @@ impl ParticleFilter {
         bearings: &[f64],
         gains: &[f64],
         lik: &Likelihood,
-    ) {
+    ) -> f64 {
         assert_eq!(bearings.len(), gains.len(), "one gain per DoA");
         if bearings.is_empty() {
-            return;
+            return self.neff();
         }
         let dirs: Vec<(f64, f64, f64)> = bearings
             .iter()
@@ -206,7 +224,7 @@ impl ParticleFilter {
             *w *= l;
             total += *w;
         }
-        self.normalise(total);
+        self.normalise(total)
     }
 
     /// The effective sample size `1 / sum w^2`, in `[1, M]`.
@@ -351,6 +369,37 @@ mod tests {
             raw.iter().filter(|&&r| r > l.floor()).count() > 20,
             "some particles above the floor"
         );
+    }
+
+    /// The updates return the effective sample size of the weights they leave, to the
+    /// last bit of `neff()` (the resampling test compares it with a threshold): after a
+    /// normal update, after a gained one, after one whose weights have all underflowed,
+    /// and after a stop with no DoA.
+    #[test]
+    fn updates_return_the_effective_sample_size_of_their_weights() {
+        use rand::Rng;
+        let mut rng = StdRng::seed_from_u64(SEED);
+        let pts: Vec<[f64; 2]> = (0..1500)
+            .map(|_| [rng.random_range(-5.0..5.0), rng.random_range(-5.0..5.0)])
+            .collect();
+        let l = Likelihood::new(5f64.to_radians(), Some(2.5));
+        let mut pf = ParticleFilter::from_parts(pts.clone(), vec![1.0; pts.len()]);
+        let n = pf.update([0.3, -0.2], &[3.0, -2.9, 0.4, 1.7], &l);
+        assert_eq!(n.to_bits(), pf.neff().to_bits());
+        assert!(n > 1.0 && n < pts.len() as f64, "{n}");
+        let gains = [1.0, 0.5, 0.25];
+        let n = pf.update_gained([1.0, 1.0], &[0.1, 2.0, -1.0], &gains, &l);
+        assert_eq!(n.to_bits(), pf.neff().to_bits());
+        // Every weight underflowed to 0 before the stop: the total is 0, and the filter
+        // falls back to equal weights, whose effective size is M.
+        let mut tiny = ParticleFilter::from_parts(pts.clone(), vec![1.0; pts.len()]);
+        tiny.weights.iter_mut().for_each(|w| *w = 0.0);
+        let n = tiny.update([0.0, 0.0], &[0.0], &l);
+        assert_eq!(n.to_bits(), tiny.neff().to_bits());
+        assert!((n - pts.len() as f64).abs() < 1e-6, "{n}");
+        // No DoA: nothing changes, and the size is the weights' as they stand.
+        let before = pf.neff();
+        assert_eq!(pf.update([0.0, 0.0], &[], &l).to_bits(), before.to_bits());
     }
 
     #[test]
