@@ -102,10 +102,10 @@
 //!   remaining DoAs that fit where its own rays meet (within the vote's gate; see
 //!   `Mapper::feed_thin`): a talker the rounds placed from three of its five stops is
 //!   then judged on all five (sparse-stop renderings: `reverberant_low_snr` x2.5,
-//!   GCC-PHAT, 0.637 -> 0.546 m). What these rules remove, and the vote's proposals they refuse,
-//!   are reported with the rule and the stops ([`MapResult::refused`]): a user whose map
-//!   misses a source its DoAs pointed at can see which rule, and which setting, kept it
-//!   out.
+//!   GCC-PHAT, 0.637 -> 0.546 m). What these rules remove, and the vote's proposals they
+//!   refuse, are reported with the rule and the stops ([`MapResult::refused`]): a user
+//!   whose map misses a source its DoAs pointed at can see which rule, and which setting,
+//!   kept it out.
 //! - **Each DoA to the source it fits best** ([`Mapper::reassociate`]), after those
 //!   removals: implicit association is greedy (a round's source takes every stop's
 //!   nearest DoA within `gamma`, whoever made it), so once every source is known a DoA
@@ -1453,9 +1453,9 @@ impl Mapper {
     /// them within the vote's own gate. Measured (`BENCHMARKS.md`, session 35): the
     /// sparse-stop renderings (108 rows, 10 maps each) 0.3378 -> 0.3362 m, three rows
     /// better, none worse (`reverberant_low_snr` x2.5 GCC-PHAT 0.637 -> 0.546 m, the far
-    /// talker in every map; `speech_two_snr15` x2.5 GCC-PHAT 0.122 -> 0.078; `three_talkers_fan`
-    /// x2.5 MVDR 0.390 -> 0.359); `sparse_eight_speech`
-    /// (held out) MVDR 0.260 -> 0.256 m, worst 0.413 -> 0.296; every other row of the suite,
+    /// talker in every map; `speech_two_snr15` x2.5 GCC-PHAT 0.122 -> 0.078;
+    /// `three_talkers_fan` x2.5 MVDR 0.390 -> 0.359); `sparse_eight_speech` (held out)
+    /// MVDR 0.260 -> 0.256 m, worst 0.413 -> 0.296; every other row of the suite,
     /// `fixtures/heldout`, two further draws of both, the pyroomacoustics surveys and
     /// arrangement II (raw audio and the authors' tables) the same to the digit.
     fn feed_thin(

@@ -105,10 +105,13 @@ impl ParticleFilter {
     }
 
     /// Random-walk state update: every coordinate moves by `N(0, sigma_p^2)`.
+    ///
+    /// # Panics
+    /// If `sigma_p` is negative or not finite (`IasmConfig::validate` refuses both).
     pub fn predict(&mut self, sigma_p: f64, rng: &mut impl Rng) {
         assert!(
-            sigma_p.is_finite() && sigma_p > 0.0,
-            "sigma_p validated positive"
+            sigma_p.is_finite() && sigma_p >= 0.0,
+            "sigma_p must be finite and non-negative"
         );
         // `sigma_p z` for standard normal `z`: the numbers `Normal::new(0, sigma_p)` draws
         // (it adds its mean, 0, to them), without a call per draw.
@@ -155,11 +158,10 @@ impl ParticleFilter {
         self.normalise(total)
     }
 
-    /// Divides the weights by their `total`; if every weight underflowed, no particle is
-    /// preferred.
-    /// Returns the effective sample size of the weights it leaves, summed in the same
-    /// pass ([`ParticleFilter::neff`] to the last bit: the same squares, added in the same
-    /// order).
+    /// Divides the weights by their `total` (if every weight underflowed, no particle is
+    /// preferred) and returns the effective sample size of the weights it leaves, summed
+    /// in the same pass ([`ParticleFilter::neff`] to the last bit: the same squares, added
+    /// in the same order).
     fn normalise(&mut self, total: f64) -> f64 {
         let mut squares = 0.0;
         if total > 0.0 && total.is_finite() {
