@@ -1495,20 +1495,11 @@ impl Mapper {
             {
                 continue;
             }
+            // The copy's rows at the new rays' stops are the real ones less what they took.
             for r in &new {
-                let row = &mut bearings[r.stop];
-                for b in std::iter::once(r.bearing).chain(r.twin) {
-                    if let Some(i) = row.iter().position(|&x| x == b) {
-                        row.remove(i);
-                    }
-                }
+                bearings[r.stop] = std::mem::take(&mut rows[r.stop]);
             }
-            let mut all = all;
-            all.sort_by_key(|r| r.stop);
-            (s.x, s.y) = (p[0], p[1]);
-            s.observations = all.len();
-            s.rays = all;
-            s.refined = true;
+            settle(s, p, all);
         }
     }
 
@@ -1580,7 +1571,7 @@ impl Mapper {
                     break 'pairs;
                 }
             }
-            let Some((i, j, p, mut best, union)) = done else {
+            let Some((i, j, p, best, union)) = done else {
                 return;
             };
             for r in &union {
@@ -1591,12 +1582,7 @@ impl Mapper {
                     r.give_back(bearings);
                 }
             }
-            best.sort_by_key(|r| r.stop);
-            let s = &mut sources[i];
-            (s.x, s.y) = (p[0], p[1]);
-            s.observations = best.len();
-            s.rays = best;
-            s.refined = true;
+            settle(&mut sources[i], p, best);
             sources.remove(j);
         }
     }
@@ -2391,6 +2377,15 @@ pub fn largest_cluster(dbscan: &Dbscan, particles: &[[f64; 2]]) -> Option<Vec<[f
             .map(|(p, _)| *p)
             .collect(),
     )
+}
+
+/// Moves `s` to `p`, fitted to `rays`, which it now explains (in stop order, as the
+/// rounds' association leaves them).
+fn settle(s: &mut Source, p: [f64; 2], mut rays: Vec<Ray>) {
+    rays.sort_by_key(|r| r.stop);
+    (s.x, s.y, s.refined) = (p[0], p[1], true);
+    s.observations = rays.len();
+    s.rays = rays;
 }
 
 /// [`fit_bearings`] from `start`, with the rays the fit drops taken out of `rays` and

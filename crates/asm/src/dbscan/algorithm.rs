@@ -363,11 +363,10 @@ pub fn dbscan(points: &[[f64; 2]], eps: f64, min_pts: usize) -> Vec<Label> {
             Some(find(&mut parent, c))
         } else {
             grid.around(c)
+                .filter(|&b| !cores[b].is_empty())
                 .find(|&b| {
                     let (near2, far2) = core_boxes[b].reach2(points[i]);
-                    !cores[b].is_empty()
-                        && near2 <= eps2
-                        && (far2 <= eps2 || cores[b].iter().any(|&j| near(i, j as usize)))
+                    near2 <= eps2 && (far2 <= eps2 || cores[b].iter().any(|&j| near(i, j as usize)))
                 })
                 .map(|b| find(&mut parent, b))
         };
