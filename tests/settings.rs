@@ -64,6 +64,7 @@ vote_min_thresholded_stops = 4
 absence_ratio = 2.0
 min_range_m = 0.25
 beyond_map_m = 0.7
+wall_clearance_m = 0.2
 share_gate_sigmas = 0.4
 reassociate = false
 rank_gain = 0.8

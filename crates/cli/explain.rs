@@ -202,8 +202,9 @@ pub struct MissedTally {
     pub spoken_against: f64,
     /// Refused as too thinly heard ([`asm::IasmConfig::vote_min_thresholded_stops`]).
     pub thinly_heard: f64,
-    /// Refused as on the robot's path or beyond the map ([`asm::IasmConfig::min_range_m`],
-    /// [`asm::IasmConfig::beyond_map_m`]).
+    /// Refused as on the robot's path, beyond the map or behind a wall
+    /// ([`asm::IasmConfig::min_range_m`], [`asm::IasmConfig::beyond_map_m`],
+    /// [`asm::IasmConfig::wall_clearance_m`]).
     pub misplaced: f64,
     /// Refused because its DoAs fit other mapped sources better
     /// ([`asm::IasmConfig::reassociate`]).

@@ -327,7 +327,8 @@ fn list(stops: &[usize]) -> String {
 fn refusal(rule: &asm::Refusal) -> String {
     match rule {
         asm::Refusal::Misplaced => {
-            "on the robot's path or beyond the map (min_range_m, beyond_map_m)".to_owned()
+            "on the robot's path, beyond the map or behind a wall (min_range_m, beyond_map_m, wall_clearance_m)"
+                .to_owned()
         }
         asm::Refusal::ThinlyHeard => {
             "too few stops once the rows the SSL cut at N count 3/5 each (vote_min_thresholded_stops)"

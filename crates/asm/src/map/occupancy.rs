@@ -265,6 +265,80 @@ impl OccupancyMap {
         Some((fi as usize, self.height - 1 - fr as usize))
     }
 
+    /// The cell holding world point `p`, if inside the map.
+    pub fn cell_at(&self, p: [f64; 2]) -> Option<Cell> {
+        self.world_to_cell(p).map(|(i, j)| self.cell(i, j))
+    }
+
+    /// Whether the segment from `a` to `b` (world, m) passes through an occupied cell:
+    /// every cell it touches is visited in order (the grid traversal of Amanatides and Woo,
+    /// 1987), so that a wall a cell thick drawn on the diagonal stops it too, and a segment
+    /// through a corner shared by four cells tries the one beside it first. Cells beyond the
+    /// map hold nothing; a non-finite end passes nothing.
+    pub fn occupied_between(&self, a: [f64; 2], b: [f64; 2]) -> bool {
+        if !a.iter().chain(&b).all(|v| v.is_finite()) {
+            return false;
+        }
+        let grid = |p: [f64; 2]| {
+            [
+                (p[0] - self.origin[0]) / self.resolution,
+                (p[1] - self.origin[1]) / self.resolution,
+            ]
+        };
+        let (ga, gb) = (grid(a), grid(b));
+        // Clip to the map (Liang and Barsky): beyond it nothing is occupied, and the
+        // traversal's length stays bounded by the map's.
+        let (mut t0, mut t1) = (0.0f64, 1.0f64);
+        for (k, size) in [(0, self.width as f64), (1, self.height as f64)] {
+            let d = gb[k] - ga[k];
+            if d == 0.0 {
+                if !(0.0..=size).contains(&ga[k]) {
+                    return false;
+                }
+                continue;
+            }
+            let (ta, tb) = ((0.0 - ga[k]) / d, (size - ga[k]) / d);
+            t0 = t0.max(ta.min(tb));
+            t1 = t1.min(ta.max(tb));
+        }
+        if t0 > t1 {
+            return false;
+        }
+        let at = |t: f64| [ga[0] + t * (gb[0] - ga[0]), ga[1] + t * (gb[1] - ga[1])];
+        let (ga, gb) = (at(t0), at(t1));
+        let mut cell = [ga[0].floor(), ga[1].floor()];
+        let steps = (gb[0].floor() - cell[0]).abs() + (gb[1].floor() - cell[1]).abs();
+        // Per axis: the step's sign, the segment's parameter at the next cell edge, and the
+        // parameter one cell spans.
+        let (mut step, mut next, mut span) = ([0.0; 2], [f64::INFINITY; 2], [f64::INFINITY; 2]);
+        for k in 0..2 {
+            let d = gb[k] - ga[k];
+            if d > 0.0 {
+                (step[k], next[k], span[k]) = (1.0, (cell[k] + 1.0 - ga[k]) / d, 1.0 / d);
+            } else if d < 0.0 {
+                (step[k], next[k], span[k]) = (-1.0, (ga[k] - cell[k]) / -d, -1.0 / d);
+            }
+        }
+        for _ in 0..=steps as usize {
+            if self.occupied_grid(cell) {
+                return true;
+            }
+            let k = usize::from(next[1] < next[0]);
+            cell[k] += step[k];
+            next[k] += span[k];
+        }
+        false
+    }
+
+    /// Whether the cell at grid coordinates `(column, row from the bottom)` is occupied
+    /// (`false` beyond the map).
+    fn occupied_grid(&self, cell: [f64; 2]) -> bool {
+        let (w, h) = (self.width as f64, self.height as f64);
+        (0.0..w).contains(&cell[0])
+            && (0.0..h).contains(&cell[1])
+            && self.cell(cell[0] as usize, self.height - 1 - cell[1] as usize) == Cell::Occupied
+    }
+
     /// Centres of every known (free or occupied) cell, in image order.
     pub fn known_cells(&self) -> impl Iterator<Item = [f64; 2]> + '_ {
         (0..self.height).flat_map(move |j| {
@@ -509,6 +583,63 @@ mod tests {
     }
 
     const YAML: &str = "image: m.pgm\nresolution: 0.5\norigin: [-1.0, 2.0, 0.0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n";
+
+    /// A 2 x 2 m map of 0.1 m cells, free but for `wall` (columns i, rows j from the top).
+    fn walled(wall: impl Fn(usize, usize) -> bool) -> OccupancyMap {
+        let cells = (0..20)
+            .flat_map(|j| (0..20).map(move |i| (i, j)))
+            .map(|(i, j)| {
+                if wall(i, j) {
+                    Cell::Occupied
+                } else {
+                    Cell::Free
+                }
+            })
+            .collect();
+        OccupancyMap::new(20, 20, 0.1, [0.0, 0.0], cells)
+    }
+
+    #[test]
+    fn a_segment_is_stopped_by_the_occupied_cells_it_crosses_and_no_others() {
+        // A wall along y in [1.0, 1.1): the cells of image row 9.
+        let m = walled(|_, j| j == 9);
+        assert!(m.occupied_between([0.55, 0.5], [0.55, 1.5]));
+        assert!(m.occupied_between([0.2, 0.3], [1.9, 1.7]));
+        // Short of it, along it below, or beyond the map's edge: nothing.
+        assert!(!m.occupied_between([0.55, 0.5], [0.55, 0.95]));
+        assert!(!m.occupied_between([0.05, 0.95], [1.95, 0.95]));
+        assert!(!m.occupied_between([-1.0, 0.5], [-0.5, 1.5]));
+        assert!(!m.occupied_between([0.5, f64::NAN], [0.5, 1.5]));
+        // From beyond the map, through it: the wall's cells are met after clipping.
+        assert!(m.occupied_between([1.0, -3.0], [1.0, 5.0]));
+        // A door at x in [0.8, 1.2): through it, free; beside it, stopped.
+        let door = walled(|i, j| j == 9 && !(8..12).contains(&i));
+        assert!(!door.occupied_between([1.0, 0.2], [1.05, 1.8]));
+        assert!(door.occupied_between([0.5, 0.2], [1.05, 1.8]));
+        assert_eq!(door.cell_at([1.0, 1.05]), Some(Cell::Free));
+        assert_eq!(door.cell_at([0.5, 1.05]), Some(Cell::Occupied));
+        assert_eq!(door.cell_at([2.5, 1.05]), None);
+    }
+
+    #[test]
+    fn a_diagonal_wall_one_cell_thick_stops_every_segment_across_it() {
+        // Cells (i, i) from the bottom: a staircase along y = x, touching only at corners.
+        use rand::{Rng, SeedableRng};
+        let m = walled(|i, j| i == 19 - j);
+        let mut rng = rand::rngs::StdRng::seed_from_u64(7);
+        let mut crossing = 0;
+        for _ in 0..2000 {
+            let a = [rng.random_range(0.0..2.0), rng.random_range(0.0..2.0)];
+            let b = [rng.random_range(0.0..2.0), rng.random_range(0.0..2.0)];
+            if (a[1] - a[0]) * (b[1] - b[0]) < 0.0 {
+                crossing += 1;
+                assert!(m.occupied_between(a, b), "{a:?} -> {b:?}");
+            }
+        }
+        assert!(crossing > 500);
+        // Through the corner the staircase's cells (4, 4) and (5, 5) share.
+        assert!(m.occupied_between([0.7, 0.3], [0.3, 0.7]));
+    }
 
     #[test]
     fn ros_convention_puts_the_lower_left_pixel_at_the_origin() {
