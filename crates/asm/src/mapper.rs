@@ -82,35 +82,34 @@
 //!   let through, not the strongest `N` of more:
 //!   [`IasmConfig::vote_min_thresholded_stops`]): `sparse_ten` 0.34 / 0.46 -> 0.21 /
 //!   0.24 m (GCC-PHAT / MVDR), nothing else changed.
-//! - **What cannot be** ([`Mapper::drop_implausible`]), before the merge: a source nearer
-//!   a stop than [`IasmConfig::min_range_m`] (where the robot stood; DoAs along the
-//!   direction of travel meet anywhere on its line), and one that stops which heard
-//!   nothing near its bearing, with room to spare, speak against
-//!   ([`IasmConfig::absence_ratio`]), and one whose DoAs meet beyond the map (a mirror
-//!   image in a wall; [`IasmConfig::beyond_map_m`]), or behind a wall inside the map (a
-//!   place the robot never saw that all its rays but one reach through a wall:
-//!   [`IasmConfig::wall_clearance_m`]; arrangement II from raw audio with N = 8, GCC-PHAT,
-//!   0.222 m with 10.9 sources -> 0.152 with ten in every run, its ghost the image of the
-//!   loudspeaker at (3.74, 0.6) in the wall 0.85 m behind it; nothing else measured
-//!   changed). Together they remove the ghosts of the one- and
-//!   two-talker scenes (`one_source` GCC-PHAT 0.34 -> 0.009 m, `speech_one_rt05`
-//!   0.17-0.18 -> 0.008-0.015, `speech_one_rt08` 0.35 -> 0.03, `speech_two_rt05` GCC-PHAT
-//!   0.15 -> 0.04; 3 seeds, N = 3) and the path's of the ReSpeaker rows (MVDR 0.22 ->
-//!   0.20 m); every other scene holds, and arrangement II is unchanged (MVDR 0.155,
-//!   GCC-PHAT 0.164 m, 50 runs; full rows speak against nothing). And, where the SSL
-//!   said which rows it cut at `N`, a source with fewer than three stops' worth of
-//!   evidence once each cut row counts 3/5 (but in full where the source's DoA is the
-//!   row's strongest: [`IasmConfig::vote_min_thresholded_stops`]), as in the vote
+//! - **What cannot be** ([`Mapper::drop_implausible`]), before the merge: a source nearer a
+//!   stop than [`IasmConfig::min_range_m`] (where the robot stood; DoAs along the direction
+//!   of travel meet anywhere on its line), and one that stops which heard nothing near its
+//!   bearing, with room to spare, speak against ([`IasmConfig::absence_ratio`]), and one
+//!   whose DoAs meet beyond the map (a mirror image in a wall;
+//!   [`IasmConfig::beyond_map_m`]), or behind a wall inside the map (a place the robot
+//!   never saw, which all its rays but one reach through a wall, and which the wall mirrors
+//!   onto another source: [`IasmConfig::wall_clearance_m`]; arrangement II from raw audio
+//!   with N = 8, GCC-PHAT, 0.225 m with 10.94 sources -> 0.152 with ten in every run of 50,
+//!   its ghost the image of the loudspeaker at (3.74, 0.6) in the wall 0.85 m behind it;
+//!   nothing else measured changed). Together they remove the ghosts of the one- and
+//!   two-talker scenes (`one_source` GCC-PHAT 0.34 -> 0.009 m, `speech_one_rt05` 0.17-0.18
+//!   -> 0.008-0.015, `speech_one_rt08` 0.35 -> 0.03, `speech_two_rt05` GCC-PHAT 0.15 ->
+//!   0.04; 3 seeds, N = 3) and the path's of the ReSpeaker rows (MVDR 0.22 -> 0.20 m);
+//!   every other scene holds, and arrangement II is unchanged (MVDR 0.155, GCC-PHAT 0.164
+//!   m, 50 runs; full rows speak against nothing). And, where the SSL said which rows it
+//!   cut at `N`, a source with fewer than three stops' worth of evidence once each cut row
+//!   counts 3/5 (but in full where the source's DoA is the row's strongest:
+//!   [`IasmConfig::vote_min_thresholded_stops`]), as in the vote
 //!   ([`Mapper::drop_implausible_cut`]): the rounds' three-stop clusters of reflections in
-//!   a reverberant, noisy room (`reverberant_low_snr` 0.342 / 0.291 -> 0.312 / 0.193 m,
-//!   9 maps per method). Before that rule judges it, a thinly heard source takes the
+//!   a reverberant, noisy room (`reverberant_low_snr` 0.342 / 0.291 -> 0.312 / 0.193 m, 9
+//!   maps per method). Before that rule judges it, a thinly heard source takes the
 //!   remaining DoAs that fit where its own rays meet (within the vote's gate; see
-//!   `Mapper::feed_thin`): a talker the rounds placed from three of its five stops is
-//!   then judged on all five (sparse-stop renderings: `reverberant_low_snr` x2.5,
-//!   GCC-PHAT, 0.637 -> 0.546 m). What these rules remove, and the vote's proposals they
-//!   refuse, are reported with the rule and the stops ([`MapResult::refused`]): a user
-//!   whose map misses a source its DoAs pointed at can see which rule, and which setting,
-//!   kept it out.
+//!   `Mapper::feed_thin`): a talker the rounds placed from three of its five stops is then
+//!   judged on all five (sparse-stop renderings: `reverberant_low_snr` x2.5, GCC-PHAT,
+//!   0.637 -> 0.546 m). What these rules remove, and the vote's proposals they refuse, are
+//!   reported with the rule and the stops ([`MapResult::refused`]): a user whose map misses
+//!   a source its DoAs pointed at can see which rule, and which setting, kept it out.
 //! - **Each DoA to the source it fits best** ([`Mapper::reassociate`]), after those
 //!   removals: implicit association is greedy (a round's source takes every stop's
 //!   nearest DoA within `gamma`, whoever made it), so once every source is known a DoA
@@ -430,24 +429,27 @@ pub struct IasmConfig {
     /// unchanged.
     pub beyond_map_m: f64,
     /// A source whose DoAs meet where the map holds nothing the robot saw (an unknown cell,
-    /// or beyond the map), and whose rays from every stop that heard it but one pass
-    /// through an occupied cell further than this (m) from it, is removed before the merge:
-    /// it was heard through a wall. A wall mirrors a talker in front of it into an image
-    /// behind it, and the reflection's DoAs cross there from stop to stop as a source's
-    /// would; but a reflection exists only where its ray meets the wall, so every ray to an
-    /// image crosses the wall's cells, and the robot's range sensor, stopped by the wall,
-    /// never saw the space behind it. A source in free or occupied space (a loudspeaker
-    /// on a table) is never removed, nor one heard through a gap (a door): only what the map
-    /// says is closed off behind walls. Occupied cells within this distance of the source
-    /// are its own (its body, the furniture it stands on) and block nothing; one ray
-    /// may pass (a wall's gap in the map's raster, a doorway's edge). The beyond-the-map rule
-    /// ([`IasmConfig::beyond_map_m`]) catches images far beyond the map; this one those
-    /// within it, as in the unknown block behind the wall by arrangement II's loudspeakers
-    /// (its images stand 0.85 m beyond the wall, inside the map's bounding box). 0 turns it
-    /// off; without a surveyed map (an open region around the stops) there is no wall and
-    /// it removes nothing. Not in the paper. Default: 0.3 m (a talker's or a loudspeaker's
-    /// own size, as [`IasmConfig::min_range_m`]) (the paper profile: 0). Measured: see the
-    /// module docs.
+    /// or beyond the map), whose rays from every stop that heard it but one pass through an
+    /// occupied cell further than this (m) from it, and which, mirrored in the line of
+    /// those crossings, lands within [`IasmConfig::merge_dist_m`] of another mapped source,
+    /// is removed before the merge: it is that source's image in the wall. A wall mirrors a
+    /// talker in front of it into an image behind it, and the reflection's DoAs cross there
+    /// from stop to stop as a source's would; but a reflection exists only where its ray
+    /// meets the wall, so every ray to an image crosses the wall's cells, the robot's range
+    /// sensor, stopped by the wall, never saw the space behind it, and the talker stands
+    /// where the wall mirrors the image back. A source in free or occupied space (a
+    /// loudspeaker on a table) is never removed, nor one heard through a gap (a door), nor
+    /// one behind an obstacle with no source at its mirror place (a talker behind a
+    /// counter, which a 2-D map cannot tell from a wall). Occupied cells within this
+    /// distance of the source are its own (its body, the furniture it stands on) and block
+    /// nothing; one ray may pass (a wall's gap in the map's raster, a doorway's edge). The
+    /// beyond-the-map rule ([`IasmConfig::beyond_map_m`]) catches images far beyond the
+    /// map; this one those within it, as in the unknown block behind the wall by
+    /// arrangement II's loudspeakers (an image 0.85 m beyond the wall, inside the map's
+    /// bounding box). 0 turns it off; without a surveyed map (an open region around the
+    /// stops) there is no wall and it removes nothing. Not in the paper. Default: 0.3 m (a
+    /// talker's or a loudspeaker's own size, as [`IasmConfig::min_range_m`]) (the paper
+    /// profile: 0). Measured: see the module docs.
     pub wall_clearance_m: f64,
     /// The vote lets a DoA that a source already explains support a second source too,
     /// where the DoA lies within this many `sigma` of the bearing to it and its stop's row
@@ -782,8 +784,8 @@ pub struct Refused {
 #[serde(tag = "rule", rename_all = "snake_case")]
 pub enum Refusal {
     /// Nearer a stop than [`IasmConfig::min_range_m`], or its rays meet further than
-    /// [`IasmConfig::beyond_map_m`] beyond the map, or behind a wall
-    /// ([`IasmConfig::wall_clearance_m`]).
+    /// [`IasmConfig::beyond_map_m`] beyond the map, or behind a wall as another source's
+    /// image in it ([`IasmConfig::wall_clearance_m`]).
     Misplaced,
     /// Too few stops once the rows the SSL cut at `N` count at the vote's exchange rate
     /// ([`IasmConfig::vote_min_thresholded_stops`]).
@@ -1418,7 +1420,9 @@ impl Mapper {
         // where the source's own rays meet.
         let mut why: Vec<Option<Refusal>> = (0..at.len())
             .map(|i| {
-                if self.misplaced(at[i], &sources[i].rays, poses) {
+                let others: Vec<[f64; 2]> =
+                    (0..at.len()).filter(|&j| j != i).map(|j| at[j]).collect();
+                if self.misplaced(at[i], &sources[i].rays, poses, &others) {
                     Some(Refusal::Misplaced)
                 } else if self.thinly_heard(&sources[i].rays, poses, said_cut, heard) {
                     Some(Refusal::ThinlyHeard)
@@ -1501,7 +1505,7 @@ impl Mapper {
         let gate = 2.0 * self.sigma;
         for s in sources.iter_mut() {
             if !self.thinly_heard(&s.rays, poses, said_cut, heard)
-                || self.misplaced([s.x, s.y], &s.rays, poses)
+                || self.misplaced([s.x, s.y], &s.rays, poses, &[])
             {
                 continue;
             }
@@ -1523,7 +1527,7 @@ impl Mapper {
             };
             if all.iter().any(|r| r.miss(p) > gate)
                 || self.thinly_heard(&all, poses, said_cut, heard)
-                || self.misplaced(p, &all, poses)
+                || self.misplaced(p, &all, poses, &[])
             {
                 continue;
             }
@@ -1565,7 +1569,12 @@ impl Mapper {
             let thin: Vec<usize> = (0..sources.len())
                 .filter(|&i| {
                     self.thinly_heard(&sources[i].rays, poses, said_cut, heard)
-                        && !self.misplaced([sources[i].x, sources[i].y], &sources[i].rays, poses)
+                        && !self.misplaced(
+                            [sources[i].x, sources[i].y],
+                            &sources[i].rays,
+                            poses,
+                            &[],
+                        )
                 })
                 .collect();
             let mut done = None;
@@ -1595,7 +1604,7 @@ impl Mapper {
                     }
                     if best.iter().any(|r| r.miss(p) > gate)
                         || self.thinly_heard(&best, poses, said_cut, heard)
-                        || self.misplaced(p, &best, poses)
+                        || self.misplaced(p, &best, poses, &[])
                     {
                         continue;
                     }
@@ -1625,11 +1634,12 @@ impl Mapper {
         (x0 - margin..=x1 + margin).contains(&q[0]) && (y0 - margin..=y1 + margin).contains(&q[1])
     }
 
-    /// Whether a source at `q` explaining `rays` cannot be, whatever else is mapped: nearer
-    /// a stop than [`IasmConfig::min_range_m`], or its rays meeting further than
-    /// [`IasmConfig::beyond_map_m`] beyond the map, or behind a wall
-    /// ([`IasmConfig::wall_clearance_m`]).
-    fn misplaced(&self, q: [f64; 2], rays: &[Ray], poses: &[Pose]) -> bool {
+    /// Whether a source at `q` explaining `rays` cannot be: nearer a stop than
+    /// [`IasmConfig::min_range_m`], or its rays meeting further than
+    /// [`IasmConfig::beyond_map_m`] beyond the map, or behind a wall as the mirror image
+    /// of one of `others` (the other sources; [`IasmConfig::wall_clearance_m`]; with none
+    /// given, as where sources are still being joined, that rule waits).
+    fn misplaced(&self, q: [f64; 2], rays: &[Ray], poses: &[Pose], others: &[[f64; 2]]) -> bool {
         let c = &self.config;
         let nearest = poses
             .iter()
@@ -1645,31 +1655,46 @@ impl Mapper {
             return false;
         };
         (c.beyond_map_m > 0.0 && !self.within_bounds(p, c.beyond_map_m))
-            || (c.wall_clearance_m > 0.0 && self.behind_wall(p, rays))
+            || (c.wall_clearance_m > 0.0 && self.behind_wall(p, rays, others))
     }
 
-    /// Whether a source whose rays meet at `p` was heard through a wall: `p` is in no cell
-    /// the map knows, and all its rays but one cross an occupied cell further
-    /// than [`IasmConfig::wall_clearance_m`] from it.
-    fn behind_wall(&self, p: [f64; 2], rays: &[Ray]) -> bool {
-        if matches!(self.map.cell_at(p), Some(Cell::Free | Cell::Occupied)) {
+    /// Whether a source whose rays meet at `p` is the mirror image of one of `others` in a
+    /// wall: `p` is in no cell the map knows, all its rays but one cross an occupied cell
+    /// further than [`IasmConfig::wall_clearance_m`] from it, and mirrored in the line
+    /// through those crossings (the wall, fitted by its principal axis) it lands within
+    /// [`IasmConfig::merge_dist_m`] of another source (the crossings spanning at least as
+    /// much, so that the wall's direction is known).
+    fn behind_wall(&self, p: [f64; 2], rays: &[Ray], others: &[[f64; 2]]) -> bool {
+        if others.is_empty() || matches!(self.map.cell_at(p), Some(Cell::Free | Cell::Occupied)) {
             return false;
         }
         let clearance = self.config.wall_clearance_m;
-        let blocked = rays
+        let hits: Vec<[f64; 2]> = rays
             .iter()
-            .filter(|r| {
+            .filter_map(|r| {
                 let d = [p[0] - r.from[0], p[1] - r.from[1]];
                 let len = d[0].hypot(d[1]);
                 let keep = 1.0 - clearance / len;
-                len > clearance
-                    && self.map.occupied_between(
-                        r.from,
-                        [r.from[0] + keep * d[0], r.from[1] + keep * d[1]],
-                    )
+                (len > clearance)
+                    .then(|| {
+                        self.map.first_occupied(
+                            r.from,
+                            [r.from[0] + keep * d[0], r.from[1] + keep * d[1]],
+                        )
+                    })
+                    .flatten()
             })
-            .count();
-        blocked > 0 && blocked + 1 >= rays.len()
+            .collect();
+        if hits.len() < 2 || hits.len() + 1 < rays.len() {
+            return false;
+        }
+        let reach = self.config.merge_dist_m;
+        let Some(image) = mirror_in_line(p, &hits, reach) else {
+            return false;
+        };
+        others
+            .iter()
+            .any(|o| (o[0] - image[0]).hypot(o[1] - image[1]) <= reach)
     }
 
     /// Whether the stops of `rays` are too few for a source once the rows the SSL cut
@@ -2330,7 +2355,7 @@ impl Mapper {
         poses: &[Pose],
         check: &Plausible,
     ) -> Option<Refusal> {
-        if self.misplaced(q, rays, poses) {
+        if self.misplaced(q, rays, poses, check.mapped) {
             return Some(Refusal::Misplaced);
         }
         self.spoken_against(q, rays, poses, check.heard, check.complete, check.mapped)
@@ -2371,6 +2396,37 @@ struct Plausible<'a> {
     heard: &'a [Vec<f64>],
     complete: &'a [bool],
     mapped: &'a [[f64; 2]],
+}
+
+/// `p` mirrored in the line through `points` (their mean and principal axis); `None` when
+/// the points span less than `min_span` (m) along it, too short a stretch of wall to say
+/// which way it runs.
+fn mirror_in_line(p: [f64; 2], points: &[[f64; 2]], min_span: f64) -> Option<[f64; 2]> {
+    let n = points.len() as f64;
+    let c = points
+        .iter()
+        .fold([0.0, 0.0], |a, q| [a[0] + q[0] / n, a[1] + q[1] / n]);
+    let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
+    for q in points {
+        let (dx, dy) = (q[0] - c[0], q[1] - c[1]);
+        (sxx, sxy, syy) = (sxx + dx * dx, sxy + dx * dy, syy + dy * dy);
+    }
+    let angle = 0.5 * (2.0 * sxy).atan2(sxx - syy);
+    let u = [angle.cos(), angle.sin()];
+    let along = |q: &[f64; 2]| (q[0] - c[0]) * u[0] + (q[1] - c[1]) * u[1];
+    let (lo, hi) = points
+        .iter()
+        .map(along)
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), t| {
+            (lo.min(t), hi.max(t))
+        });
+    if hi - lo < min_span {
+        return None;
+    }
+    // The foot of the perpendicular from `p`, then as far again beyond it.
+    let t = along(&p);
+    let foot = [c[0] + t * u[0], c[1] + t * u[1]];
+    Some([2.0 * foot[0] - p[0], 2.0 * foot[1] - p[1]])
 }
 
 /// Where the line from `pa` at bearing `a` meets the line from `pb` at bearing `b` (rad),
@@ -3697,37 +3753,58 @@ mod tests {
     }
 
     #[test]
+    fn a_point_is_mirrored_in_the_line_its_wall_points_lie_on() {
+        // Points on y = x + 1 (a wall at 45 degrees): (3, 0) mirrors to (-1, 4).
+        let wall = [[0.0, 1.0], [1.0, 2.0], [2.5, 3.5], [-1.0, 0.0]];
+        let m = mirror_in_line([3.0, 0.0], &wall, 0.5).unwrap();
+        assert!(
+            (m[0] + 1.0).abs() < 1e-12 && (m[1] - 4.0).abs() < 1e-12,
+            "{m:?}"
+        );
+        // A stretch shorter than asked says nothing of the wall's direction.
+        assert!(mirror_in_line([3.0, 0.0], &wall[..2], 2.0).is_none());
+    }
+
+    #[test]
     fn a_source_heard_through_a_wall_is_its_image_in_the_wall() {
         // The image's rays meet at (4, 2.9), behind the wall and inside the map's box (no
-        // further than `beyond_map_m` beyond it); its cloud, drawn on the known cells, settled against the wall at (4, 1.9).
-        let removed = |config: IasmConfig, door: bool| {
+        // further than `beyond_map_m` beyond it); its cloud, drawn on the known cells,
+        // settled against the wall at (4, 1.9). Mirrored in the wall's face (y = 2.0, its
+        // first cells' centres at 2.025), it lands at (4, 1.15), 0.05 m from the talker.
+        let removed = |config: IasmConfig, door: bool, talker: bool| {
             let (mapper, poses, heard) = walled_room(config, door);
             let all: Vec<usize> = (0..9).collect();
             let mut image = heard_from([4.0, 2.9], &poses, &all);
             (image.x, image.y) = (4.0, 1.9);
-            let mut sources = vec![heard_from([4.0, 1.2], &poses, &all), image];
+            let mut sources = vec![image];
+            if talker {
+                sources.insert(0, heard_from([4.0, 1.2], &poses, &all));
+            }
+            let before = sources.len();
             let mut left = vec![Vec::new(); poses.len()];
             let complete = mapper.complete_by_length(&heard);
             mapper.drop_implausible(&mut sources, &poses, &heard, &complete, &mut left);
-            assert!(sources.iter().any(|s| (s.x, s.y) == (4.0, 1.2)));
-            sources.len() == 1
+            assert!(!talker || sources.iter().any(|s| (s.x, s.y) == (4.0, 1.2)));
+            sources.len() < before
         };
-        assert!(removed(IasmConfig::default(), false));
+        assert!(removed(IasmConfig::default(), false, true));
         // The rule off (the paper profile's value), or the wall opened by a door that
-        // every ray passes through: a source.
+        // every ray passes through, or no source in front of the wall to be mirrored (a
+        // talker behind a counter): a source.
         let off = IasmConfig {
             wall_clearance_m: 0.0,
             ..IasmConfig::default()
         };
-        assert!(!removed(off, false));
-        assert!(!removed(IasmConfig::default(), true));
+        assert!(!removed(off, false, true));
+        assert!(!removed(IasmConfig::default(), true, true));
+        assert!(!removed(IasmConfig::default(), false, false));
         // A clearance of 1 m, more than the image's 0.8 m behind the wall's far face,
         // leaves the wall in the way of the slanted rays of stops 0-2 and 6-8 only: kept.
         let wide = IasmConfig {
             wall_clearance_m: 1.0,
             ..IasmConfig::default()
         };
-        assert!(!removed(wide, false));
+        assert!(!removed(wide, false, true));
     }
 
     #[test]

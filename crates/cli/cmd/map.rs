@@ -206,7 +206,7 @@ pub fn run(a: &MapArgs) -> Result<Outcome> {
     );
     if result.removed > 0 {
         println!(
-            "  {} more found and removed: on the robot's path, contradicted by stops that heard nothing there, or left with too few DoAs by sources that fit them better (--explain says which; see asm::IasmConfig::min_range_m, absence_ratio, reassociate)",
+            "  {} more found and removed: on the robot's path, beyond the map or behind a wall, contradicted by stops that heard nothing there, or left with too few DoAs by sources that fit them better (--explain says which; see asm::IasmConfig::min_range_m, wall_clearance_m, absence_ratio, reassociate)",
             result.removed
         );
     }

@@ -270,14 +270,15 @@ impl OccupancyMap {
         self.world_to_cell(p).map(|(i, j)| self.cell(i, j))
     }
 
-    /// Whether the segment from `a` to `b` (world, m) passes through an occupied cell:
-    /// every cell it touches is visited in order (the grid traversal of Amanatides and Woo,
-    /// 1987), so that a wall a cell thick drawn on the diagonal stops it too, and a segment
-    /// through a corner shared by four cells tries the one beside it first. Cells beyond the
-    /// map hold nothing; a non-finite end passes nothing.
-    pub fn occupied_between(&self, a: [f64; 2], b: [f64; 2]) -> bool {
+    /// The centre (world, m) of the first occupied cell that the segment from `a` to `b`
+    /// passes through, if any: every cell it touches is visited in order from `a` (the grid
+    /// traversal of Amanatides and Woo, 1987), so that a wall a cell thick drawn on the
+    /// diagonal stops it too, and a segment through a corner shared by four cells tries the
+    /// one beside it first. Cells beyond the map hold nothing; a non-finite end passes
+    /// nothing.
+    pub fn first_occupied(&self, a: [f64; 2], b: [f64; 2]) -> Option<[f64; 2]> {
         if !a.iter().chain(&b).all(|v| v.is_finite()) {
-            return false;
+            return None;
         }
         let grid = |p: [f64; 2]| {
             [
@@ -293,7 +294,7 @@ impl OccupancyMap {
             let d = gb[k] - ga[k];
             if d == 0.0 {
                 if !(0.0..=size).contains(&ga[k]) {
-                    return false;
+                    return None;
                 }
                 continue;
             }
@@ -302,7 +303,7 @@ impl OccupancyMap {
             t1 = t1.min(ta.max(tb));
         }
         if t0 > t1 {
-            return false;
+            return None;
         }
         let at = |t: f64| [ga[0] + t * (gb[0] - ga[0]), ga[1] + t * (gb[1] - ga[1])];
         let (ga, gb) = (at(t0), at(t1));
@@ -321,13 +322,16 @@ impl OccupancyMap {
         }
         for _ in 0..=steps as usize {
             if self.occupied_grid(cell) {
-                return true;
+                return Some([
+                    self.origin[0] + (cell[0] + 0.5) * self.resolution,
+                    self.origin[1] + (cell[1] + 0.5) * self.resolution,
+                ]);
             }
             let k = usize::from(next[1] < next[0]);
             cell[k] += step[k];
             next[k] += span[k];
         }
-        false
+        None
     }
 
     /// Whether the cell at grid coordinates `(column, row from the bottom)` is occupied
@@ -603,19 +607,20 @@ mod tests {
     fn a_segment_is_stopped_by_the_occupied_cells_it_crosses_and_no_others() {
         // A wall along y in [1.0, 1.1): the cells of image row 9.
         let m = walled(|_, j| j == 9);
-        assert!(m.occupied_between([0.55, 0.5], [0.55, 1.5]));
-        assert!(m.occupied_between([0.2, 0.3], [1.9, 1.7]));
+        let hit = m.first_occupied([0.55, 0.5], [0.55, 1.5]).unwrap();
+        assert!((hit[0] - 0.55).abs() < 1e-9 && (hit[1] - 1.05).abs() < 1e-9);
+        assert!(m.first_occupied([0.2, 0.3], [1.9, 1.7]).is_some());
         // Short of it, along it below, or beyond the map's edge: nothing.
-        assert!(!m.occupied_between([0.55, 0.5], [0.55, 0.95]));
-        assert!(!m.occupied_between([0.05, 0.95], [1.95, 0.95]));
-        assert!(!m.occupied_between([-1.0, 0.5], [-0.5, 1.5]));
-        assert!(!m.occupied_between([0.5, f64::NAN], [0.5, 1.5]));
+        assert!(m.first_occupied([0.55, 0.5], [0.55, 0.95]).is_none());
+        assert!(m.first_occupied([0.05, 0.95], [1.95, 0.95]).is_none());
+        assert!(m.first_occupied([-1.0, 0.5], [-0.5, 1.5]).is_none());
+        assert!(m.first_occupied([0.5, f64::NAN], [0.5, 1.5]).is_none());
         // From beyond the map, through it: the wall's cells are met after clipping.
-        assert!(m.occupied_between([1.0, -3.0], [1.0, 5.0]));
+        assert!(m.first_occupied([1.0, -3.0], [1.0, 5.0]).is_some());
         // A door at x in [0.8, 1.2): through it, free; beside it, stopped.
         let door = walled(|i, j| j == 9 && !(8..12).contains(&i));
-        assert!(!door.occupied_between([1.0, 0.2], [1.05, 1.8]));
-        assert!(door.occupied_between([0.5, 0.2], [1.05, 1.8]));
+        assert!(door.first_occupied([1.0, 0.2], [1.05, 1.8]).is_none());
+        assert!(door.first_occupied([0.5, 0.2], [1.05, 1.8]).is_some());
         assert_eq!(door.cell_at([1.0, 1.05]), Some(Cell::Free));
         assert_eq!(door.cell_at([0.5, 1.05]), Some(Cell::Occupied));
         assert_eq!(door.cell_at([2.5, 1.05]), None);
@@ -633,12 +638,12 @@ mod tests {
             let b = [rng.random_range(0.0..2.0), rng.random_range(0.0..2.0)];
             if (a[1] - a[0]) * (b[1] - b[0]) < 0.0 {
                 crossing += 1;
-                assert!(m.occupied_between(a, b), "{a:?} -> {b:?}");
+                assert!(m.first_occupied(a, b).is_some(), "{a:?} -> {b:?}");
             }
         }
         assert!(crossing > 500);
         // Through the corner the staircase's cells (4, 4) and (5, 5) share.
-        assert!(m.occupied_between([0.7, 0.3], [0.3, 0.7]));
+        assert!(m.first_occupied([0.7, 0.3], [0.3, 0.7]).is_some());
     }
 
     #[test]
