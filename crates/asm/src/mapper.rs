@@ -3017,7 +3017,23 @@ mod tests {
 
     /// A mapper of the ghost surveys' open 11 x 8 m room, N = 3, otherwise `config`.
     fn ghost_mapper(config: IasmConfig) -> Mapper {
-        let map = OccupancyMap::new(220, 160, 0.05, [-1.0, -4.0], vec![Cell::Free; 220 * 160]);
+        ghost_mapper_on(|_| Cell::Free, config)
+    }
+
+    /// [`ghost_mapper`] on the same grid (x in [-1, 10], y in [-4, 4], 0.05 m cells) with
+    /// each cell as `cell` says at its centre.
+    fn ghost_mapper_on(cell: impl Fn([f64; 2]) -> Cell, config: IasmConfig) -> Mapper {
+        let (w, h) = (220, 160);
+        let cells = (0..h)
+            .flat_map(|j| (0..w).map(move |i| (i, j)))
+            .map(|(i, j)| {
+                cell([
+                    -1.0 + (i as f64 + 0.5) * 0.05,
+                    4.0 - (j as f64 + 0.5) * 0.05,
+                ])
+            })
+            .collect();
+        let map = OccupancyMap::new(w, h, 0.05, [-1.0, -4.0], cells);
         Mapper::new(
             &map,
             &IasmConfig {
@@ -3715,14 +3731,8 @@ mod tests {
     /// (4, 2.9): every stop of the path along y = 0 hears both, rows full at N = 3. `door`
     /// opens both walls for x in [2.5, 5.5).
     fn walled_room(config: IasmConfig, door: bool) -> (Mapper, Vec<Pose>, Vec<Vec<f64>>) {
-        let (w, h) = (220, 160);
-        let cells = (0..h)
-            .flat_map(|j| (0..w).map(move |i| (i, j)))
-            .map(|(i, j)| {
-                let (x, y) = (
-                    -1.0 + (i as f64 + 0.5) * 0.05,
-                    4.0 - (j as f64 + 0.5) * 0.05,
-                );
+        let mapper = ghost_mapper_on(
+            |[x, y]| {
                 let in_door = door && (2.5..5.5).contains(&x);
                 match y {
                     y if !(2.0..3.5).contains(&y) => Cell::Free,
@@ -3730,17 +3740,9 @@ mod tests {
                     _ if in_door => Cell::Free,
                     _ => Cell::Unknown,
                 }
-            })
-            .collect();
-        let map = OccupancyMap::new(w, h, 0.05, [-1.0, -4.0], cells);
-        let mapper = Mapper::new(
-            &map,
-            &IasmConfig {
-                num_doas: 3,
-                ..config
             },
-        )
-        .unwrap();
+            config,
+        );
         let poses: Vec<Pose> = (0..9).map(|i| Pose::new(i as f64, 0.0, 0.0)).collect();
         let heard = rows(&poses, [4.0, 1.2], [4.0, 2.9], |_| true)
             .into_iter()
