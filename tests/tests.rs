@@ -7,6 +7,7 @@ mod map;
 mod near;
 mod noise;
 mod regression;
+mod ros;
 mod settings;
 mod simulate;
 mod util;

@@ -108,8 +108,12 @@ pub fn json(o: &Output) -> serde_json::Value {
     serde_json::from_slice(&o.stdout).expect("JSON on stdout")
 }
 
-/// Asserts that a command failed with exit status 2, without a panic, and that its
-/// message names every one of `needles`.
+/// The JSON in a file.
+pub fn json_file(p: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
+}
+
+/// Asserts that `o` failed with exit 2, no panic, and a message holding each of `needles`.
 pub fn assert_clear_error(o: &Output, needles: &[&str]) {
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{}", show(o));

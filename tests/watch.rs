@@ -139,10 +139,6 @@ fn in_a_sparse_scene_the_live_map_finds_what_few_stops_hear() {
     assert!(sources >= 8 && ospa < 0.3, "{text}");
 }
 
-fn json_file(p: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
-}
-
 /// Waits until `cond` holds, up to `secs`.
 fn wait_for(secs: f64, what: &str, mut cond: impl FnMut() -> bool) {
     let t0 = Instant::now();

@@ -35,6 +35,9 @@ pub enum Command {
         /// Where to draw the map: PNG or SVG by the file's extension.
         #[arg(long, default_value = "iasm-demo.png")]
         png: PathBuf,
+        /// Also write the map as ROS 2 messages to this MCAP file (see `iasm map --mcap`).
+        #[arg(long, value_name = "FILE")]
+        mcap: Option<PathBuf>,
         /// How the map is drawn.
         #[command(flatten)]
         figure: FigureArgs,
@@ -224,6 +227,11 @@ pub struct WatchArgs {
     /// Draw the map here after every stop: PNG or SVG by the extension (atomically).
     #[arg(long, value_name = "FILE", visible_alias = "figure")]
     pub png: Option<PathBuf>,
+    /// Write the map's growth as ROS 2 messages to this MCAP file: one update per stop,
+    /// stamped, so that a player shows the map grow (see `iasm map --mcap`); written whole
+    /// when the run ends.
+    #[arg(long, value_name = "FILE")]
+    pub mcap: Option<PathBuf>,
     /// How the map is drawn.
     #[command(flatten)]
     pub figure: FigureArgs,
@@ -560,6 +568,11 @@ pub struct MapArgs {
     /// Write the sources as CSV here.
     #[arg(long, value_name = "FILE")]
     pub csv: Option<PathBuf>,
+    /// Write the map as ROS 2 messages to this MCAP file (frame `map`): source markers with
+    /// their 2-sigma ellipses and labels, each stop's DoA rays, the trajectory, the occupancy
+    /// map and the sources as poses; Foxglove opens it, `ros2 bag play` sends it to RViz.
+    #[arg(long, value_name = "FILE")]
+    pub mcap: Option<PathBuf>,
     /// Draw the map here: PNG or SVG by the file's extension (axes in metres, legend, title).
     #[arg(long, value_name = "FILE", visible_alias = "figure")]
     pub png: Option<PathBuf>,

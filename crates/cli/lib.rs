@@ -35,6 +35,7 @@ pub mod online;
 pub mod output;
 pub mod pipeline;
 pub mod robot_noise;
+pub mod rosmap;
 pub mod rules;
 pub mod scenes;
 pub mod score;
@@ -60,7 +61,12 @@ pub fn run(cli: &args::Cli) -> anyhow::Result<Outcome> {
             set_threads(a.threads);
             cmd::ssl::run(a)
         }
-        args::Command::Demo { seed, png, figure } => cmd::demo::run(*seed, png, figure),
+        args::Command::Demo {
+            seed,
+            png,
+            mcap,
+            figure,
+        } => cmd::demo::run(*seed, png, mcap.as_deref(), figure),
         args::Command::Map(a) => cmd::map::run(a),
         args::Command::Simulate {
             scene,

@@ -61,6 +61,8 @@ pub struct Session {
     ospa_c: f64,
     ospa_p: f64,
     poses: Vec<Pose>,
+    /// Each stop's DoAs as given (degrees, array frame), for the rays a map is shown with.
+    doas_deg: Vec<Vec<f64>>,
     recompute: bool,
 }
 
@@ -96,6 +98,7 @@ impl Session {
             ospa_c,
             ospa_p,
             poses: Vec::new(),
+            doas_deg: Vec::new(),
             recompute: false,
         })
     }
@@ -206,6 +209,7 @@ impl Session {
             .add_row(pose, &rad[..keep], cut)
             .with_context(|| format!("stop {} ({name})", self.poses.len() + 1))?;
         self.poses.push(pose);
+        self.doas_deg.push(doas_deg.to_vec());
         if self.recompute {
             self.mapper.consolidate();
         }
@@ -238,6 +242,11 @@ impl Session {
     /// The stops so far.
     pub fn poses(&self) -> &[Pose] {
         &self.poses
+    }
+
+    /// Each stop's DoAs as given (degrees, array frame, strongest first).
+    pub fn doas_deg(&self) -> &[Vec<f64>] {
+        &self.doas_deg
     }
 
     /// The truth, when known.

@@ -33,11 +33,12 @@ pub fn run_scene(seed: u64, method: Method) -> Result<(Simulated, SceneRun)> {
     Ok((simulated, run))
 }
 
-/// Runs `iasm demo`: prints the map against the truth and writes the picture to `png`.
+/// Runs `iasm demo`: prints the map against the truth, writes the picture to `png` and,
+/// when asked, the map as ROS 2 messages to `mcap`.
 ///
 /// # Errors
 /// If the picture cannot be written.
-pub fn run(seed: u64, png: &Path, figure: &FigureArgs) -> Result<Outcome> {
+pub fn run(seed: u64, png: &Path, mcap: Option<&Path>, figure: &FigureArgs) -> Result<Outcome> {
     crate::figure::Format::of(png)?;
     let t0 = std::time::Instant::now();
     let (sim, run) = run_scene(seed, Method::Mvdr)?;
@@ -107,5 +108,10 @@ pub fn run(seed: u64, png: &Path, figure: &FigureArgs) -> Result<Outcome> {
         },
     )?;
     println!("map drawn to {}", png.display());
+    if let Some(path) = mcap {
+        let messages = crate::rosmap::of_survey(&run.survey, &run.map);
+        crate::rosmap::write_mcap(path, &messages, messages.path.header.stamp.ns())?;
+        println!("map written as ROS 2 messages to {}", path.display());
+    }
     Ok(Outcome::Success)
 }

@@ -23,6 +23,8 @@ pub const SCHEMA_VERSION: u32 = 1;
 #[derive(Serialize)]
 struct MapReport<'a> {
     schema_version: u32,
+    /// The frame the sources' and poses' coordinates are in (ROS's name for it).
+    frame_id: &'static str,
     doas: &'a str,
     seed: u64,
     params: &'a IasmConfig,
@@ -112,6 +114,7 @@ pub fn run(a: &MapArgs) -> Result<Outcome> {
     });
     let report = MapReport {
         schema_version: SCHEMA_VERSION,
+        frame_id: crate::rosmap::FRAME,
         doas: &survey.doa_source,
         seed: a.seed,
         params: config,
@@ -188,6 +191,10 @@ pub fn run(a: &MapArgs) -> Result<Outcome> {
                 width: a.figure.figure_width,
             },
         )?;
+    }
+    if let Some(path) = &a.mcap {
+        let messages = crate::rosmap::of_survey(&survey, &result);
+        crate::rosmap::write_mcap(path, &messages, messages.path.header.stamp.ns())?;
     }
     if a.report.json {
         println!("{}", serde_json::to_string_pretty(&report)?);

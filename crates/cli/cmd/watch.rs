@@ -26,6 +26,8 @@ pub const SCHEMA_VERSION: u32 = 1;
 #[derive(Serialize)]
 struct WatchReport<'a> {
     schema_version: u32,
+    /// The frame the sources' coordinates are in (ROS's name for it).
+    frame_id: &'static str,
     dir: String,
     seed: u64,
     /// Stops mapped so far.
@@ -45,15 +47,24 @@ struct Outputs<'a> {
     name: String,
     map: asm::map::OccupancyMap,
     settings: &'a crate::settings::Settings,
+    /// The MCAP file of every update (`--mcap`), written whole when the run ends.
+    mcap: std::cell::RefCell<Option<crate::rosmap::McapFile>>,
 }
 
 impl Outputs<'_> {
     /// Writes the map JSON and picture, each whole.
     fn write(&self, session: &Session, map: &MapResult, final_map: bool) -> Result<()> {
         let ospa = session.ospa(map);
+        if let Some(file) = self.mcap.borrow_mut().as_mut() {
+            // Each stop's update at its own second; the final map one second after the last.
+            let k = session.poses().len();
+            let t = crate::rosmap::stop_stamp_ns(if final_map { k } else { k.saturating_sub(1) });
+            file.add(&crate::rosmap::of_session(session, map, &self.map, t), t)?;
+        }
         if let Some(out) = &self.a.out {
             let report = WatchReport {
                 schema_version: SCHEMA_VERSION,
+                frame_id: crate::rosmap::FRAME,
                 dir: self.a.dir.display().to_string(),
                 seed: self.a.seed,
                 stops: session.poses().len(),
@@ -164,6 +175,12 @@ pub fn run(a: &WatchArgs) -> Result<Outcome> {
         name,
         map,
         settings: &settings,
+        mcap: std::cell::RefCell::new(
+            a.mcap
+                .as_deref()
+                .map(crate::rosmap::McapFile::new)
+                .transpose()?,
+        ),
     };
     let theta_rad = a.theta_unit == AngleUnit::Rad;
     let mut records: Vec<StopRecord> = Vec::new();
@@ -177,6 +194,9 @@ pub fn run(a: &WatchArgs) -> Result<Outcome> {
     let live_ospa = session.ospa(&live);
     let fin = session.finish();
     out.write(&session, &fin, true)?;
+    if let Some(file) = out.mcap.take() {
+        file.finish()?;
+    }
     let elapsed = t_run.elapsed().as_secs_f64();
     let fo = session
         .ospa(&fin)

@@ -1,0 +1,310 @@
+//! `--mcap`: a map as ROS 2 messages, read back and decoded, each message checked against
+//! what it must hold: the map JSON's sources and covariances, the pose table, the rays
+//! towards the true sources, and the occupancy map's cells (decoded by `bag`'s own CDR
+//! reader, written independently of `iasm-ros`).
+
+use std::path::Path;
+
+use iasm_ros::msg::{Marker, MarkerArray, Message, Path as RosPath, PoseArray};
+
+use crate::util::*;
+
+const TRUTH: [[f64; 2]; 3] = [[1.5, 1.5], [4.0, -1.2], [5.5, 2.0]];
+
+/// One message as the file holds it.
+struct Read {
+    topic: String,
+    schema: String,
+    schema_encoding: String,
+    encoding: String,
+    qos: String,
+    log_time: u64,
+    data: Vec<u8>,
+}
+
+fn read_mcap(path: &Path) -> Vec<Read> {
+    let bytes = std::fs::read(path).unwrap();
+    mcap::MessageStream::new(&bytes)
+        .unwrap()
+        .map(|m| {
+            let m = m.unwrap();
+            let schema = m.channel.schema.as_ref().unwrap();
+            Read {
+                topic: m.channel.topic.clone(),
+                schema: schema.name.clone(),
+                schema_encoding: schema.encoding.clone(),
+                encoding: m.channel.message_encoding.clone(),
+                qos: m
+                    .channel
+                    .metadata
+                    .get("offered_qos_profiles")
+                    .cloned()
+                    .unwrap_or_default(),
+                log_time: m.log_time,
+                data: m.data.into_owned(),
+            }
+        })
+        .collect()
+}
+
+/// The test room with a wall (occupied) along x = 3 from y = 0.5 to 1.5 and an unknown
+/// block in the top-left corner: a grid whose cells tell its rows apart.
+fn walled(root: &Path) {
+    mapping_dataset(root, &TRUTH, &drive());
+    let (w, h) = (160usize, 120usize);
+    let mut px = vec![254u8; w * h];
+    for j in 0..h {
+        for i in 0..w {
+            // Cell (i, j) of the image, row 0 at the top: world x = -1 + 0.05 (i + 0.5),
+            // y = -3 + 0.05 (h - 1 - j + 0.5).
+            let (x, y) = (
+                -1.0 + 0.05 * (i as f64 + 0.5),
+                -3.0 + 0.05 * ((h - 1 - j) as f64 + 0.5),
+            );
+            if (2.9..3.1).contains(&x) && (0.5..1.5).contains(&y) {
+                px[j * w + i] = 0;
+            } else if x < 0.0 && y > 2.0 {
+                px[j * w + i] = 205;
+            }
+        }
+    }
+    let mut pgm = format!("P5\n{w} {h}\n255\n").into_bytes();
+    pgm.extend(px);
+    std::fs::write(root.join("map/room.pgm"), pgm).unwrap();
+}
+
+fn f(v: &serde_json::Value) -> f64 {
+    v.as_f64().unwrap()
+}
+
+#[test]
+fn a_maps_mcap_holds_its_sources_ellipses_rays_path_and_grid_in_frame_map() {
+    let dir = tempdir();
+    let root = path(&dir, "ds");
+    walled(&root);
+    let (out, file) = (path(&dir, "m.json"), path(&dir, "m.mcap"));
+    let o = iasm(&[
+        "map",
+        "--dataset",
+        arg(&root),
+        "--doas",
+        arg(&root.join("doas.csv")),
+        "--num",
+        "3",
+        "--seed",
+        "4",
+        "--out",
+        arg(&out),
+        "--mcap",
+        arg(&file),
+    ]);
+    assert!(o.status.success(), "{}", show(&o));
+    let v = json_file(&out);
+    assert_eq!(v["frame_id"], "map");
+    let sources = v["sources"].as_array().unwrap();
+    assert_eq!(sources.len(), 3, "{v}");
+    let msgs = read_mcap(&file);
+    let topics: Vec<&str> = msgs.iter().map(|m| m.topic.as_str()).collect();
+    assert_eq!(
+        topics,
+        [
+            "/map",
+            "/iasm/path",
+            "/iasm/doas",
+            "/iasm/sources",
+            "/iasm/source_poses"
+        ]
+    );
+    for m in &msgs {
+        assert_eq!(
+            (m.schema_encoding.as_str(), m.encoding.as_str()),
+            ("ros2msg", "cdr")
+        );
+        // The last of 20 stops, one second apart.
+        assert_eq!(m.log_time, 19_000_000_000);
+        // /map is offered transient local (durability 1), the rest volatile (2).
+        let durability = if m.topic == "/map" {
+            "durability: 1"
+        } else {
+            "durability: 2"
+        };
+        assert!(
+            m.qos.contains(durability) && m.qos.contains("reliability: 1"),
+            "{}",
+            m.qos
+        );
+    }
+    let by = |t: &str| msgs.iter().find(|m| m.topic == t).unwrap();
+
+    // The grid, decoded by the bag reader: the PGM's cells, rows from the bottom.
+    assert_eq!(by("/map").schema, "nav_msgs/msg/OccupancyGrid");
+    let g = bag::msg::grid(bag::msg::Encoding::Cdr, &by("/map").data).unwrap();
+    assert_eq!(
+        (g.frame_id.as_str(), g.width, g.height, g.resolution),
+        ("map", 160, 120, 0.05)
+    );
+    assert!((g.origin.x + 1.0).abs() < 1e-12 && (g.origin.y + 3.0).abs() < 1e-12);
+    let cell = |x: f64, y: f64| {
+        let (i, r) = (((x + 1.0) / 0.05) as usize, ((y + 3.0) / 0.05) as usize);
+        g.data[r * 160 + i]
+    };
+    assert_eq!(cell(3.0, 1.0), 100);
+    assert_eq!(cell(3.0, 0.4), 0);
+    assert_eq!(cell(-0.5, 2.5), -1);
+    assert_eq!(cell(-0.5, 1.9), 0);
+    assert_eq!(g.data.iter().filter(|&&c| c == 100).count(), 4 * 20);
+    assert_eq!(g.data.iter().filter(|&&c| c == -1).count(), 20 * 20);
+
+    // The sources for programs: the JSON's, in its order.
+    let poses = PoseArray::from_cdr(&by("/iasm/source_poses").data).unwrap();
+    assert_eq!(poses.header.frame_id, "map");
+    assert_eq!(poses.poses.len(), 3);
+    for (p, s) in poses.poses.iter().zip(sources) {
+        assert!((p.position.x - f(&s["x"])).abs() < 1e-12, "{p:?} {s}");
+        assert!((p.position.y - f(&s["y"])).abs() < 1e-12, "{p:?} {s}");
+    }
+
+    // Markers: a DELETEALL, then per source a sphere, its 2-sigma ellipse and a label.
+    let markers = MarkerArray::from_cdr(&by("/iasm/sources").data)
+        .unwrap()
+        .markers;
+    assert_eq!(markers[0].action, Marker::DELETEALL);
+    for (k, s) in sources.iter().enumerate() {
+        let find = |ns: &str| {
+            markers
+                .iter()
+                .find(|m| m.ns == ns && m.id == k as i32)
+                .unwrap_or_else(|| panic!("{ns} {k}"))
+        };
+        let (x, y) = (f(&s["x"]), f(&s["y"]));
+        let sphere = find("sources");
+        assert_eq!(
+            (sphere.kind, sphere.header.frame_id.as_str()),
+            (Marker::SPHERE, "map")
+        );
+        assert!((sphere.pose.position.x - x).abs() < 1e-12);
+        assert!((sphere.pose.position.y - y).abs() < 1e-12);
+        let label = find("labels");
+        assert_eq!(
+            label.text,
+            format!("s{}: {} DoAs", k + 1, s["observations"])
+        );
+        // The ellipse's diameters are 4 sigma along its axes: R diag((a/4)², (b/4)²) Rᵀ is
+        // the JSON's covariance.
+        let e = find("ellipses");
+        assert_eq!(e.kind, Marker::CYLINDER);
+        let phi = e.pose.orientation.to_yaw();
+        let (a, b) = ((e.scale.x / 4.0).powi(2), (e.scale.y / 4.0).powi(2));
+        let (c, sn) = (phi.cos(), phi.sin());
+        let cov = [
+            [a * c * c + b * sn * sn, (a - b) * c * sn],
+            [(a - b) * c * sn, a * sn * sn + b * c * c],
+        ];
+        let want = &s["covariance"];
+        for i in 0..2 {
+            for j in 0..2 {
+                let w = f(&want[i][j]);
+                assert!(
+                    (cov[i][j] - w).abs() <= 1e-9 * (1.0 + w.abs()),
+                    "{k}: {cov:?} {want}"
+                );
+            }
+        }
+    }
+
+    // The path: the pose table's stops, with headings, a second apart.
+    let path = RosPath::from_cdr(&by("/iasm/path").data).unwrap();
+    let stops = drive();
+    assert_eq!(path.poses.len(), stops.len());
+    for (k, (p, &(x, y, th))) in path.poses.iter().zip(&stops).enumerate() {
+        assert_eq!((p.pose.position.x, p.pose.position.y), (x, y));
+        assert!(ssl::wrap_deg(p.pose.orientation.to_yaw().to_degrees() - th).abs() < 1e-9);
+        assert_eq!(p.header.stamp.ns(), k as i64 * 1_000_000_000);
+    }
+
+    // The rays: per stop, one segment per DoA from the robot, 5 m long, pointing at a
+    // true source (the table's DoAs are the exact bearings).
+    let rays = MarkerArray::from_cdr(&by("/iasm/doas").data)
+        .unwrap()
+        .markers;
+    assert_eq!(rays.len(), stops.len());
+    for (k, (m, &(x, y, _))) in rays.iter().zip(&stops).enumerate() {
+        assert_eq!(
+            (m.kind, m.id, m.ns.as_str()),
+            (Marker::LINE_LIST, k as i32, "doas")
+        );
+        assert_eq!(m.points.len(), 2 * TRUTH.len());
+        for (pair, s) in m.points.chunks(2).zip(&TRUTH) {
+            assert_eq!((pair[0].x, pair[0].y), (x, y));
+            let (dx, dy) = (pair[1].x - x, pair[1].y - y);
+            assert!((dx.hypot(dy) - 5.0).abs() < 1e-9);
+            let miss =
+                ssl::wrap_deg(dy.atan2(dx).to_degrees() - (s[1] - y).atan2(s[0] - x).to_degrees());
+            assert!(miss.abs() < 0.01, "stop {k}: {miss}");
+        }
+    }
+}
+
+#[test]
+fn a_replays_mcap_grows_the_map_one_stamped_update_per_stop() {
+    let dir = tempdir();
+    let root = path(&dir, "ds");
+    audio_dataset(&root, &AUDIO_TRUTH);
+    let (out, file) = (path(&dir, "w.json"), path(&dir, "w.mcap"));
+    let o = iasm(&[
+        "watch",
+        arg(&root),
+        "--replay",
+        "--num",
+        "2",
+        "--seed",
+        "3",
+        "--out",
+        arg(&out),
+        "--mcap",
+        arg(&file),
+    ]);
+    assert!(o.status.success(), "{}", show(&o));
+    let msgs = read_mcap(&file);
+    // The grid once; every other topic once per stop and once for the final map.
+    assert_eq!(msgs.iter().filter(|m| m.topic == "/map").count(), 1);
+    let paths: Vec<&Read> = msgs.iter().filter(|m| m.topic == "/iasm/path").collect();
+    assert_eq!(paths.len(), 21);
+    for (k, m) in paths.iter().enumerate() {
+        assert_eq!(m.log_time, k as u64 * 1_000_000_000);
+        let p = RosPath::from_cdr(&m.data).unwrap();
+        assert_eq!(p.poses.len(), (k + 1).min(20));
+    }
+    // The last update is the final map the JSON holds.
+    let fin = json_file(&out);
+    assert_eq!(fin["frame_id"], "map");
+    let last = msgs
+        .iter()
+        .rev()
+        .find(|m| m.topic == "/iasm/source_poses")
+        .unwrap();
+    let poses = PoseArray::from_cdr(&last.data).unwrap();
+    let want = sources_of(&fin);
+    assert_eq!(poses.poses.len(), want.len());
+    for (p, s) in poses.poses.iter().zip(&want) {
+        // serde_json's float reading may differ in the last bit.
+        assert!((p.position.x - s[0]).abs() < 1e-12 && (p.position.y - s[1]).abs() < 1e-12);
+    }
+}
+
+#[test]
+fn an_mcap_that_cannot_be_written_is_a_clear_error() {
+    let dir = tempdir();
+    let root = path(&dir, "ds");
+    mapping_dataset(&root, &TRUTH, &drive());
+    let o = iasm(&[
+        "map",
+        "--dataset",
+        arg(&root),
+        "--doas",
+        arg(&root.join("doas.csv")),
+        "--mcap",
+        arg(&root),
+    ]);
+    assert_clear_error(&o, &["is a folder"]);
+}
