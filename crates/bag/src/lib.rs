@@ -21,6 +21,7 @@
 
 pub mod error;
 pub mod format;
+pub mod live;
 pub mod msg;
 pub mod ros2;
 pub mod run;

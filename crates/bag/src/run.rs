@@ -217,7 +217,7 @@ type Raw = Vec<(i64, Vec<u8>)>;
 
 /// An audio topic as read: each message's receipt time, stamp and length in bytes, and
 /// their samples end to end.
-#[derive(Default)]
+#[derive(Clone, Default)]
 struct AudioRaw {
     msgs: Vec<(i64, Option<i64>, usize)>,
     bytes: Vec<u8>,
@@ -307,19 +307,50 @@ pub fn read_file(path: &std::path::Path, options: &ReadOptions) -> Result<Run> {
 
 /// What a scan keeps: the audio topics' samples, the last message of each occupancy grid,
 /// every message of the other topics of a kind [`msg`] reads.
-#[derive(Default)]
-struct Kept {
+#[derive(Clone, Default)]
+pub(crate) struct Kept {
     raw: HashMap<String, Raw>,
     audio: HashMap<String, AudioRaw>,
     encodings: HashMap<String, Encoding>,
+    kinds: HashMap<String, Kind>,
 }
 
 impl Kept {
-    fn take(&mut self, m: &format::Message<'_>, options: &ReadOptions) -> Result<()> {
+    /// Forgets what a run that starts at `cutoff_ns` does not need: audio messages
+    /// received before it, and of each pose topic's messages before it all but the last
+    /// (a localiser that publishes only when the robot moves may have said its last word
+    /// long before); transforms before `cutoff_ns - keep_tf_ns`.
+    pub(crate) fn forget_before(&mut self, cutoff_ns: i64, keep_tf_ns: i64) {
+        for raw in self.audio.values_mut() {
+            let n = raw.msgs.partition_point(|m| m.0 < cutoff_ns);
+            let n = n.min(raw.msgs.len().saturating_sub(1));
+            let bytes: usize = raw.msgs[..n].iter().map(|m| m.2).sum();
+            raw.msgs.drain(..n);
+            raw.bytes.drain(..bytes);
+        }
+        for (topic, raw) in &mut self.raw {
+            let tf = self.kinds.get(topic) == Some(&Kind::Tf);
+            if tf && topic.ends_with("_static") {
+                // Sent once, latched: the robot's fixed frames.
+                continue;
+            }
+            let cut = if tf {
+                cutoff_ns.saturating_sub(keep_tf_ns)
+            } else {
+                cutoff_ns
+            };
+            let n = raw.partition_point(|m| m.0 < cut);
+            let n = if tf { n } else { n.saturating_sub(1) };
+            raw.drain(..n);
+        }
+    }
+
+    pub(crate) fn take(&mut self, m: &format::Message<'_>, options: &ReadOptions) -> Result<()> {
         let topic = &m.connection.topic;
         let kind = Kind::of(&m.connection.msg_type);
-        if kind.is_some() {
+        if let Some(k) = kind {
             self.encodings.insert(topic.clone(), m.connection.encoding);
+            self.kinds.insert(topic.clone(), k);
         }
         match kind {
             Some(kind)
@@ -372,11 +403,12 @@ impl Kept {
     }
 }
 
-fn assemble(summary: &Summary, kept: Kept, options: &ReadOptions) -> Result<Run> {
+pub(crate) fn assemble(summary: &Summary, kept: Kept, options: &ReadOptions) -> Result<Run> {
     let Kept {
         raw: kept,
         audio: mut audio_raw,
         encodings,
+        ..
     } = kept;
     let encoding = |topic: &str| encodings.get(topic).copied().unwrap_or(Encoding::Ros1);
     let start_ns = summary.spans.values().map(|s| s.0).min().unwrap_or(0);

@@ -620,3 +620,49 @@ fn an_mcap_chunk_whose_checksum_fails_is_refused() {
         "{e}"
     );
 }
+
+/// A run fed to [`bag::live::Recorder`] message by message, asking for finished stops
+/// after each, hands on the stops the whole bag has, each once, as soon as the robot has
+/// left it (the first while the robot drives, at 1.2-1.8 s; the last only when the run
+/// ends), with the same pose and audio.
+#[test]
+fn a_run_fed_live_gives_each_stop_once_as_soon_as_the_robot_leaves_it() {
+    for name in ["run_ros2", "run_audiostamped.mcap", "run_zstd.mcap"] {
+        let whole = bag::read_file(&fixture(name), &ReadOptions::default()).unwrap();
+        let want = whole.stops(&StopOptions::default()).unwrap();
+        assert_eq!(want.len(), 2, "{name}");
+        let mut live = bag::live::Recorder::new(ReadOptions::default());
+        let mut got: Vec<(i64, bag::live::LiveStop)> = Vec::new();
+        bag::ros2::scan_files(&fixture(name), |m| {
+            live.push(&m.connection.topic, &m.connection.msg_type, m.time_ns, m.data)
+                .unwrap();
+            if live.run().is_ok() {
+                for s in live.finished_stops(&StopOptions::default(), false).unwrap() {
+                    got.push((m.time_ns, s));
+                }
+            }
+            Ok(())
+        })
+        .unwrap();
+        assert_eq!(got.len(), 1, "{name}: only the first stop is left while recording");
+        let t0 = whole.start_ns;
+        let handed = (got[0].0 - t0) as f64 * 1e-9;
+        assert!((1.2..1.9).contains(&handed), "{name}: handed on at {handed} s");
+        got.extend(
+            live.finished_stops(&StopOptions::default(), true)
+                .unwrap()
+                .into_iter()
+                .map(|s| (0, s)),
+        );
+        assert_eq!(got.len(), 2, "{name}");
+        for ((_, g), w) in got.iter().zip(&want) {
+            assert_eq!(g.run_start_ns, t0);
+            assert_eq!(g.stop.pose, w.pose, "{name}");
+            // Times on the clock of the audio left after the first stop: equal to rounding.
+            assert_abs_diff_eq!(g.stop.listen_s.0, w.listen_s.0, epsilon = 1e-9);
+            assert_abs_diff_eq!(g.stop.listen_s.1, w.listen_s.1, epsilon = 1e-9);
+            assert_eq!(g.audio, whole.stop_audio(w), "{name}");
+            assert_eq!(g.sample_rate, 8000);
+        }
+    }
+}
