@@ -10,6 +10,18 @@ are padded with low noise), so that `iasm bag` then `iasm map` can be compared w
 
     pip install rosbags==0.11.9 scipy
     python3 scripts/dataset_to_bag.py DATASET OUT.bag [--drive 1.0]
+
+With --ros2, OUT is a ROS 2 bag (MCAP storage, CDR; a folder, or with OUT ending in .mcap
+one MCAP file in zstd chunks, as `ros2 bag record` compresses them) as a ROS 2 robot records it:
+audio_common_msgs/msg/AudioStamped on /audio as the ROS 2 audio_common's
+audio_capturer_node publishes it (int16 samples, each buffer stamped with its last
+sample's time), nav_msgs/msg/Odometry on /odom, and the data set's map as
+nav_msgs/msg/OccupancyGrid on /map (frame `odom`, the poses' frame, sent once at the
+start). fixtures/bags/sim_run.mcap was made so, from the scene in fixtures/bags/sim/:
+
+    pip install rosbags==0.11.9 scipy mcap zstandard
+    iasm simulate fixtures/bags/sim/two_talkers_six_stops.toml --out /tmp/sim6
+    python3 scripts/dataset_to_bag.py /tmp/sim6 fixtures/bags/sim_run.mcap --ros2 --drive 0.4
 """
 
 import argparse
@@ -34,6 +46,7 @@ def main():
     ap.add_argument("dataset")
     ap.add_argument("out")
     ap.add_argument("--drive", type=float, default=1.0, help="seconds between stops")
+    ap.add_argument("--ros2", action="store_true", help="a ROS 2 bag folder (module docs)")
     ap.add_argument("--stamped", action="store_true",
                     help="AudioDataStamped, each buffer stamped with its last sample's time "
                          "(else AudioData, timed by its receipt 2 ms later)")
@@ -79,6 +92,9 @@ def main():
         p = poses[-1]
         return p["x"], p["y"], math.radians(p["theta_deg"])
 
+    if a.ros2:
+        write_ros2(a, d, audio, fs, ch, total, pose_at)
+        return
     ts = typestore()
     T = ts.types
     out = Path(a.out)
@@ -113,6 +129,94 @@ def main():
         for ns, c, data in sorted(events, key=lambda e: e[0]):
             w.write(c, ns, data)
     print(f"{out}: {len(clips)} stops, {total:.1f} s, {os.path.getsize(out)} bytes")
+
+
+def read_map(d):
+    """The data set's map/*.yaml and its PGM as (resolution, origin, rows from the bottom
+    as ROS occupancy values), or None."""
+    import re
+    yamls = sorted((d / "map").glob("*.yaml"))
+    if not yamls:
+        return None
+    text = yamls[0].read_text()
+    res = float(re.search(r"resolution:\s*([0-9.eE+-]+)", text).group(1))
+    origin = [float(v) for v in re.search(r"origin:\s*\[([^\]]*)\]", text).group(1).split(",")]
+    image = re.search(r"image:\s*(\S+)", text).group(1)
+    raw = (yamls[0].parent / image).read_bytes()
+    parts = raw.split(maxsplit=4)
+    w, h = int(parts[1]), int(parts[2])
+    px = np.frombuffer(parts[4][: w * h], dtype=np.uint8).reshape(h, w)[::-1]
+    occ = np.where(px <= 50, 100, np.where(px >= 250, 0, -1)).astype(np.int8)
+    return res, origin, w, h, occ.reshape(-1)
+
+
+def write_ros2(a, d, audio, fs, ch, total, pose_at):
+    from make_bag_fixtures import AUDIO_STAMPED_DEFS, stamp
+    from rosbags.rosbag2 import StoragePlugin
+    from rosbags.rosbag2 import Writer as Writer2
+    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+    ts = get_typestore(Stores.ROS2_JAZZY)
+    types = {}
+    for name, text in AUDIO_STAMPED_DEFS.items():
+        types.update(get_types_from_msg(text, name))
+    ts.register(types)
+    T = ts.types
+    import shutil
+    import tempfile
+    final = Path(a.out)
+    single = final.suffix == ".mcap"
+    out = Path(tempfile.mkdtemp()) / "bag" if single else final
+    if out.exists():
+        shutil.rmtree(out)
+    empty = lambda dt: np.zeros(0, dtype=dt)
+    with Writer2(out, version=9, storage_plugin=StoragePlugin.MCAP) as w:
+        ca = w.add_connection("/audio", "audio_common_msgs/msg/AudioStamped", typestore=ts)
+        co = w.add_connection("/odom", "nav_msgs/msg/Odometry", typestore=ts)
+        events = []
+        m = read_map(d)
+        if m is not None:
+            res, origin, gw, gh, data = m
+            cm = w.add_connection("/map", "nav_msgs/msg/OccupancyGrid", typestore=ts)
+            P, Pt = T["geometry_msgs/msg/Pose"], T["geometry_msgs/msg/Point"]
+            info = T["nav_msgs/msg/MapMetaData"](
+                map_load_time=stamp(ts, T0), resolution=res, width=gw, height=gh,
+                origin=P(position=Pt(x=origin[0], y=origin[1], z=0.0), orientation=quat(ts, 0.0)))
+            grid = T["nav_msgs/msg/OccupancyGrid"](header=header(ts, T0, "odom"), info=info, data=data)
+            events.append((T0, cm, ts.serialize_cdr(grid, "nav_msgs/msg/OccupancyGrid")))
+        buf = fs // 10
+        for k in range(0, len(audio), buf):
+            blk = audio[k:k + buf]
+            ns = T0 + round((k + len(blk)) / fs * 1e9)
+            info = T["audio_common_msgs/msg/AudioInfo"](format=8, channels=ch, rate=fs, chunk=len(blk))
+            data = T["audio_common_msgs/msg/AudioData"](
+                float32_data=empty(np.float32), int32_data=empty(np.int32),
+                int16_data=blk.astype(np.int16).reshape(-1), int8_data=empty(np.int8),
+                uint8_data=empty(np.uint8))
+            msg = T["audio_common_msgs/msg/AudioStamped"](
+                header=header(ts, ns, "mic"), audio=T["audio_common_msgs/msg/Audio"](info=info, audio_data=data))
+            events.append((ns + 2_000_000, ca, ts.serialize_cdr(msg, "audio_common_msgs/msg/AudioStamped")))
+        V = T["geometry_msgs/msg/Vector3"]
+        for j in range(int(total * 20) + 1):
+            t = j / 20
+            x, y, th = pose_at(t)
+            ns = T0 + round(t * 1e9)
+            P = T["geometry_msgs/msg/Pose"](position=T["geometry_msgs/msg/Point"](x=float(x), y=float(y), z=0.0), orientation=quat(ts, th))
+            msg = T["nav_msgs/msg/Odometry"](
+                header=header(ts, ns, "odom"), child_frame_id="base_link",
+                pose=T["geometry_msgs/msg/PoseWithCovariance"](pose=P, covariance=np.zeros(36)),
+                twist=T["geometry_msgs/msg/TwistWithCovariance"](twist=T["geometry_msgs/msg/Twist"](linear=V(x=0.0, y=0.0, z=0.0), angular=V(x=0.0, y=0.0, z=0.0)), covariance=np.zeros(36)))
+            events.append((ns + 1_000_000, co, ts.serialize_cdr(msg, "nav_msgs/msg/Odometry")))
+        for ns, c, data in sorted(events, key=lambda e: e[0]):
+            w.write(c, ns, data)
+    if single:
+        from make_bag_fixtures import recompress
+        recompress(next(out.glob("*.mcap")), final)
+        shutil.rmtree(out.parent)
+        size = final.stat().st_size
+    else:
+        size = sum(f.stat().st_size for f in out.iterdir())
+    print(f"{final}: {total:.1f} s, {size} bytes")
 
 
 if __name__ == "__main__":

@@ -261,6 +261,15 @@ def recompress(src, dst, drop=()):
         w.finish()
 
 
+# The ROS 2 audio_common's messages (audio_capturer_node's).
+AUDIO_STAMPED_DEFS = {
+    "audio_common_msgs/msg/AudioInfo": "int32 format\nint32 channels\nint32 rate\nint32 chunk\n",
+    "audio_common_msgs/msg/AudioData": "float32[] float32_data\nint32[] int32_data\nint16[] int16_data\nint8[] int8_data\nuint8[] uint8_data\n",
+    "audio_common_msgs/msg/Audio": "audio_common_msgs/AudioInfo info\naudio_common_msgs/AudioData audio_data\n",
+    "audio_common_msgs/msg/AudioStamped": "std_msgs/Header header\naudio_common_msgs/Audio audio\n",
+}
+
+
 def write_audiostamped(dst):
     """`run_audiostamped.mcap` (module docs), through a temporary ROS 2 bag."""
     import shutil

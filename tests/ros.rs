@@ -308,3 +308,78 @@ fn an_mcap_that_cannot_be_written_is_a_clear_error() {
     ]);
     assert_clear_error(&o, &["is a folder"]);
 }
+
+/// The robot run of `fixtures/bags/sim_run.mcap` (six stops past two talkers, recorded as
+/// a ROS 2 robot records it) fed to the live mapper message by message, as the node
+/// receives them: each stop is mapped once the robot has left it (the last when the run
+/// ends), and the final map is the one `iasm bag --out` then `iasm map` makes of the same
+/// stops with the same seed.
+#[test]
+fn the_live_mapper_fed_a_bag_maps_what_bag_then_map_maps() {
+    let bag_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/bags/sim_run.mcap");
+    let mut live = iasm::live::LiveMapper::new(
+        iasm::settings::Settings::default(),
+        bag::ReadOptions::default(),
+        bag::StopOptions::default(),
+        5,
+    )
+    .unwrap();
+    let mut mapped_at = Vec::new();
+    bag::ros2::scan_files(&bag_path, |m| {
+        assert_eq!(
+            live.push(
+                &m.connection.topic,
+                &m.connection.msg_type,
+                m.time_ns,
+                m.data
+            ),
+            None
+        );
+        let (updates, _) = live.step(false);
+        mapped_at.extend(updates.iter().map(|u| (u.record.stop, m.time_ns)));
+        Ok(())
+    })
+    .unwrap();
+    // Stops 1-5 while recording, each before the robot reached the next (1.5 s apart).
+    assert_eq!(
+        mapped_at.iter().map(|s| s.0).collect::<Vec<_>>(),
+        [1, 2, 3, 4, 5]
+    );
+    let (last, warnings) = live.step(true);
+    assert_eq!(last.len(), 1, "{warnings:?}");
+    let fin = live.finish().unwrap();
+    assert!(live.notes().is_empty(), "{:?}", live.notes());
+
+    let dir = tempdir();
+    let ds = path(&dir, "ds");
+    let o = iasm(&["bag", arg(&bag_path), "--out", arg(&ds)]);
+    assert!(o.status.success(), "{}", show(&o));
+    let batch = json(&iasm(&[
+        "map",
+        "--dataset",
+        arg(&ds),
+        "--seed",
+        "5",
+        "--json",
+    ]));
+    let want = sources_of(&batch);
+    assert_eq!(fin.sources.len(), 2);
+    assert_eq!(want.len(), 2);
+    for (s, w) in fin.sources.iter().zip(&want) {
+        assert!((s.x - w[0]).hypot(s.y - w[1]) < 1e-9, "{s:?} {w:?}");
+    }
+    // The stops are the bag's: the pose table `iasm bag` wrote.
+    let poses = std::fs::read_to_string(ds.join("pose/poses.csv")).unwrap();
+    assert_eq!(live.stops().len(), poses.lines().count() - 1);
+    // And both are near the talkers the scene placed at (2.0, 4.0) and (4.5, 1.0).
+    let truth = [[2.0, 4.0], [4.5, 1.0]];
+    for t in truth {
+        assert!(
+            fin.sources
+                .iter()
+                .any(|s| (s.x - t[0]).hypot(s.y - t[1]) < 0.1),
+            "{:?}",
+            fin.sources
+        );
+    }
+}

@@ -225,3 +225,47 @@ fn grid_pgm(grid: &bag::msg::Grid) -> Vec<u8> {
 fn stop_file(i: usize, width: usize) -> String {
     format!("stop{:0width$}.wav", i + 1)
 }
+
+/// The robot's occupancy grid as the mapper's map: the cells `iasm bag --out` writes as a
+/// PGM and `iasm map` reads back from it (free to 25 %, occupied from 65 %, the rest and
+/// the unknown unknown), so that a live map and one made from the written data set search
+/// the same cells.
+///
+/// # Errors
+/// A grid whose cells do not fill it, or of no positive resolution.
+pub fn grid_map(grid: &bag::msg::Grid) -> Result<asm::map::OccupancyMap> {
+    use asm::map::Cell;
+    ensure!(
+        grid.width > 0 && grid.data.len() == grid.width * grid.height,
+        "an occupancy grid of {} x {} cells holds {}",
+        grid.width,
+        grid.height,
+        grid.data.len()
+    );
+    // As the YAML gives it: the f32's shortest decimal, read as f64.
+    let resolution: f64 = grid.resolution.to_string().parse().unwrap_or(f64::NAN);
+    ensure!(
+        resolution.is_finite() && resolution > 0.0,
+        "an occupancy grid of resolution {}",
+        grid.resolution
+    );
+    let cells = grid
+        .data
+        .chunks_exact(grid.width)
+        .rev()
+        .flat_map(|row| {
+            row.iter().map(|&v| match v {
+                0..=25 => Cell::Free,
+                65.. => Cell::Occupied,
+                _ => Cell::Unknown,
+            })
+        })
+        .collect();
+    Ok(asm::map::OccupancyMap::new(
+        grid.width,
+        grid.height,
+        resolution,
+        [grid.origin.x, grid.origin.y],
+        cells,
+    ))
+}

@@ -31,6 +31,7 @@ pub mod compare;
 pub mod dataset;
 pub mod explain;
 pub mod figure;
+pub mod live;
 pub mod online;
 pub mod output;
 pub mod pipeline;

@@ -501,7 +501,7 @@ pub struct SurveyInputs {
 pub const OPEN_MARGIN_M: f64 = 3.0;
 
 /// The grid of an open region (m): as fine as the ROS maps robots build.
-const OPEN_RESOLUTION_M: f64 = 0.05;
+pub const OPEN_RESOLUTION_M: f64 = 0.05;
 
 /// What one robot run gives the mapper.
 #[derive(Clone, Debug)]

@@ -153,7 +153,7 @@ impl Recorder {
             let left = stop.still_s.1 < last_pose;
             let heard = audio_end >= stop.still_s.1 - options.end_margin_s
                 || last_pose > stop.still_s.1 + AUDIO_WAIT_S;
-            if !all && !(left && heard) {
+            if !(all || left && heard) {
                 break;
             }
             self.next_after_ns = abs(stop.still_s.1);

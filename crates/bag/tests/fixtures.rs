@@ -634,8 +634,13 @@ fn a_run_fed_live_gives_each_stop_once_as_soon_as_the_robot_leaves_it() {
         let mut live = bag::live::Recorder::new(ReadOptions::default());
         let mut got: Vec<(i64, bag::live::LiveStop)> = Vec::new();
         bag::ros2::scan_files(&fixture(name), |m| {
-            live.push(&m.connection.topic, &m.connection.msg_type, m.time_ns, m.data)
-                .unwrap();
+            live.push(
+                &m.connection.topic,
+                &m.connection.msg_type,
+                m.time_ns,
+                m.data,
+            )
+            .unwrap();
             if live.run().is_ok() {
                 for s in live.finished_stops(&StopOptions::default(), false).unwrap() {
                     got.push((m.time_ns, s));
@@ -644,10 +649,17 @@ fn a_run_fed_live_gives_each_stop_once_as_soon_as_the_robot_leaves_it() {
             Ok(())
         })
         .unwrap();
-        assert_eq!(got.len(), 1, "{name}: only the first stop is left while recording");
+        assert_eq!(
+            got.len(),
+            1,
+            "{name}: only the first stop is left while recording"
+        );
         let t0 = whole.start_ns;
         let handed = (got[0].0 - t0) as f64 * 1e-9;
-        assert!((1.2..1.9).contains(&handed), "{name}: handed on at {handed} s");
+        assert!(
+            (1.2..1.9).contains(&handed),
+            "{name}: handed on at {handed} s"
+        );
         got.extend(
             live.finished_stops(&StopOptions::default(), true)
                 .unwrap()
