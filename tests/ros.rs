@@ -383,3 +383,125 @@ fn the_live_mapper_fed_a_bag_maps_what_bag_then_map_maps() {
         );
     }
 }
+
+/// Whether this process may make a network namespace of its own (root, or a user namespace
+/// allowed): the DDS tests run only inside one, so that no packet leaves the machine.
+#[cfg(feature = "ros2")]
+fn own_network_namespace() -> Result<(), String> {
+    match std::process::Command::new("unshare")
+        .args(["--net", "true"])
+        .output()
+    {
+        Ok(o) if o.status.success() => Ok(()),
+        Ok(o) => Err(String::from_utf8_lossy(&o.stderr).trim().to_owned()),
+        Err(e) => Err(format!("unshare: {e}")),
+    }
+}
+
+/// The node on a robot: inside a network namespace of its own (only `lo`, multicast on it),
+/// `iasm ros2-play` publishes `fixtures/bags/sim_run.mcap` as the robot published it
+/// (AudioStamped, Odometry, a transient-local OccupancyGrid; stamps moved to now), `iasm
+/// ros2` maps it live and, on Ctrl-C, publishes and writes its final map; the player,
+/// subscribed to `/iasm/source_poses`, hears sources within 0.02 m of what `iasm bag --out`
+/// then `iasm map` make of the same bag with the same seed.
+#[cfg(feature = "ros2")]
+#[test]
+fn ros2_node_maps_a_robot_run_live_as_map_maps_the_bag() {
+    if let Err(why) = own_network_namespace() {
+        eprintln!(
+            "skipped: no network namespace of its own can be made here ({why}); DDS must not reach the host's network"
+        );
+        return;
+    }
+    let dir = tempdir();
+    let bag_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/bags/sim_run.mcap");
+    let script = r#"
+set -u
+ip link set lo up multicast on
+ip route add 224.0.0.0/4 dev lo
+cd "$WORK"
+"$IASM" ros2 --seed 5 --out node.json --mcap node.mcap > node.log 2> node.err &
+NODE=$!
+"$IASM" ros2-play "$BAG" --listen heard.json --linger 4 > play.log 2> play.err &
+PLAY=$!
+for i in $(seq 1 600); do grep -q '^played' play.log && break; sleep 0.1; done
+sleep 0.5
+kill -INT $NODE
+wait $NODE; echo "node $?"
+wait $PLAY; echo "play $?"
+"#;
+    let o = std::process::Command::new("unshare")
+        .args(["--net", "bash", "-c", script])
+        .env("IASM", env!("CARGO_BIN_EXE_iasm"))
+        .env("BAG", &bag_path)
+        .env("WORK", dir.path())
+        .output()
+        .unwrap();
+    let read = |n: &str| std::fs::read_to_string(dir.path().join(n)).unwrap_or_default();
+    let logs = format!(
+        "{}\nnode:\n{}{}\nplay:\n{}{}",
+        show(&o),
+        read("node.log"),
+        read("node.err"),
+        read("play.log"),
+        read("play.err")
+    );
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("node 0") && out.contains("play 0"), "{logs}");
+    // Every stop mapped live, the last on Ctrl-C.
+    assert_eq!(
+        read("node.log")
+            .lines()
+            .filter(|l| l.starts_with("stop "))
+            .count(),
+        6,
+        "{logs}"
+    );
+
+    let ds = path(&dir, "ds");
+    let o = iasm(&["bag", arg(&bag_path), "--out", arg(&ds)]);
+    assert!(o.status.success(), "{}", show(&o));
+    let want = sources_of(&json(&iasm(&[
+        "map",
+        "--dataset",
+        arg(&ds),
+        "--seed",
+        "5",
+        "--json",
+    ])));
+    assert_eq!(want.len(), 2);
+    let close = |got: &[[f64; 2]], what: &str| {
+        assert_eq!(got.len(), want.len(), "{what}: {got:?}\n{logs}");
+        for (g, w) in got.iter().zip(&want) {
+            let d = (g[0] - w[0]).hypot(g[1] - w[1]);
+            assert!(d < 0.02, "{what}: {g:?} is {d} m from {w:?}\n{logs}");
+        }
+    };
+    close(
+        &sources_of(&json_file(&dir.path().join("heard.json"))),
+        "heard on /iasm/source_poses",
+    );
+    let node = json_file(&dir.path().join("node.json"));
+    assert_eq!(
+        (node["final_map"].as_bool(), node["frame_id"].as_str()),
+        (Some(true), Some("map"))
+    );
+    close(&sources_of(&node), "the node's final map JSON");
+    // The MCAP of the live run: one update per stop and the final map, all in frame map.
+    let msgs = read_mcap(&dir.path().join("node.mcap"));
+    let updates: Vec<&Read> = msgs
+        .iter()
+        .filter(|m| m.topic == "/iasm/source_poses")
+        .collect();
+    assert_eq!(updates.len(), 7, "{logs}");
+    let last = PoseArray::from_cdr(&updates[6].data).unwrap();
+    assert_eq!(last.header.frame_id, "map");
+    close(
+        &last
+            .poses
+            .iter()
+            .map(|p| [p.position.x, p.position.y])
+            .collect::<Vec<_>>(),
+        "the MCAP's last update",
+    );
+}

@@ -92,6 +92,65 @@ pub enum Command {
     /// still, one WAV and one pose each, in the published layout for ssl, map and eval;
     /// without --out, what the bag holds and the stops it finds.
     Bag(BagArgs),
+    /// The live node: subscribes to a ROS 2 robot's audio, poses and map, localises each
+    /// stop as the robot leaves it, and publishes the map (markers, rays, path, poses)
+    /// after every stop; Ctrl-C ends the run with its final map.
+    #[cfg(feature = "ros2")]
+    Ros2(Ros2Args),
+    /// Publish a recorded ROS 2 bag on its topics at its pace, stamps moved to now, as the
+    /// robot published it (to try the node without a robot).
+    #[cfg(feature = "ros2")]
+    Ros2Play(Ros2PlayArgs),
+}
+
+/// `iasm ros2`.
+#[cfg(feature = "ros2")]
+#[derive(Debug, Clone, Args)]
+pub struct Ros2Args {
+    /// The topics, the audio's format and the stop rules (as `iasm bag` takes them).
+    #[command(flatten)]
+    pub run: RunArgs,
+    /// The settings.
+    #[command(flatten)]
+    pub settings: SettingsArgs,
+    /// Seed of the particle filter.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Write the map as JSON here after every stop, and the final map at the end.
+    #[arg(long, value_name = "FILE")]
+    pub out: Option<PathBuf>,
+    /// Write every update to this MCAP file (written when the run ends).
+    #[arg(long, value_name = "FILE")]
+    pub mcap: Option<PathBuf>,
+    /// The DDS domain (ROS_DOMAIN_ID).
+    #[arg(long, env = "ROS_DOMAIN_ID", default_value_t = 0)]
+    pub domain_id: u16,
+    /// The node's name.
+    #[arg(long, default_value = "iasm")]
+    pub node_name: String,
+    /// End the run when no message has arrived for this long (s) [default: only on Ctrl-C].
+    #[arg(long, value_name = "S")]
+    pub until_idle: Option<f64>,
+}
+
+/// `iasm ros2-play`.
+#[cfg(feature = "ros2")]
+#[derive(Debug, Clone, Args)]
+pub struct Ros2PlayArgs {
+    /// The ROS 2 bag (MCAP or SQLite; its folder or one of its files).
+    pub bag: PathBuf,
+    /// The DDS domain (ROS_DOMAIN_ID).
+    #[arg(long, env = "ROS_DOMAIN_ID", default_value_t = 0)]
+    pub domain_id: u16,
+    /// Wait this long (s) for a subscriber on every topic before playing.
+    #[arg(long = "wait", default_value_t = 10.0, value_name = "S")]
+    pub wait_s: f64,
+    /// Listen to the node's /iasm/source_poses and write the last sources heard here (JSON).
+    #[arg(long, value_name = "FILE")]
+    pub listen: Option<PathBuf>,
+    /// With --listen: how long to go on listening after the bag is played (s).
+    #[arg(long = "linger", default_value_t = 5.0, value_name = "S")]
+    pub linger_s: f64,
 }
 
 /// `iasm bag`.
@@ -111,6 +170,29 @@ pub struct BagArgs {
     /// Replace the --out folder even if it is not empty and not an earlier output of iasm.
     #[arg(long)]
     pub force: bool,
+    /// The topics, the audio's format and the stop rules.
+    #[command(flatten)]
+    pub run: RunArgs,
+    /// The microphones that recorded the audio (a preset or an array file), written to
+    /// array.toml so that every command on the data set uses them.
+    #[arg(long)]
+    pub array: Option<String>,
+    /// Which channels of the audio are the array's microphones, in its order, counted from
+    /// 1 (`2-5`); the WAVs hold those [default: every channel].
+    #[arg(long, value_name = "LIST", value_parser = parse_channels)]
+    pub channels: Option<ChannelList>,
+    /// When the robot stood alone, its fans running and nobody else making a sound: from
+    /// START to END seconds in the bag (as the stop table counts them, `3.0-8.5`). That
+    /// audio is written as noise/robot.wav, the recording of the robot's own noise that
+    /// every command then subtracts (see `ssl::noise`), and no stop is taken from it.
+    #[arg(long, value_name = "START-END", value_parser = parse_window)]
+    pub noise_window: Option<(f64, f64)>,
+}
+
+/// How a robot run is read, from a bag or live: which topics, the audio's format when the
+/// run does not say it, and what a stop is.
+#[derive(Debug, Clone, Args)]
+pub struct RunArgs {
     /// The audio topic (audio_common_msgs/AudioData, AudioDataStamped or AudioStamped)
     /// [default: the bag's one audio topic].
     #[arg(long, value_name = "TOPIC")]
@@ -152,14 +234,6 @@ pub struct BagArgs {
         requires = "audio_channels"
     )]
     pub sample_format: String,
-    /// The microphones that recorded the audio (a preset or an array file), written to
-    /// array.toml so that every command on the data set uses them.
-    #[arg(long)]
-    pub array: Option<String>,
-    /// Which channels of the audio are the array's microphones, in its order, counted from
-    /// 1 (`2-5`); the WAVs hold those [default: every channel].
-    #[arg(long, value_name = "LIST", value_parser = parse_channels)]
-    pub channels: Option<ChannelList>,
     /// How far the robot may move within a stop (m).
     #[arg(long, value_name = "M", default_value_t = bag::StopOptions::default().radius_m)]
     pub still_radius: f64,
@@ -175,12 +249,57 @@ pub struct BagArgs {
     /// The shortest stop kept (s of audio after the margins).
     #[arg(long, value_name = "S", default_value_t = bag::StopOptions::default().min_listen_s)]
     pub min_listen: f64,
-    /// When the robot stood alone, its fans running and nobody else making a sound: from
-    /// START to END seconds in the bag (as the stop table counts them, `3.0-8.5`). That
-    /// audio is written as noise/robot.wav, the recording of the robot's own noise that
-    /// every command then subtracts (see `ssl::noise`), and no stop is taken from it.
-    #[arg(long, value_name = "START-END", value_parser = parse_window)]
-    pub noise_window: Option<(f64, f64)>,
+}
+
+impl RunArgs {
+    /// The topics and format to read.
+    ///
+    /// # Errors
+    /// A `--sample-format` that is not one.
+    pub fn read_options(&self) -> anyhow::Result<bag::ReadOptions> {
+        use anyhow::Context;
+        // A topic option: "none" is the empty name, which asks for no topic.
+        let none_is_empty = |t: &str| {
+            if t == "none" {
+                String::new()
+            } else {
+                t.to_owned()
+            }
+        };
+        let format = match (self.audio_channels, self.sample_rate) {
+            (Some(channels), Some(sample_rate)) => Some(bag::AudioFormat {
+                channels,
+                sample_rate,
+                sample: self.sample_format.parse().context("--sample-format")?,
+            }),
+            _ => None,
+        };
+        Ok(bag::ReadOptions {
+            audio_topic: self.audio_topic.clone(),
+            pose_topic: self.pose_topic.clone(),
+            odom_topic: self.odom_topic.as_deref().map(none_is_empty),
+            map_topic: self.map_topic.as_deref().map(none_is_empty),
+            base_frame: self.base_frame.clone(),
+            format,
+        })
+    }
+
+    /// The stop rules, checked.
+    ///
+    /// # Errors
+    /// Options [`bag::StopOptions::validate`] refuses.
+    pub fn stop_options(&self) -> anyhow::Result<bag::StopOptions> {
+        use anyhow::Context;
+        let stops = bag::StopOptions {
+            radius_m: self.still_radius,
+            turn_deg: self.still_turn,
+            settle_s: self.settle,
+            end_margin_s: self.end_margin,
+            min_listen_s: self.min_listen,
+        };
+        stops.validate().context("stop options")?;
+        Ok(stops)
+    }
 }
 
 /// A `--noise-window`: two times in seconds, `START-END` (or `START,END`), START before END.

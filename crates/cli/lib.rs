@@ -69,6 +69,10 @@ pub fn run(cli: &args::Cli) -> anyhow::Result<Outcome> {
             figure,
         } => cmd::demo::run(*seed, png, mcap.as_deref(), figure),
         args::Command::Map(a) => cmd::map::run(a),
+        #[cfg(feature = "ros2")]
+        args::Command::Ros2(a) => cmd::ros2::run(a),
+        #[cfg(feature = "ros2")]
+        args::Command::Ros2Play(a) => cmd::ros2::play(a),
         args::Command::Simulate {
             scene,
             out,

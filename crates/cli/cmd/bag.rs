@@ -13,30 +13,8 @@ use crate::output::replace_dir;
 /// A bag that cannot be read, options refused, no stop found with `--out`, or an output
 /// folder that is refused or cannot be written.
 pub fn run(a: &BagArgs) -> Result<Outcome> {
-    let format = match (a.audio_channels, a.sample_rate) {
-        (Some(channels), Some(sample_rate)) => Some(bag::AudioFormat {
-            channels,
-            sample_rate,
-            sample: a.sample_format.parse().context("--sample-format")?,
-        }),
-        _ => None,
-    };
-    let read = bag::ReadOptions {
-        audio_topic: a.audio_topic.clone(),
-        pose_topic: a.pose_topic.clone(),
-        odom_topic: a.odom_topic.as_deref().map(none_is_empty),
-        map_topic: a.map_topic.as_deref().map(none_is_empty),
-        base_frame: a.base_frame.clone(),
-        format,
-    };
-    let stops = bag::StopOptions {
-        radius_m: a.still_radius,
-        turn_deg: a.still_turn,
-        settle_s: a.settle,
-        end_margin_s: a.end_margin,
-        min_listen_s: a.min_listen,
-    };
-    stops.validate().context("stop options")?;
+    let read = a.run.read_options()?;
+    let stops = a.run.stop_options()?;
     let array = a
         .array
         .as_deref()
@@ -153,11 +131,11 @@ pub fn run(a: &BagArgs) -> Result<Outcome> {
             1 => "only 1 stop".to_string(),
             n => format!("only {n} stops"),
         },
-        a.still_radius,
-        a.still_turn,
-        a.min_listen,
-        a.settle,
-        a.end_margin,
+        a.run.still_radius,
+        a.run.still_turn,
+        a.run.min_listen,
+        a.run.settle,
+        a.run.end_margin,
     );
     let Some(out) = &a.out else {
         if got.stops.len() < 3 {
@@ -191,13 +169,4 @@ pub fn run(a: &BagArgs) -> Result<Outcome> {
         out.display()
     );
     Ok(Outcome::Success)
-}
-
-/// A topic option: "none" is the empty name, which asks for no topic.
-fn none_is_empty(t: &str) -> String {
-    if t == "none" {
-        String::new()
-    } else {
-        t.to_owned()
-    }
 }

@@ -9,6 +9,8 @@ pub mod demo;
 pub mod eval;
 pub mod map;
 pub mod regress;
+#[cfg(feature = "ros2")]
+pub mod ros2;
 pub mod simulate;
 pub mod ssl;
 pub mod watch;
