@@ -54,6 +54,7 @@ impl LiveStop {
 }
 
 /// The messages of a run so far, as a bag.
+#[derive(Clone)]
 pub struct Recorder {
     options: ReadOptions,
     summary: Summary,
