@@ -505,3 +505,83 @@ wait $PLAY; echo "play $?"
         "the MCAP's last update",
     );
 }
+
+/// What a robot gets wrong is a warning and a note, never the end of the run: a message
+/// that is not its type, audio at another sample rate, a second of audio lost in the
+/// middle of a stop. The run goes on and the talkers are mapped from the stops left.
+#[test]
+fn the_live_mapper_warns_of_bad_messages_and_maps_on() {
+    let bag_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/bags/sim_run.mcap");
+    let mut live = iasm::live::LiveMapper::new(
+        iasm::settings::Settings::default(),
+        bag::ReadOptions::default(),
+        bag::StopOptions::default(),
+        5,
+    )
+    .unwrap();
+    let mut warnings = Vec::new();
+    let mut audio = 0usize;
+    let mut first_ns = None;
+    bag::ros2::scan_files(&bag_path, |m| {
+        let t0 = *first_ns.get_or_insert(m.time_ns);
+        let t = (m.time_ns - t0) as f64 * 1e-9;
+        let (topic, ty) = (m.connection.topic.as_str(), m.connection.msg_type.as_str());
+        if ty.ends_with("AudioStamped") {
+            audio += 1;
+            // Stop 3 listens from 3.3 to 3.9 s: a second lost from 3.0 s (a gap).
+            if (3.0..4.0).contains(&t) {
+                return Ok(());
+            }
+            if audio == 20 {
+                // The same buffer at another rate (the AudioStamped's rate field: after the
+                // header's stamp and frame "mic", format and channels).
+                let mut other = m.data.to_vec();
+                let at = 4 + 8 + 4 + 4 + 4 + 4;
+                other[at..at + 4].copy_from_slice(&44_100i32.to_le_bytes());
+                warnings.extend(live.push(topic, ty, m.time_ns, &other));
+                return Ok(());
+            }
+        }
+        if ty.ends_with("Odometry") && (t * 20.0).round() as i64 % 37 == 0 {
+            // Garbage on the pose topic.
+            warnings.extend(live.push(topic, ty, m.time_ns, &[0, 1, 0, 0, 7, 7, 7]));
+        }
+        warnings.extend(live.push(topic, ty, m.time_ns, m.data));
+        warnings.extend(live.step(false).1);
+        Ok(())
+    })
+    .unwrap();
+    warnings.extend(live.step(true).1);
+    let fin = live.finish().unwrap();
+    let notes = live.notes();
+    assert!(
+        notes
+            .iter()
+            .any(|n| n.contains("/odom") && n.contains("times")),
+        "{notes:?}"
+    );
+    assert!(
+        notes
+            .iter()
+            .any(|n| n.contains("/audio") && n.contains("44100")),
+        "{notes:?}"
+    );
+    assert!(
+        warnings
+            .iter()
+            .any(|w| w.contains("/odom (nav_msgs/msg/Odometry) dropped")),
+        "{warnings:?}"
+    );
+    // Stop 3's window crosses the gap: not a stop of 0.5 s of audio; the other five mapped.
+    assert_eq!(live.stops().len(), 5, "{warnings:?}");
+    assert!(live.stops().iter().all(|s| (s.pose.x - 2.6).abs() > 0.1));
+    for t in [[2.0, 4.0], [4.5, 1.0]] {
+        assert!(
+            fin.sources
+                .iter()
+                .any(|s| (s.x - t[0]).hypot(s.y - t[1]) < 0.15),
+            "{:?}",
+            fin.sources
+        );
+    }
+}

@@ -136,6 +136,10 @@ impl LiveMapper {
     ) -> Option<String> {
         match self.recorder.push(topic, msg_type, time_ns, data) {
             Ok(()) => None,
+            // Counted by what is wrong, not by which message.
+            Err(bag::Error::Message { what, .. }) => {
+                Some(self.note(format!("a message of {topic} ({msg_type}) dropped: {what}")))
+            }
             Err(e) => Some(self.note(format!("a message of {topic} dropped: {e}"))),
         }
     }

@@ -13,7 +13,8 @@
 //!
 //! ```
 //! let mut live = bag::live::Recorder::new(bag::ReadOptions::default());
-//! // A message that is not CDR of its type is refused, and the run goes on without it.
+//! // A message that is not CDR of its type is refused as it comes, and the run goes on
+//! // without it.
 //! assert!(live.push("/odom", "nav_msgs/msg/Odometry", 1_000_000_000, &[0, 1, 0, 0]).is_err());
 //! assert!(live.run().is_err()); // no audio yet
 //! ```
@@ -22,7 +23,7 @@ use std::collections::HashMap;
 
 use crate::error::{Error, Result};
 use crate::format::{Connection, Message, Summary};
-use crate::msg::Encoding;
+use crate::msg::{self, Encoding, Kind};
 use crate::run::{Kept, ReadOptions, Run, assemble};
 use crate::stops::{Stop, StopOptions};
 
@@ -104,6 +105,39 @@ impl Recorder {
                 "{topic} carried {} and now {msg_type}",
                 connection.msg_type
             )));
+        }
+        // A bag reader decodes poses, transforms and grids when it assembles the run; here
+        // each is decoded as it comes, so that one bad message is refused alone rather than
+        // making every later run unreadable.
+        let checked = match Kind::of(msg_type) {
+            Some(k) if k.is_pose() => msg::pose(k, Encoding::Cdr, data).and_then(|p| {
+                [p.pose.x, p.pose.y, p.pose.theta]
+                    .iter()
+                    .all(|v| v.is_finite())
+                    .then_some(())
+                    .ok_or_else(|| format!("a pose that is not finite ({:?})", p.pose))
+            }),
+            Some(Kind::Tf) => msg::transforms(Encoding::Cdr, data).and_then(|ts| {
+                ts.iter()
+                    .all(|t| {
+                        [t.pose.x, t.pose.y, t.pose.theta]
+                            .iter()
+                            .all(|v| v.is_finite())
+                    })
+                    .then_some(())
+                    .ok_or_else(|| "a transform that is not finite".to_owned())
+            }),
+            Some(Kind::OccupancyGrid) => msg::grid(Encoding::Cdr, data).map(|_| ()),
+            Some(Kind::AudioInfo) => msg::audio_info(Encoding::Cdr, data).map(|_| ()),
+            _ => Ok(()),
+        };
+        if let Err(what) = checked {
+            return Err(Error::Message {
+                topic: topic.to_owned(),
+                msg_type: msg_type.to_owned(),
+                index: self.summary.counts.get(&id).copied().unwrap_or(0) + 1,
+                what,
+            });
         }
         self.kept.take(
             &Message {
