@@ -728,8 +728,9 @@ mod tests {
             w.u32(5);
             w.string(frame);
             w.string(child);
-            for v in 0..7 {
-                w.f64(f64::from(v));
+            // Translation, then a rotation (the identity).
+            for v in [1.0, 2.0, 0.0, 0.0, 0.0, 0.0, 1.0] {
+                w.f64(v);
             }
         }
         let mut data = w.finish();
