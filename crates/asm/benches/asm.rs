@@ -1,18 +1,18 @@
 //! Benchmarks of the mapper: DBSCAN and one filter step across sizes, and a whole I-ASM
 //! map of an arrangement-II-like scene across particle counts and stop counts.
 //!
-//! `cargo bench -p asm`; figures go to `BENCHMARKS.md`.
+//! `cargo bench -p iasm-asm`; figures go to `BENCHMARKS.md`.
 
 // criterion_group!/criterion_main! generate undocumented items (criterion.rs #774/#775).
 #![allow(missing_docs)]
 
 use std::hint::black_box;
 
-use asm::dbscan::dbscan;
-use asm::map::{Cell, OccupancyMap};
-use asm::pf::{Likelihood, ParticleFilter};
-use asm::{IasmConfig, MapRng, Mapper, Pose, wrap_rad};
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use iasm_asm::dbscan::dbscan;
+use iasm_asm::map::{Cell, OccupancyMap};
+use iasm_asm::pf::{Likelihood, ParticleFilter};
+use iasm_asm::{IasmConfig, MapRng, Mapper, Pose, wrap_rad};
 use rand::{Rng, SeedableRng, rngs::StdRng};
 
 const SEED: u64 = 23;

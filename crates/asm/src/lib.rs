@@ -15,7 +15,7 @@
 //! # Example
 //!
 //! ```
-//! use asm::{IasmConfig, MapRng, Mapper, Pose, map::{Cell, OccupancyMap}, ospa::ospa};
+//! use iasm_asm::{IasmConfig, MapRng, Mapper, Pose, map::{Cell, OccupancyMap}, ospa::ospa};
 //! use rand::SeedableRng;
 //! // A free 4 x 4 m room, a robot at 8 stops, one source at (2, 3).
 //! let map = OccupancyMap::new(80, 80, 0.05, [0.0, 0.0], vec![Cell::Free; 6400]);

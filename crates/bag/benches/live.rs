@@ -1,18 +1,18 @@
 //! What the live node spends on the run itself, beside localising and mapping: a step of
-//! [`bag::live::Recorder`] (the run so far read as a bag, its stops found) on the paper's
+//! [`iasm_bag::live::Recorder`] (the run so far read as a bag, its stops found) on the paper's
 //! array at 48 kHz: 6 channels of 16-bit audio in 0.1-s `AudioStamped` buffers and 50-Hz
 //! odometry, a stop of 3.5 s after a drive of 1.5 s.
 //!
-//! `cargo bench -p bag --bench live`; figures go to `BENCHMARKS.md`.
+//! `cargo bench -p iasm-bag --bench live`; figures go to `BENCHMARKS.md`.
 
 // criterion_group!/criterion_main! generate undocumented items (criterion.rs #774/#775).
 #![allow(missing_docs)]
 
 use std::hint::black_box;
 
-use bag::live::Recorder;
-use bag::{ReadOptions, StopOptions};
 use criterion::{BatchSize, Criterion, criterion_group, criterion_main};
+use iasm_bag::live::Recorder;
+use iasm_bag::{ReadOptions, StopOptions};
 use iasm_ros::cdr::Writer;
 
 const FS: i32 = 48_000;

@@ -9,11 +9,11 @@
 //! the robot stood still, each with its pose and its audio ([`stops`]).
 //!
 //! ```no_run
-//! let run = bag::read_file("run.bag".as_ref(), &bag::ReadOptions::default())?;
-//! for stop in run.stops(&bag::StopOptions::default())? {
+//! let run = iasm_bag::read_file("run.bag".as_ref(), &iasm_bag::ReadOptions::default())?;
+//! for stop in run.stops(&iasm_bag::StopOptions::default())? {
 //!     println!("{:.1}-{:.1} s at ({:.2}, {:.2})", stop.listen_s.0, stop.listen_s.1, stop.pose.x, stop.pose.y);
 //! }
-//! # Ok::<(), bag::Error>(())
+//! # Ok::<(), iasm_bag::Error>(())
 //! ```
 //!
 //! ROS 2 bags are read too ([`ros2`]: CDR messages of the same types), stored in MCAP (the

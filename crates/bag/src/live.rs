@@ -12,7 +12,7 @@
 //! the audio of one drive and one stop, not of the whole run.
 //!
 //! ```
-//! let mut live = bag::live::Recorder::new(bag::ReadOptions::default());
+//! let mut live = iasm_bag::live::Recorder::new(iasm_bag::ReadOptions::default());
 //! // A message that is not CDR of its type is refused as it comes, and the run goes on
 //! // without it.
 //! assert!(live.push("/odom", "nav_msgs/msg/Odometry", 1_000_000_000, &[0, 1, 0, 0]).is_err());

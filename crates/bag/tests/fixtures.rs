@@ -7,8 +7,8 @@
 use std::path::PathBuf;
 
 use approx::assert_abs_diff_eq;
-use bag::{Error, ReadOptions, SampleFormat, StopOptions, TimedPose};
 use geom::Pose;
+use iasm_bag::{Error, ReadOptions, SampleFormat, StopOptions, TimedPose};
 
 fn fixture(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -22,7 +22,7 @@ fn pattern(i: usize, c: usize) -> f32 {
 
 /// The run's one segment holds the 3 s of the pattern, full scale at 1 (every 997th frame
 /// of every channel checked).
-fn assert_every_sample(run: &bag::Run) {
+fn assert_every_sample(run: &iasm_bag::Run) {
     assert_eq!(run.segments[0].frames, 24_000);
     for (c, channel) in run.samples(0, 0..24_000).iter().enumerate() {
         for i in (0..24_000).step_by(997) {
@@ -33,18 +33,18 @@ fn assert_every_sample(run: &bag::Run) {
 
 #[test]
 fn the_lz4_bag_gives_every_sample_and_both_stops() {
-    check_lz4_run(&bag::read_file(&fixture("run_lz4.bag"), &ReadOptions::default()).unwrap());
+    check_lz4_run(&iasm_bag::read_file(&fixture("run_lz4.bag"), &ReadOptions::default()).unwrap());
 }
 
 #[test]
 fn a_bag_split_in_two_files_is_read_as_one_run() {
     // run_lz4.bag cut at 1.5 s as rosbag record --split cuts a run: the AudioInfo is in the
     // first file only, the audio runs on across the cut as one segment.
-    check_lz4_run(&bag::read_file(&fixture("run_split"), &ReadOptions::default()).unwrap());
+    check_lz4_run(&iasm_bag::read_file(&fixture("run_split"), &ReadOptions::default()).unwrap());
 }
 
 /// Everything run_lz4.bag holds (scripts/make_bag_fixtures.py).
-fn check_lz4_run(run: &bag::Run) {
+fn check_lz4_run(run: &iasm_bag::Run) {
     assert_eq!(run.audio_topic, "/audio");
     assert_eq!(run.pose_topic, "/odom");
     assert_eq!(run.odom_topic, None);
@@ -110,7 +110,7 @@ fn check_lz4_run(run: &bag::Run) {
 
 #[test]
 fn the_bz2_bag_takes_the_map_frame_poses_and_finds_stops_by_odometry() {
-    let run = bag::read_file(&fixture("run_bz2.bag"), &ReadOptions::default()).unwrap();
+    let run = iasm_bag::read_file(&fixture("run_bz2.bag"), &ReadOptions::default()).unwrap();
     assert_eq!(run.audio_topic, "/mic/audio");
     assert_eq!(run.format.sample, SampleFormat::S32LE);
     assert_eq!(
@@ -138,7 +138,7 @@ fn the_bz2_bag_takes_the_map_frame_poses_and_finds_stops_by_odometry() {
         pose_topic: Some("/odom".into()),
         ..Default::default()
     };
-    let run = bag::read_file(&fixture("run_bz2.bag"), &opts).unwrap();
+    let run = iasm_bag::read_file(&fixture("run_bz2.bag"), &opts).unwrap();
     assert_eq!(run.odom_topic, None);
     assert_abs_diff_eq!(
         run.stops(&StopOptions::default()).unwrap()[1].pose.x,
@@ -151,7 +151,7 @@ fn the_bz2_bag_takes_the_map_frame_poses_and_finds_stops_by_odometry() {
 fn a_pose_from_before_the_stop_is_carried_to_it_by_the_odometry() {
     // The localiser's last estimate came at 1.5 s, mid-drive, in a frame turned by 90
     // degrees and shifted from the odometry's; the robot then drove on to its stop.
-    let mut run = bag::read_file(&fixture("run_bz2.bag"), &ReadOptions::default()).unwrap();
+    let mut run = iasm_bag::read_file(&fixture("run_bz2.bag"), &ReadOptions::default()).unwrap();
     let odom_mid = run
         .odometry
         .iter()
@@ -176,7 +176,7 @@ fn a_pose_from_before_the_stop_is_carried_to_it_by_the_odometry() {
 
 #[test]
 fn a_topic_that_is_not_there_or_not_a_pose_names_the_candidates() {
-    let e = bag::read_file(
+    let e = iasm_bag::read_file(
         &fixture("run_bz2.bag"),
         &ReadOptions {
             pose_topic: Some("/amcl_pose".into()),
@@ -190,7 +190,7 @@ fn a_topic_that_is_not_there_or_not_a_pose_names_the_candidates() {
         e.contains("/odom (nav_msgs/Odometry, 61 messages)") && e.contains("/robot_pose"),
         "{e}"
     );
-    let e = bag::read_file(
+    let e = iasm_bag::read_file(
         &fixture("run_bz2.bag"),
         &ReadOptions {
             pose_topic: Some("/mic/audio".into()),
@@ -206,7 +206,7 @@ fn a_topic_that_is_not_there_or_not_a_pose_names_the_candidates() {
 fn a_format_given_by_hand_that_does_not_fit_is_an_error() {
     // The bag's frames are 4 channels of 32 bits (16 bytes; 384 000 bytes in 3 s at 8 kHz).
     let read = |channels, sample_rate, sample| {
-        let format = bag::AudioFormat {
+        let format = iasm_bag::AudioFormat {
             channels,
             sample_rate,
             sample,
@@ -215,7 +215,7 @@ fn a_format_given_by_hand_that_does_not_fit_is_an_error() {
             format: Some(format),
             ..Default::default()
         };
-        bag::read_file(&fixture("run_bz2.bag"), &opts)
+        iasm_bag::read_file(&fixture("run_bz2.bag"), &opts)
             .map(|_| ())
             .map_err(|e| e.to_string())
     };
@@ -245,10 +245,10 @@ fn a_format_given_by_hand_that_does_not_fit_is_an_error() {
 #[test]
 fn a_bag_cut_off_anywhere_reads_up_to_its_last_whole_record_or_says_why_not() {
     let bytes = std::fs::read(fixture("run_lz4.bag")).unwrap();
-    let whole = bag::read(bytes.as_slice(), &ReadOptions::default()).unwrap();
+    let whole = iasm_bag::read(bytes.as_slice(), &ReadOptions::default()).unwrap();
     let mut read_some = 0;
     for cut in (0..bytes.len()).step_by(211) {
-        match bag::read(&bytes[..cut], &ReadOptions::default()) {
+        match iasm_bag::read(&bytes[..cut], &ReadOptions::default()) {
             Ok(run) => {
                 assert!(run.truncated.is_some() || cut == bytes.len());
                 let frames: usize = run.segments.iter().map(|s| s.frames).sum();
@@ -265,11 +265,11 @@ fn a_bag_cut_off_anywhere_reads_up_to_its_last_whole_record_or_says_why_not() {
 #[test]
 fn files_that_are_not_ros_1_bags_say_what_they_are() {
     let e = |b: &[u8]| {
-        bag::read(b, &ReadOptions::default())
+        iasm_bag::read(b, &ReadOptions::default())
             .unwrap_err()
             .to_string()
     };
-    assert!(e(b"SQLite format 3\0....").contains("bag::read_file"));
+    assert!(e(b"SQLite format 3\0....").contains("iasm_bag::read_file"));
     assert!(e(b"\x89MCAP0\r\n").contains("MCAP"));
     assert!(e(b"#ROSBAG V1.2\n").contains("format 1.2"));
     assert!(e(b"RIFF....WAVEfmt ").contains("not #ROSBAG V2.0"));
@@ -278,7 +278,7 @@ fn files_that_are_not_ros_1_bags_say_what_they_are() {
 
 #[test]
 fn the_robots_map_in_the_poses_frame_is_read_cell_for_cell() {
-    let run = bag::read_file(&fixture("run_bz2.bag"), &ReadOptions::default()).unwrap();
+    let run = iasm_bag::read_file(&fixture("run_bz2.bag"), &ReadOptions::default()).unwrap();
     assert_eq!(run.pose_frame.as_deref(), Some("map"));
     let g = run.map.expect("the map, in the poses' frame");
     assert_eq!((g.width, g.height, g.frame_id.as_str()), (40, 30, "map"));
@@ -299,7 +299,7 @@ fn the_robots_map_in_the_poses_frame_is_read_cell_for_cell() {
         ..Default::default()
     };
     assert!(
-        bag::read_file(&fixture("run_bz2.bag"), &opts)
+        iasm_bag::read_file(&fixture("run_bz2.bag"), &opts)
             .unwrap()
             .map
             .is_none()
@@ -324,7 +324,7 @@ fn the_ros2_mcap_bag_gives_the_same_run_in_cdr() {
         fixture("run_mcap_zstd_msg"),
         fixture("run_mcap_zstd_msg/run_mcap_zstd_msg.mcap"),
     ] {
-        let run = bag::read_file(&path, &ReadOptions::default()).unwrap();
+        let run = iasm_bag::read_file(&path, &ReadOptions::default()).unwrap();
         assert_eq!(run.audio_topic, "/mic/audio");
         assert_eq!((run.format.channels, run.format.sample_rate), (4, 8000));
         assert_eq!(run.format.sample, SampleFormat::S16LE);
@@ -393,11 +393,11 @@ fn a_compressed_bag_that_does_not_decompress_is_named_and_leaves_no_file_behind(
         both.join("run_db3_zstd.db3"),
     )
     .unwrap();
-    let run = bag::read_file(&both, &ReadOptions::default()).unwrap();
+    let run = iasm_bag::read_file(&both, &ReadOptions::default()).unwrap();
     let audio = run.topics.iter().find(|t| t.topic == "/mic/audio").unwrap();
     assert_eq!(audio.messages, 30);
     // A whole SQLite file read once more: its temporary copy is gone after.
-    bag::read_file(&fixture("run_db3_zstd"), &ReadOptions::default()).unwrap();
+    iasm_bag::read_file(&fixture("run_db3_zstd"), &ReadOptions::default()).unwrap();
     assert_eq!(temporaries(), before);
     for (name, len) in [
         ("run_db3_zstd/run_db3_zstd.db3.zstd", 10_000),
@@ -418,7 +418,7 @@ fn a_compressed_bag_that_does_not_decompress_is_named_and_leaves_no_file_behind(
             let p = sub.join(file);
             std::fs::write(&p, damaged).unwrap();
             for path in [&p, &sub] {
-                let e = bag::read_file(path, &ReadOptions::default()).unwrap_err();
+                let e = iasm_bag::read_file(path, &ReadOptions::default()).unwrap_err();
                 let text = e.to_string();
                 assert!(
                     text.contains(&p.display().to_string()) && text.contains("zstd"),
@@ -440,7 +440,7 @@ fn a_ros2_bag_cut_off_is_read_up_to_the_cut() {
     for cut in (0..bytes.len()).step_by(1021) {
         let p = dir.join("cut.mcap");
         std::fs::write(&p, &bytes[..cut]).unwrap();
-        match bag::read_file(&p, &ReadOptions::default()) {
+        match iasm_bag::read_file(&p, &ReadOptions::default()) {
             Ok(run) => {
                 assert!(run.truncated.is_some());
                 read_some += 1;
@@ -459,14 +459,14 @@ fn a_ros2_sqlite_bag_that_is_not_one_or_is_compressed_says_so() {
     std::fs::create_dir_all(&dir).unwrap();
     // SQLite's magic and nothing else: SQLite refuses it, and the error says so.
     std::fs::write(dir.join("run_0.db3"), b"SQLite format 3\0").unwrap();
-    let e = bag::read_file(&dir, &ReadOptions::default())
+    let e = iasm_bag::read_file(&dir, &ReadOptions::default())
         .unwrap_err()
         .to_string();
     assert!(e.contains("SQLite database"), "{e}");
     // A bag compressed file by file, whose file is a zstd frame's magic alone.
     std::fs::remove_file(dir.join("run_0.db3")).unwrap();
     std::fs::write(dir.join("run_0.db3.zstd"), b"(\xb5/\xfd").unwrap();
-    let e = bag::read_file(&dir, &ReadOptions::default())
+    let e = iasm_bag::read_file(&dir, &ReadOptions::default())
         .unwrap_err()
         .to_string();
     std::fs::remove_dir_all(&dir).unwrap();
@@ -494,7 +494,7 @@ fn poses_from_tf_compose_the_localiser_and_the_odometry() {
             pose_topic: named.then(|| "/tf".into()),
             ..Default::default()
         };
-        let run = bag::read_file(&path, &opts).unwrap();
+        let run = iasm_bag::read_file(&path, &opts).unwrap();
         if !named {
             // Every sample of the zstd chunks, as the run wrote it.
             assert_eq!(run.segments[0].frames, 24_000);
@@ -516,7 +516,7 @@ fn poses_from_tf_compose_the_localiser_and_the_odometry() {
             base_frame: Some("laser".into()),
             ..opts
         };
-        let run = bag::read_file(&path, &opts).unwrap();
+        let run = iasm_bag::read_file(&path, &opts).unwrap();
         let s = &run.stops(&StopOptions::default()).unwrap()[1];
         let a = 120f64.to_radians();
         assert_abs_diff_eq!(s.pose.x, 3.0 + 0.2 * a.cos(), epsilon = 1e-9);
@@ -526,7 +526,7 @@ fn poses_from_tf_compose_the_localiser_and_the_odometry() {
             base_frame: Some("base_footprint".into()),
             ..opts
         };
-        let e = bag::read_file(&path, &opts).unwrap_err().to_string();
+        let e = iasm_bag::read_file(&path, &opts).unwrap_err().to_string();
         assert!(
             e.contains("no transform has base_footprint as its child"),
             "{e}"
@@ -567,7 +567,7 @@ fn a_bag_with_bytes_changed_anywhere_is_read_or_refused_never_a_panic() {
             }
             let path = dir.join(name.replace('/', "_"));
             std::fs::write(&path, &b).unwrap();
-            let _ = bag::read_file(&path, &ReadOptions::default()).map(|run| {
+            let _ = iasm_bag::read_file(&path, &ReadOptions::default()).map(|run| {
                 run.stops(&StopOptions::default())
                     .map(|stops| stops.iter().map(|s| run.stop_audio(s).len()).sum::<usize>())
             });
@@ -580,7 +580,8 @@ fn a_bag_with_bytes_changed_anywhere_is_read_or_refused_never_a_panic() {
 fn audio_stamped_messages_carry_their_own_format() {
     // The ROS 2 audio_common of audio_capturer_node: AudioStamped, int16 samples, no
     // AudioInfo topic; the format is each message's own.
-    let run = bag::read_file(&fixture("run_audiostamped.mcap"), &ReadOptions::default()).unwrap();
+    let run =
+        iasm_bag::read_file(&fixture("run_audiostamped.mcap"), &ReadOptions::default()).unwrap();
     assert_eq!(run.audio_topic, "/audio/in");
     assert_eq!((run.format.channels, run.format.sample_rate), (4, 8000));
     assert_eq!(run.format.sample, SampleFormat::S16LE);
@@ -611,7 +612,7 @@ fn an_mcap_chunk_whose_checksum_fails_is_refused() {
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("crc.mcap");
     std::fs::write(&path, &bytes).unwrap();
-    let e = bag::read_file(&path, &ReadOptions::default())
+    let e = iasm_bag::read_file(&path, &ReadOptions::default())
         .unwrap_err()
         .to_string();
     std::fs::remove_dir_all(&dir).unwrap();
@@ -621,19 +622,19 @@ fn an_mcap_chunk_whose_checksum_fails_is_refused() {
     );
 }
 
-/// A run fed to [`bag::live::Recorder`] message by message, asking for finished stops
+/// A run fed to [`iasm_bag::live::Recorder`] message by message, asking for finished stops
 /// after each, hands on the stops the whole bag has, each once, as soon as the robot has
 /// left it (the first while the robot drives, at 1.2-1.8 s; the last only when the run
 /// ends), with the same pose and audio.
 #[test]
 fn a_run_fed_live_gives_each_stop_once_as_soon_as_the_robot_leaves_it() {
     for name in ["run_ros2", "run_audiostamped.mcap", "run_zstd.mcap"] {
-        let whole = bag::read_file(&fixture(name), &ReadOptions::default()).unwrap();
+        let whole = iasm_bag::read_file(&fixture(name), &ReadOptions::default()).unwrap();
         let want = whole.stops(&StopOptions::default()).unwrap();
         assert_eq!(want.len(), 2, "{name}");
-        let mut live = bag::live::Recorder::new(ReadOptions::default());
-        let mut got: Vec<(i64, bag::live::LiveStop)> = Vec::new();
-        bag::ros2::scan_files(&fixture(name), |m| {
+        let mut live = iasm_bag::live::Recorder::new(ReadOptions::default());
+        let mut got: Vec<(i64, iasm_bag::live::LiveStop)> = Vec::new();
+        iasm_bag::ros2::scan_files(&fixture(name), |m| {
             live.push(
                 &m.connection.topic,
                 &m.connection.msg_type,

@@ -10,7 +10,7 @@
 //! # Example
 //!
 //! ```
-//! use geom::Pose;
+//! use iasm_geom::Pose;
 //! // A robot at (1, 2) facing +y hears a source dead ahead (azimuth 0 in its array frame).
 //! let p = Pose::from_degrees(1.0, 2.0, 90.0);
 //! let world = p.world_bearing(0.0);

@@ -3,7 +3,7 @@
 //! array, 3 s at 48 kHz): preparing the renderer (images, signal spectra), one stop (six
 //! microphones), and one source-to-microphone response.
 //!
-//! `cargo bench -p sim`; the whole 71-stop scene is timed with `iasm simulate` beside
+//! `cargo bench -p iasm-sim`; the whole 71-stop scene is timed with `iasm simulate` beside
 //! pyroomacoustics (`scripts/pra_render_bench.py`); figures go to `BENCHMARKS.md`.
 
 // criterion_group!/criterion_main! generate undocumented items (criterion.rs #774/#775).
@@ -12,8 +12,8 @@
 use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use sim::ism::{add_images, image_sources};
-use sim::scene::{PreparedScene, Scene, mic_world};
+use iasm_sim::ism::{add_images, image_sources};
+use iasm_sim::scene::{PreparedScene, Scene, mic_world};
 
 fn scene() -> PreparedScene {
     let path = concat!(

@@ -19,7 +19,7 @@
 //! # Example
 //!
 //! ```
-//! use sim::{farfield::{PlaneWave, render}, signal::Signal};
+//! use iasm_sim::{farfield::{PlaneWave, render}, signal::Signal};
 //! let mics = [[0.0, 0.0, 0.0], [0.1, 0.0, 0.0]];
 //! let waves = [PlaneWave { azimuth_deg: 0.0, elevation_deg: 0.0, signal: Signal::Noise }];
 //! let audio = render(&mics, &waves, 16_000, 1600, 343.0, None, 1);

@@ -12,9 +12,9 @@
 //! (the direct path differs by 0.44 %, the others by less), the total energy to 1 % (0.2 %)
 //! and the decay curve to 0.1 dB above -40 dB (0.002 dB).
 
+use iasm_sim::Room;
+use iasm_sim::ism::{image_sources, rir_unfiltered};
 use serde::Deserialize;
-use sim::Room;
-use sim::ism::{image_sources, rir_unfiltered};
 
 #[derive(Deserialize)]
 struct Fixture {

@@ -2,7 +2,7 @@
 //! the STFT across frame lengths, one block's spectrum across grids, and deflation's cost
 //! on a compact array.
 //!
-//! `cargo bench -p ssl`; figures go to `BENCHMARKS.md`.
+//! `cargo bench -p iasm-ssl`; figures go to `BENCHMARKS.md`.
 
 // criterion_group!/criterion_main! generate undocumented items (criterion.rs #774/#775).
 #![allow(missing_docs)]
@@ -10,9 +10,9 @@
 use std::hint::black_box;
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use iasm_ssl::{Audio, Localizer, Method, MicArray, SslConfig, Stft};
 use sim::farfield::{PlaneWave, render};
 use sim::signal::Signal;
-use ssl::{Audio, Localizer, Method, MicArray, SslConfig, Stft};
 
 const SEED: u64 = 11;
 const FS: u32 = 48_000;
@@ -68,7 +68,7 @@ fn whole_recording(c: &mut Criterion) {
     let mut g = c.benchmark_group("ssl/recording-3s-6ch-48k");
     g.sample_size(30);
     g.bench_function("read-wav", |b| {
-        b.iter(|| ssl::read_wav(black_box(&wav)).unwrap())
+        b.iter(|| iasm_ssl::read_wav(black_box(&wav)).unwrap())
     });
     for method in Method::ALL {
         let loc = Localizer::new(
@@ -82,7 +82,7 @@ fn whole_recording(c: &mut Criterion) {
         .unwrap();
         g.bench_function(BenchmarkId::new("read+locate", method), |b| {
             b.iter(|| {
-                loc.locate(&ssl::read_wav(black_box(&wav)).unwrap())
+                loc.locate(&iasm_ssl::read_wav(black_box(&wav)).unwrap())
                     .unwrap()
             })
         });
@@ -185,7 +185,7 @@ fn block_spectrum(c: &mut Criterion) {
                 (config.fmin_hz / spacing).ceil() as usize..(config.fmax_hz / spacing) as usize + 1;
             let spec = loc.stft().analyze(&audio, bins).unwrap();
             let mut out = vec![0.0f32; loc.grid().len()];
-            let mut scratch = ssl::Scratch::default();
+            let mut scratch = iasm_ssl::Scratch::default();
             g.bench_function(
                 BenchmarkId::new(method.name(), format!("{}cells", loc.grid().len())),
                 |b| {

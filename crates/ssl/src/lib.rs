@@ -20,7 +20,7 @@
 //! # Example
 //!
 //! ```
-//! use ssl::{Audio, Localizer, MicArray, Method, SslConfig};
+//! use iasm_ssl::{Audio, Localizer, MicArray, Method, SslConfig};
 //! // A click arriving from azimuth 90 degrees reaches mic 1 (at +y) before mic 0.
 //! let array = MicArray::new("pair+", vec![[0.0, 0.0, 0.0], [0.0, 0.2, 0.0], [0.2, 0.0, 0.0]])?;
 //! let fs = 16_000;

@@ -1,11 +1,11 @@
 //! A quiet source is not a loud one's copy: the source coherence of two directions
-//! ([`ssl::SpatialCovariance::source_coherence`]) and the rule that reports a low peak
-//! carrying a signal of its own ([`ssl::SslConfig::incoherent_relative`]), on plane waves
+//! ([`iasm_ssl::SpatialCovariance::source_coherence`]) and the rule that reports a low peak
+//! carrying a signal of its own ([`iasm_ssl::SslConfig::incoherent_relative`]), on plane waves
 //! delayed exactly to the paper's array.
 
+use iasm_ssl::{Audio, Localizer, Method, MicArray, SpatialCovariance, SslConfig, Stft, wrap_deg};
 use sim::farfield::{self, PlaneWave, fractional_delay};
 use sim::signal::Signal;
-use ssl::{Audio, Localizer, Method, MicArray, SpatialCovariance, SslConfig, Stft, wrap_deg};
 
 const SEED: u64 = 20_261_125;
 const FS: u32 = 48_000;
@@ -98,14 +98,14 @@ fn a_reflection_is_coherent_with_its_source_and_another_source_is_not() {
 /// hears from it is a signal of its own; with the rule off it is not. (Below the
 /// sidelobe it is not: the two-wave fit of the sidelobe's direction and its own leaves
 /// the loud source out, both waves take some of it, and they look coherent; see
-/// `ssl::covariance`.) The loud source's sidelobe is never
+/// `iasm_ssl::covariance`.) The loud source's sidelobe is never
 /// reported, nor is its reflection from the quiet source's direction at the same level:
 /// they are copies. (How high a steady quiet source stands depends on the method: the
 /// pairwise ones, pooling blocks that the loud source dominates, show it lower.)
 #[test]
 fn a_quiet_source_below_min_relative_is_reported_and_a_copy_is_not() {
     let (loud, quiet) = (40.0, -100.0);
-    let near = |d: &ssl::Doa, az: f64| wrap_deg(d.azimuth_deg - az).abs() < 3.0;
+    let near = |d: &iasm_ssl::Doa, az: f64| wrap_deg(d.azimuth_deg - az).abs() < 3.0;
     let floors = SslConfig::default().incoherent_relative..SslConfig::default().min_relative;
     let mut between = Vec::new();
     for method in Method::ALL {
@@ -126,7 +126,7 @@ fn a_quiet_source_below_min_relative_is_reported_and_a_copy_is_not() {
             let copy = scene(loud, quiet, gain, true, 0.003, 40.0);
             let with = run(&other, SslConfig::default());
             assert!(near(&with[0], loud), "{method} {db} dB: {with:?}");
-            let sidelobe = |doas: &[ssl::Doa]| doas.iter().any(|d| near(d, loud + 30.0));
+            let sidelobe = |doas: &[iasm_ssl::Doa]| doas.iter().any(|d| near(d, loud + 30.0));
             assert!(!sidelobe(&with), "{method} {db} dB: the sidelobe: {with:?}");
             let copied = run(&copy, SslConfig::default());
             assert!(

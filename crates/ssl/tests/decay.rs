@@ -7,7 +7,7 @@
 
 use std::path::PathBuf;
 
-use ssl::{Localizer, Method, MicArray, SslConfig, read_wav, wrap_deg};
+use iasm_ssl::{Localizer, Method, MicArray, SslConfig, read_wav, wrap_deg};
 
 /// The sources' azimuths (degrees, array frame), as `fixtures/pra/decay.json` records.
 const TRUTH: [f64; 2] = [40.0, -160.0];

@@ -2,12 +2,12 @@
 //! ramp in the frequency domain) to the microphones of an array, from known directions.
 //! Every case runs with every method and reports all failures in one table.
 
+use iasm_ssl::{
+    Audio, ElevationRange, Localizer, Method, MicArray, Pooling, Scratch, SslConfig, wrap_deg,
+};
 use proptest::prelude::*;
 use sim::farfield::{self, PlaneWave};
 use sim::signal::Signal;
-use ssl::{
-    Audio, ElevationRange, Localizer, Method, MicArray, Pooling, Scratch, SslConfig, wrap_deg,
-};
 
 const SEED: u64 = 20_241_122;
 const FS: u32 = 48_000;
@@ -209,7 +209,7 @@ fn two_and_three_simultaneous_sources_are_all_found() {
 fn every_preset_localises_a_source() {
     // Small arrays at a robot's usual 16 kHz: the grid and band adapt to the geometry.
     let mut failures = Vec::new();
-    for name in ssl::array::PRESETS {
+    for name in iasm_ssl::array::PRESETS {
         let array = MicArray::preset(name).unwrap();
         let audio = render(&array, &[(-37.0, 0.0, Signal::Noise)], 0.4, 30.0, SEED);
         failures.extend(misses(name, &array, &audio, &[-37.0], 3.0));
@@ -308,7 +308,7 @@ fn a_row_is_cut_only_when_a_further_peak_passes_the_thresholds() {
             };
             let loc = Localizer::new(&array, FS, &config).unwrap();
             let located = loc
-                .locate_row_with_scratch(&audio, &mut ssl::Scratch::default())
+                .locate_row_with_scratch(&audio, &mut iasm_ssl::Scratch::default())
                 .unwrap();
             assert_eq!(located.doas, loc.locate(&audio).unwrap(), "{method}");
             located
@@ -412,7 +412,7 @@ fn two_waves(
 }
 
 /// The DoAs the default array's localizer with `config` finds in `audio`.
-fn locate(audio: &Audio, config: &SslConfig) -> Vec<ssl::Doa> {
+fn locate(audio: &Audio, config: &SslConfig) -> Vec<iasm_ssl::Doa> {
     Localizer::new(&MicArray::default(), FS, config)
         .unwrap()
         .locate(audio)
@@ -539,7 +539,7 @@ fn a_source_that_dominates_blocks_is_reported_below_min_relative() {
             run_gated(audio, dominance_blocks, SslConfig::default().decay_gate_db)
         };
         let run = |dominance_blocks: usize| run_on(&audio, dominance_blocks);
-        let near = |d: &ssl::Doa, az: f64| wrap_deg(d.azimuth_deg - az).abs() < 2.0;
+        let near = |d: &iasm_ssl::Doa, az: f64| wrap_deg(d.azimuth_deg - az).abs() < 2.0;
         let with = run(2);
         assert!(near(&with[0], steady), "{method}: {with:?}");
         let doa = with.iter().find(|d| near(d, second));
@@ -788,7 +788,7 @@ fn a_plane_waves_profile_has_the_sidelobes_of_the_arrays_pattern() {
             .map(|v| (v - median) / (top - median))
             .collect();
         let ours = loc
-            .plane_wave_profile(az0, 0.0, &mut ssl::Scratch::default())
+            .plane_wave_profile(az0, 0.0, &mut iasm_ssl::Scratch::default())
             .unwrap();
         let want = sidelobes(&analytic, &azimuths, 0.1);
         let got = sidelobes(&ours, &azimuths, 0.1);
@@ -850,11 +850,11 @@ fn a_sources_sidelobes_are_not_reported_as_sources() {
                 .plane_wave_profile(
                     top.azimuth_deg,
                     top.elevation_deg,
-                    &mut ssl::Scratch::default(),
+                    &mut iasm_ssl::Scratch::default(),
                 )
                 .unwrap();
             let lobes = sidelobes(&profile, loc.grid().azimuths(), 0.1);
-            let near_lobe = |d: &ssl::Doa| {
+            let near_lobe = |d: &iasm_ssl::Doa| {
                 lobes
                     .iter()
                     .any(|l| wrap_deg(d.azimuth_deg - l).abs() <= 3.0)
@@ -919,11 +919,11 @@ fn a_source_an_octave_hears_is_reported_beyond_n_in_a_cut_row() {
             };
             Localizer::new(&array, FS, &config)
                 .unwrap()
-                .locate_row_with_scratch(audio, &mut ssl::Scratch::default())
+                .locate_row_with_scratch(audio, &mut iasm_ssl::Scratch::default())
                 .unwrap()
         };
         let (two, off, three) = (row(&audio, 2, 4), row(&audio, 2, 0), row(&audio, 3, 4));
-        let near = |d: &ssl::Doa, az: f64, tol: f64| wrap_deg(d.azimuth_deg - az).abs() <= tol;
+        let near = |d: &iasm_ssl::Doa, az: f64, tol: f64| wrap_deg(d.azimuth_deg - az).abs() <= tol;
         assert!(two.cut, "{method}: {two:?}");
         for az in [-150.0, -30.0] {
             assert!(
@@ -956,7 +956,7 @@ fn a_source_an_octave_hears_is_reported_beyond_n_in_a_cut_row() {
         };
         let one = Localizer::new(&array, FS, &bare)
             .unwrap()
-            .locate_row_with_scratch(&lone, &mut ssl::Scratch::default())
+            .locate_row_with_scratch(&lone, &mut iasm_ssl::Scratch::default())
             .unwrap();
         assert!(
             one.cut && near(&one.doas[0], 40.0, 2.0),
@@ -1045,7 +1045,7 @@ fn two_talker_row(
     audio: &Audio,
     deflate: Option<bool>,
     gate: f64,
-) -> Vec<ssl::Doa> {
+) -> Vec<iasm_ssl::Doa> {
     let config = SslConfig {
         method: Method::GccPhat,
         num_peaks: 2,
@@ -1084,7 +1084,7 @@ fn deflation_moves_a_weak_talker_off_a_strong_ones_lobe() {
         let (plain, deflated) = (row(Some(false)), row(Some(true)));
         assert_eq!(row(None), deflated, "{strong}/{weak}: the default deflates");
         assert_eq!(plain.len(), 2, "{strong}/{weak}: {plain:?}");
-        let off = |d: &ssl::Doa| wrap_deg(d.azimuth_deg - weak).abs();
+        let off = |d: &iasm_ssl::Doa| wrap_deg(d.azimuth_deg - weak).abs();
         let (before, after) = (off(&plain[1]), off(&deflated[1]));
         assert!(
             before >= 2.5,
@@ -1126,7 +1126,7 @@ fn deflation_refines_a_row_only_when_its_doas_explain_the_field() {
     let plain = row(false, 0.65);
     assert_eq!(plain.len(), 2, "{plain:?}");
     let refined = row(true, 0.65);
-    let off = |d: &ssl::Doa| wrap_deg(d.azimuth_deg - weak).abs();
+    let off = |d: &iasm_ssl::Doa| wrap_deg(d.azimuth_deg - weak).abs();
     assert!(
         off(&refined[1]) < off(&plain[1]),
         "{plain:?} -> {refined:?}"
@@ -1222,7 +1222,7 @@ type PoolingCase = (
 
 /// [`Pooling::Auto`] (the default) pools a recording by the mean of its blocks when its
 /// blocks' levels are steady in every octave of the band and its spectrum is noise-like,
-/// and by their max otherwise (`ssl::steady`). Steady: one or two noise sources sounding
+/// and by their max otherwise (`iasm_ssl::steady`). Steady: one or two noise sources sounding
 /// throughout (white, pink or speech-shaped), or two of the same spectrum taking turns.
 /// Not: a source that pauses (on for 0.2 s, off for 0.1 s, as syllables and words are),
 /// two sources of different spectra taking turns every 0.2 s (whose summed level is
@@ -1316,7 +1316,7 @@ fn replaced(audio: &Audio, c: usize, with: impl Fn(usize) -> f32) -> Audio {
 
 /// A dead microphone (a channel of zeros) or a disconnected one (its own noise at the
 /// others' level) is left out of the recording (`SslConfig::screen_channels`,
-/// `ssl::channels`): the row is exactly the one the array of the other five microphones
+/// `iasm_ssl::channels`): the row is exactly the one the array of the other five microphones
 /// gives for their channels, both talkers within 2 degrees, and it names the channel and
 /// why. Working microphones are all kept.
 #[test]

@@ -1,10 +1,10 @@
-//! The robot's own noise subtracted (`ssl::noise`): a talker 10 dB below a fan that moves
+//! The robot's own noise subtracted (`iasm_ssl::noise`): a talker 10 dB below a fan that moves
 //! with the array is found once a recording of the fan alone is given, by every method.
 //! Plane waves delayed exactly to the paper's array, so the bearings are known.
 
+use iasm_ssl::{Audio, Error, Localizer, Method, MicArray, SslConfig, wrap_deg};
 use sim::farfield::{self, PlaneWave};
 use sim::signal::Signal;
-use ssl::{Audio, Error, Localizer, Method, MicArray, SslConfig, wrap_deg};
 
 const FS: u32 = 16_000;
 const C: f64 = 343.0;
@@ -74,9 +74,10 @@ fn a_talker_under_the_robots_fan_is_found_once_the_fan_alone_is_given() {
         assert!(less.noise().is_some());
         // The method's response to an ideal plane wave (the sidelobe rule's) is the
         // method's, not the recording's: the robot's noise is no part of it.
-        let mut scratch = ssl::Scratch::default();
-        let profile =
-            |l: &Localizer, s: &mut ssl::Scratch| l.plane_wave_profile(TALKER_AZ, 0.0, s).unwrap();
+        let mut scratch = iasm_ssl::Scratch::default();
+        let profile = |l: &Localizer, s: &mut iasm_ssl::Scratch| {
+            l.plane_wave_profile(TALKER_AZ, 0.0, s).unwrap()
+        };
         let plain = Localizer::new(&array, FS, &config).unwrap();
         if profile(&plain, &mut scratch) != profile(&less, &mut scratch) {
             failures.push(format!(
@@ -105,7 +106,7 @@ fn the_noise_field_is_the_mean_cross_spectrum_of_the_recording() {
         .unwrap();
     let field = loc.noise().unwrap();
     assert_eq!(field.num_channels(), array.len());
-    assert!(field.frames() >= ssl::noise::MIN_NOISE_FRAMES);
+    assert!(field.frames() >= iasm_ssl::noise::MIN_NOISE_FRAMES);
     let mut worst = 0.0f64;
     for b in field.bins().step_by(7) {
         let p0 = f64::from(field.power(b, 0));
