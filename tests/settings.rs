@@ -196,10 +196,13 @@ fn a_refused_setting_names_the_file_it_came_from() {
     write_wav(&wav, &plane_wave_recording(&iasm6(), &[30.0], SEED), FS);
     std::fs::write(&cfg, "[ssl]\naz_step_deg = 0.0\n").unwrap();
     let o = iasm(&["ssl", arg(&wav), "--config", arg(&cfg)]);
-    assert_clear_error(&o, &["c.toml", "[ssl]", "azimuth step 0"]);
+    assert_clear_error(
+        &o,
+        &["c.toml", "[ssl]", "az_step_deg = 0.0 is out of range"],
+    );
     std::fs::write(&cfg, "[ssl]\nhop = 5000\n").unwrap();
     let o = iasm(&["ssl", arg(&wav), "--config", arg(&cfg)]);
-    assert_clear_error(&o, &["a.wav", "[ssl]", "hop 5000"]);
+    assert_clear_error(&o, &["a.wav", "[ssl]", "hop = 5000"]);
 }
 
 // See: issue 8
@@ -239,4 +242,104 @@ fn the_deflate_flags_reach_the_localizer() {
         "{}",
         String::from_utf8_lossy(&o.stderr)
     );
+}
+
+/// Every numeric setting of the file, set to what a hand or a typo writes (zero, negative,
+/// NaN, infinite, huge, tiny, and the values of the 2026-11-27 sweep that crashed it,
+/// aborted it on a 2-TB allocation or kept it busy for minutes), is either refused when the
+/// file is read, with an error that names the file, the key and the range accepted, or runs
+/// to a map (exit 0). None panics, aborts or runs on unbounded.
+// See: issue 49
+#[test]
+fn r49_every_numeric_setting_is_refused_at_reading_or_maps() {
+    let dir = tempdir();
+    let root = path(&dir, "ds");
+    audio_dataset(&root, &AUDIO_TRUTH);
+    let base: toml::Table = toml::from_str(EVERY_FIELD).unwrap();
+    let bad: [toml::Value; 11] = [
+        toml::Value::Integer(0),
+        toml::Value::Integer(-1),
+        toml::Value::Float(f64::NAN),
+        toml::Value::Float(f64::INFINITY),
+        toml::Value::Float(1e300),
+        toml::Value::Float(1e-300),
+        toml::Value::Float(5e-324),
+        toml::Value::Float(1e-9),
+        toml::Value::Integer(i64::MAX),
+        toml::Value::Integer(1_000_000_000),
+        toml::Value::Integer(1),
+    ];
+    let mut keys: Vec<(String, Option<String>)> = Vec::new();
+    for table in ["ssl", "iasm"] {
+        for (k, v) in base[table].as_table().unwrap() {
+            match v {
+                toml::Value::Integer(_) | toml::Value::Float(_) => {
+                    keys.push((table.into(), Some(k.clone())))
+                }
+                _ => {}
+            }
+        }
+    }
+    // The elevation's step, inside its inline table.
+    keys.push(("ssl".into(), None));
+    let mut refused = 0;
+    let mut ran = 0;
+    for (table, key) in &keys {
+        for value in &bad {
+            let mut t = base.clone();
+            let shown = match key {
+                Some(k) => {
+                    t[table.as_str()]
+                        .as_table_mut()
+                        .unwrap()
+                        .insert(k.clone(), value.clone());
+                    k.clone()
+                }
+                None => {
+                    t["ssl"]["elevation"]
+                        .as_table_mut()
+                        .unwrap()
+                        .insert("step_deg".into(), value.clone());
+                    "step_deg".into()
+                }
+            };
+            let cfg = path(&dir, "bad.toml");
+            std::fs::write(&cfg, toml::to_string(&t).unwrap()).unwrap();
+            let o = iasm(&[
+                "map",
+                "--dataset",
+                arg(&root),
+                "--method",
+                "mvdr",
+                "--config",
+                arg(&cfg),
+            ]);
+            let err = String::from_utf8_lossy(&o.stderr);
+            let what = format!("[{table}] {shown} = {value}: {}", show(&o));
+            assert!(
+                !err.contains("panicked") && o.status.code().is_some(),
+                "{what}"
+            );
+            // Not a number, infinite, or beyond any room or array: never a setting.
+            let absurd = match value {
+                toml::Value::Float(f) => !f.is_finite() || f.abs() > 1e100,
+                toml::Value::Integer(i) => *i == i64::MAX,
+                _ => false,
+            };
+            assert!(!absurd || o.status.code() == Some(2), "accepted: {what}");
+            match o.status.code() {
+                Some(0) => ran += 1,
+                Some(2) => {
+                    refused += 1;
+                    assert!(err.contains("bad.toml"), "the error names the file: {what}");
+                    assert!(err.contains(&shown), "the error names the key: {what}");
+                }
+                _ => panic!("neither a map nor a clean error: {what}"),
+            }
+        }
+    }
+    // Those accepted (a zero where zero turns a rule off, a one where one is a count, a
+    // tiny fraction where any fraction is one) made a map.
+    assert_eq!(refused + ran, keys.len() * bad.len());
+    assert!(refused > 0 && ran > 0);
 }

@@ -107,7 +107,15 @@ impl Settings {
         let mut base = toml::Table::try_from(IasmConfig::profile(profile))?;
         base.extend(iasm);
         raw.insert("iasm".into(), toml::Value::Table(base));
-        let mut s: Settings = raw.try_into().map_err(msg)?;
+        let mut s: Settings = match raw.clone().try_into() {
+            Ok(s) => s,
+            // A value of the wrong type: serde says what it expected but not where; the
+            // key that fails alone is the one to name.
+            Err(e) => bail!(
+                "{}",
+                bad_key(&raw).unwrap_or_else(|| e.message().to_owned())
+            ),
+        };
         match (has_peaks, has_doas) {
             (true, true) if s.ssl.num_peaks != s.iasm.num_doas => bail!(
                 "ssl.num_peaks = {} but iasm.num_doas = {}: both are N, the DoAs per stop; set one",
@@ -222,6 +230,34 @@ impl Settings {
         self.iasm.validate().context("[iasm]")?;
         Ok(())
     }
+}
+
+/// The first `[ssl]` or `[iasm]` key whose value does not deserialise on its own (on top of
+/// the defaults), as `[table] key = value: what is wrong`.
+fn bad_key(raw: &toml::Table) -> Option<String> {
+    fn first<T: serde::de::DeserializeOwned>(
+        name: &str,
+        table: &toml::Table,
+        base: &toml::Table,
+    ) -> Option<String> {
+        table.iter().find_map(|(k, v)| {
+            let mut one = base.clone();
+            one.insert(k.clone(), v.clone());
+            toml::Value::Table(one)
+                .try_into::<T>()
+                .err()
+                .map(|e| format!("[{name}] {k} = {v}: {}", e.message()))
+        })
+    }
+    let table = |name: &str| raw.get(name).and_then(toml::Value::as_table);
+    if let Some(t) = table("ssl")
+        && let Some(e) = first::<SslConfig>("ssl", t, &toml::Table::new())
+    {
+        return Some(e);
+    }
+    let iasm = table("iasm")?;
+    let base = toml::Table::try_from(IasmConfig::default()).ok()?;
+    first::<IasmConfig>("iasm", iasm, &base)
 }
 
 #[cfg(test)]

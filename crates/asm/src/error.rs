@@ -7,6 +7,17 @@ use std::path::PathBuf;
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum ConfigError {
+    /// A parameter outside the range in which it means something for a robot in a room:
+    /// refused when the settings are read, before any memory or time is spent on it.
+    #[error("{name} = {value} is out of range: accepted {range}")]
+    OutOfRange {
+        /// The parameter.
+        name: &'static str,
+        /// Its value, as given.
+        value: String,
+        /// What is accepted, and why.
+        range: &'static str,
+    },
     /// A parameter that must be positive and finite is not.
     #[error("{name} must be positive and finite, got {value}")]
     NotPositive {

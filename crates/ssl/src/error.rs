@@ -7,11 +7,22 @@ use std::path::PathBuf;
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum ConfigError {
+    /// A setting outside the range in which it means something for an array and a room:
+    /// refused when the settings are read, before any memory or time is spent on it.
+    #[error("{name} = {value} is out of range: accepted {range}")]
+    OutOfRange {
+        /// The setting.
+        name: &'static str,
+        /// Its value, as given.
+        value: String,
+        /// What is accepted, and why.
+        range: &'static str,
+    },
     /// The STFT frame is too short to hold a useful spectrum.
-    #[error("frame length {0} samples is too short (at least 16)")]
+    #[error("frame_len = {0} samples is too short (at least 16)")]
     FrameLen(usize),
     /// The hop is zero or longer than the frame.
-    #[error("hop {hop} must be in 1..={frame_len} samples")]
+    #[error("hop = {hop} must be in 1..={frame_len} samples (the frame)")]
     Hop {
         /// The hop that was asked for.
         hop: usize,
@@ -19,7 +30,9 @@ pub enum ConfigError {
         frame_len: usize,
     },
     /// The frequency band is empty or outside `[0, fs / 2]`.
-    #[error("frequency band [{fmin}, {fmax}] Hz is empty or outside [0, {nyquist}] Hz")]
+    #[error(
+        "frequency band fmin_hz = {fmin} to fmax_hz = {fmax} Hz is empty or outside [0, {nyquist}] Hz"
+    )]
     Band {
         /// Lower edge (Hz).
         fmin: f64,
@@ -29,7 +42,9 @@ pub enum ConfigError {
         nyquist: f64,
     },
     /// The band holds no STFT bin at this frame length and sample rate.
-    #[error("frequency band [{fmin}, {fmax}] Hz holds no STFT bin (bin spacing {spacing} Hz)")]
+    #[error(
+        "frequency band fmin_hz = {fmin} to fmax_hz = {fmax} Hz holds no STFT bin (bin spacing {spacing} Hz)"
+    )]
     BandHasNoBin {
         /// Lower edge (Hz).
         fmin: f64,
@@ -39,11 +54,11 @@ pub enum ConfigError {
         spacing: f64,
     },
     /// The azimuth step does not divide the circle into at least 4 cells.
-    #[error("azimuth step {0} degrees must be in (0, 90]")]
+    #[error("az_step_deg = {0} must be in (0, 90] degrees")]
     AzimuthStep(f64),
     /// The elevation search range is malformed.
     #[error(
-        "elevation search [{min}, {max}] step {step} degrees is invalid (need -90 <= min <= max <= 90, step > 0)"
+        "elevation = {{ min_deg = {min}, max_deg = {max}, step_deg = {step} }} is invalid (need -90 <= min_deg <= max_deg <= 90, step_deg > 0)"
     )]
     Elevation {
         /// Lowest elevation (degrees).
@@ -54,13 +69,13 @@ pub enum ConfigError {
         step: f64,
     },
     /// A block must hold at least one frame.
-    #[error("block of {0} frames: must be at least 1")]
+    #[error("block_frames = {0}: must be at least 1")]
     BlockFrames(usize),
     /// Max pooling must average at least the one best block.
-    #[error("pool_top of {0} blocks: must be at least 1")]
+    #[error("pool_top = {0}: must be at least 1")]
     PoolTop(usize),
     /// Peak separation outside `[0, 180]` degrees.
-    #[error("minimum peak separation {0} degrees must be in [0, 180]")]
+    #[error("min_sep_deg = {0} must be in [0, 180] degrees")]
     MinSeparation(f64),
     /// A decay gate that is negative or not finite.
     #[error("decay_gate_db must be finite and >= 0, got {0}")]
@@ -84,16 +99,16 @@ pub enum ConfigError {
     #[error("min_significance must be finite and >= 0, got {0}")]
     MinSignificance(f64),
     /// Asked for no peaks at all.
-    #[error("number of peaks must be at least 1, got {0}")]
+    #[error("num_peaks must be at least 1, got {0}")]
     MaxPeaks(usize),
     /// Speed of sound not positive and finite.
-    #[error("speed of sound {0} m/s must be positive and finite")]
+    #[error("speed_of_sound = {0} m/s must be positive and finite")]
     SpeedOfSound(f64),
     /// A MUSIC signal subspace of no dimension.
     #[error("music_sources must be at least 1, got {0}")]
     MusicSources(usize),
     /// MVDR diagonal loading not positive and finite.
-    #[error("diagonal loading {0} must be positive and finite")]
+    #[error("mvdr_loading = {0} must be positive and finite")]
     Loading(f64),
     /// A sample rate of zero.
     #[error("sample rate must be positive")]
