@@ -238,9 +238,10 @@ fn not_a_bag(head: &[u8]) -> Error {
             "a ROS bag of format {version}, which only ROS's own tools still read (rosbag reindex/fix)"
         )
     } else if head.starts_with(b"\x89MCAP") {
-        "an MCAP file (a ROS 2 bag): read it with bag::read_file, which tells the two apart".into()
+        "an MCAP file (a ROS 2 bag): read it with iasm_bag::read_file, which tells the two apart"
+            .into()
     } else if head.starts_with(b"SQLite format") {
-        "an SQLite database (a ROS 2 bag's .db3): read it with bag::read_file, which tells them apart"
+        "an SQLite database (a ROS 2 bag's .db3): read it with iasm_bag::read_file, which tells them apart"
             .into()
     } else if head.is_empty() {
         "the file is empty".into()

@@ -22,7 +22,6 @@
 //! second publisher of the robot's `/map`.
 
 use std::collections::{BTreeMap, HashMap};
-use std::path::Path;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
@@ -314,8 +313,11 @@ pub fn run(a: &Ros2Args) -> Result<Outcome> {
     let subscriber = dp
         .create_subscriber(&qos(false, false, 100))
         .map_err(|e| anyhow!("a DDS subscriber: {e}"))?;
-    let mut out = Outputs::new(&dp)?;
-    let mut mcap = a.mcap.as_deref().map(rosmap::McapFile::new).transpose()?;
+    let mut sink = Sink {
+        out: Outputs::new(&dp)?,
+        mcap: a.mcap.as_deref().map(rosmap::McapFile::new).transpose()?,
+        json: a.out.clone(),
+    };
     let mut readers: BTreeMap<String, (String, Reader)> = BTreeMap::new();
     let mut log = Log::default();
     let mut last_discovery = Instant::now() - Duration::from_secs(10);
@@ -399,21 +401,7 @@ pub fn run(a: &Ros2Args) -> Result<Outcome> {
         }
         if last_step.elapsed() >= Duration::from_millis(200) {
             last_step = Instant::now();
-            let (updates, warnings) = live.step(false);
-            for w in &warnings {
-                log.warn(w);
-            }
-            for u in updates {
-                announce(&live, &u);
-                publish(
-                    &live,
-                    &u.map,
-                    &mut out,
-                    mcap.as_mut(),
-                    a.out.as_deref(),
-                    false,
-                )?;
-            }
+            step(&mut live, &mut sink, &mut log, false)?;
         }
         if let (Some(idle), Some(t)) = (a.until_idle, last_message)
             && t.elapsed().as_secs_f64() > idle
@@ -426,24 +414,10 @@ pub fn run(a: &Ros2Args) -> Result<Outcome> {
         }
     }
     // The run's end: the stop the robot stands at, then the full map over every stop.
-    let (updates, warnings) = live.step(true);
-    for w in &warnings {
-        log.warn(w);
-    }
-    for u in updates {
-        announce(&live, &u);
-        publish(
-            &live,
-            &u.map,
-            &mut out,
-            mcap.as_mut(),
-            a.out.as_deref(),
-            false,
-        )?;
-    }
+    step(&mut live, &mut sink, &mut log, true)?;
     match live.finish() {
         Some(fin) => {
-            publish(&live, &fin, &mut out, mcap.as_mut(), a.out.as_deref(), true)?;
+            sink.publish(&live, &fin, true)?;
             println!(
                 "{} stops; final map (full, seed {}): {} sources",
                 live.stops().len(),
@@ -465,7 +439,7 @@ pub fn run(a: &Ros2Args) -> Result<Outcome> {
     for n in live.notes() {
         eprintln!("note: {n}");
     }
-    if let Some(f) = mcap {
+    if let Some(f) = sink.mcap {
         f.finish()?;
     }
     // Give reliable readers a moment to take the final map before the writers go.
@@ -488,24 +462,40 @@ fn announce(live: &LiveMapper, u: &crate::live::Update) {
     );
 }
 
-fn publish(
-    live: &LiveMapper,
-    map: &asm::MapResult,
-    out: &mut Outputs,
-    mcap: Option<&mut rosmap::McapFile>,
-    json: Option<&Path>,
-    final_map: bool,
-) -> Result<()> {
-    let t = now_ns();
-    if let Some(m) = live.messages(map, t) {
-        out.publish(&m)?;
-        if let Some(f) = mcap {
-            f.add(&m, t)?;
+/// Where each map update goes: the topics, the MCAP file, the JSON.
+struct Sink {
+    out: Outputs,
+    mcap: Option<rosmap::McapFile>,
+    json: Option<std::path::PathBuf>,
+}
+
+impl Sink {
+    fn publish(&mut self, live: &LiveMapper, map: &asm::MapResult, final_map: bool) -> Result<()> {
+        let t = now_ns();
+        if let Some(m) = live.messages(map, t) {
+            self.out.publish(&m)?;
+            if let Some(f) = self.mcap.as_mut() {
+                f.add(&m, t)?;
+            }
         }
+        if let Some(path) = &self.json {
+            let report = live.report(map, final_map);
+            crate::output::write_atomic(path, serde_json::to_string_pretty(&report)?.as_bytes())?;
+        }
+        Ok(())
     }
-    if let Some(path) = json {
-        let report = live.report(map, final_map);
-        crate::output::write_atomic(path, serde_json::to_string_pretty(&report)?.as_bytes())?;
+}
+
+/// Maps the stops the robot has finished (with `all`, the one it stands at too), says so
+/// and publishes each update.
+fn step(live: &mut LiveMapper, sink: &mut Sink, log: &mut Log, all: bool) -> Result<()> {
+    let (updates, warnings) = live.step(all);
+    for w in &warnings {
+        log.warn(w);
+    }
+    for u in updates {
+        announce(live, &u);
+        sink.publish(live, &u.map, false)?;
     }
     Ok(())
 }

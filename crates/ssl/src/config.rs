@@ -820,14 +820,6 @@ impl SslConfig {
             )?;
         }
         n(
-            "block_frames",
-            self.block_frames,
-            1,
-            100_000,
-            "1 to 100000 frames",
-        )?;
-        n("pool_top", self.pool_top, 1, 10_000, "1 to 10000 blocks")?;
-        n(
             "dominance_blocks",
             self.dominance_blocks,
             0,
@@ -991,12 +983,28 @@ mod tests {
             az_step_deg: 0.0,
             ..SslConfig::default()
         };
-        assert_eq!(c.validate(), Err(ConfigError::AzimuthStep(0.0)));
+        assert!(
+            matches!(
+                c.validate(),
+                Err(ConfigError::OutOfRange {
+                    name: "az_step_deg",
+                    ..
+                })
+            ),
+            "{:?}",
+            c.validate()
+        );
         let c = SslConfig {
             num_peaks: 0,
             ..SslConfig::default()
         };
-        assert_eq!(c.validate(), Err(ConfigError::MaxPeaks(0)));
+        assert!(matches!(
+            c.validate(),
+            Err(ConfigError::OutOfRange {
+                name: "num_peaks",
+                ..
+            })
+        ));
         let c = SslConfig {
             pool_top: 0,
             ..SslConfig::default()
@@ -1006,7 +1014,13 @@ mod tests {
             speed_of_sound: -1.0,
             ..SslConfig::default()
         };
-        assert_eq!(c.validate(), Err(ConfigError::SpeedOfSound(-1.0)));
+        assert!(matches!(
+            c.validate(),
+            Err(ConfigError::OutOfRange {
+                name: "speed_of_sound",
+                ..
+            })
+        ));
         let c = SslConfig {
             min_prominence: 1.5,
             ..SslConfig::default()

@@ -1538,7 +1538,8 @@ mod tests {
     #[test]
     fn a_band_above_nyquist_is_refused() {
         let c = SslConfig {
-            fmin_hz: 9000.0,
+            fmin_hz: 8500.0,
+            fmax_hz: 9000.0,
             ..SslConfig::default()
         };
         let e = Localizer::new(&MicArray::default(), 16_000, &c).unwrap_err();
