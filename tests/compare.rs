@@ -242,3 +242,51 @@ fn compare_rules_accounts_for_every_missed_near_source_of_each_method() {
     let header = csv.lines().next().unwrap();
     assert!(header.ends_with("beyond_n,beyond_n_on_source"), "{header}");
 }
+
+/// The report folder is built beside its place and swapped in whole: an earlier report is
+/// replaced file for file (no figure of the last run stays beside the new JSON), and a
+/// folder that holds anything else is refused, left as it was.
+// See: issue 49
+#[test]
+fn r49_the_report_folder_is_replaced_whole_or_not_at_all() {
+    let dir = tempdir();
+    let root = dataset(&dir);
+    let out = path(&dir, "report");
+    // An earlier report, written before reports were swapped in whole.
+    std::fs::create_dir_all(&out).unwrap();
+    for f in ["report.json", "maps.svg"] {
+        std::fs::write(out.join(f), "the last run").unwrap();
+    }
+    let o = compare(&root, &out, "gcc-phat", "1", &[]);
+    assert!(o.status.success(), "{}", show(&o));
+    for f in [
+        "report.json",
+        "report.csv",
+        "ospa.svg",
+        "error_by_distance.svg",
+        "maps.svg",
+    ] {
+        let text = std::fs::read_to_string(out.join(f)).unwrap();
+        assert!(
+            !text.contains("the last run") && text.contains("gcc-phat"),
+            "{f}"
+        );
+    }
+    // Nothing left beside it.
+    let siblings: Vec<String> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert!(
+        siblings.iter().all(|s| !s.starts_with(".report.")),
+        "{siblings:?}"
+    );
+    // A folder of the user's own files is not written into.
+    let theirs = path(&dir, "mine");
+    std::fs::create_dir_all(&theirs).unwrap();
+    std::fs::write(theirs.join("notes.txt"), "keep").unwrap();
+    let o = compare(&root, &theirs, "gcc-phat", "1", &[]);
+    assert_clear_error(&o, &["mine", "not empty"]);
+    let left: Vec<_> = std::fs::read_dir(&theirs).unwrap().collect();
+    assert_eq!(left.len(), 1);
+}

@@ -106,6 +106,7 @@ pub fn replace_dir(out: &Path, force: bool, fill: impl FnOnce(&Path) -> Result<(
             );
         }
     }
+    remove_stale_siblings(out);
     let tmp = sibling(out, "tmp");
     if tmp.exists() {
         std::fs::remove_dir_all(&tmp).with_context(|| format!("removing {}", tmp.display()))?;
@@ -130,9 +131,67 @@ pub fn replace_dir(out: &Path, force: bool, fill: impl FnOnce(&Path) -> Result<(
     Ok(())
 }
 
+/// Removes the temporary and set-aside folders (`.NAME.tmp-PID`, `.NAME.old-PID`) that a
+/// run killed before its rename left beside `out`, when no process of that PID runs (on
+/// systems without `/proc`, only this process's own).
+fn remove_stale_siblings(out: &Path) {
+    let (Some(parent), Some(name)) = (out.parent(), out.file_name()) else {
+        return;
+    };
+    let parent = if parent.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        parent
+    };
+    let name = name.to_string_lossy();
+    let Ok(entries) = std::fs::read_dir(parent) else {
+        return;
+    };
+    for e in entries.flatten() {
+        let file = e.file_name().to_string_lossy().into_owned();
+        let Some(rest) = file.strip_prefix(&format!(".{name}.")) else {
+            continue;
+        };
+        let Some(pid) = rest
+            .strip_prefix("tmp-")
+            .or_else(|| rest.strip_prefix("old-"))
+            .and_then(|p| p.parse::<u32>().ok())
+        else {
+            continue;
+        };
+        let alive = pid == std::process::id()
+            || (Path::new("/proc/self").exists() && Path::new(&format!("/proc/{pid}")).exists());
+        if !alive && e.path().is_dir() {
+            let _ = std::fs::remove_dir_all(e.path());
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_killed_runs_temporary_folder_is_removed_by_the_next() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("ds");
+        // A PID no process has (above the kernel's pid_max of 2^22).
+        let stale = dir.path().join(".ds.tmp-4999999");
+        std::fs::create_dir_all(stale.join("audio")).unwrap();
+        let other = dir.path().join(".other.tmp-4999999");
+        std::fs::create_dir_all(&other).unwrap();
+        replace_dir(&out, false, |d| {
+            std::fs::write(d.join("a"), "x")?;
+            Ok(())
+        })
+        .unwrap();
+        assert!(!stale.exists());
+        assert!(
+            other.exists(),
+            "another output's temporary is not ours to remove"
+        );
+        assert_eq!(std::fs::read_to_string(out.join("a")).unwrap(), "x");
+    }
 
     #[test]
     fn a_file_is_replaced_whole_and_no_temporary_is_left() {

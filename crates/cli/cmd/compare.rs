@@ -1,6 +1,6 @@
 //! `iasm compare`: every SSL method side by side on one data set.
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 
 use crate::Outcome;
 use crate::args::CompareArgs;
@@ -37,11 +37,15 @@ pub fn run(a: &CompareArgs) -> Result<Outcome> {
         print_table(&report, secs);
     }
     if let Some(dir) = &a.out {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        // Built beside the folder and swapped in whole: a run that fails part-way leaves the
+        // last report as it was, never a folder of two runs' files. A folder of nothing but
+        // an earlier report's files (written before the swap was) is replaced too.
         let json = serde_json::to_string_pretty(&report)?;
-        crate::output::write_atomic(&dir.join("report.json"), json.as_bytes())?;
-        crate::output::write_atomic(&dir.join("report.csv"), to_csv(&report).as_bytes())?;
-        crate::figure::comparison(&report, dir)?;
+        crate::output::replace_dir(dir, only_report_files(dir), |d| {
+            crate::output::write_atomic(&d.join("report.json"), json.as_bytes())?;
+            crate::output::write_atomic(&d.join("report.csv"), to_csv(&report).as_bytes())?;
+            crate::figure::comparison(&report, d)
+        })?;
         if !a.report.json {
             println!(
                 "report: {} (report.json, report.csv, ospa.svg, error_by_distance.svg, maps.svg)",
@@ -50,6 +54,22 @@ pub fn run(a: &CompareArgs) -> Result<Outcome> {
         }
     }
     Ok(Outcome::Success)
+}
+
+/// Whether `dir` holds nothing but the files `iasm compare --out` writes.
+fn only_report_files(dir: &std::path::Path) -> bool {
+    const OURS: [&str; 5] = [
+        "report.json",
+        "report.csv",
+        "ospa.svg",
+        "error_by_distance.svg",
+        "maps.svg",
+    ];
+    std::fs::read_dir(dir).is_ok_and(|entries| {
+        entries
+            .flatten()
+            .all(|e| OURS.contains(&e.file_name().to_string_lossy().as_ref()))
+    })
 }
 
 fn print_table(r: &Report, secs: f64) {
