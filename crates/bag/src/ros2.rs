@@ -295,6 +295,30 @@ pub fn bag_files(path: &Path) -> Result<(Storage, Vec<std::path::PathBuf>)> {
         };
         return Ok((storage, vec![path.to_path_buf()]));
     }
+    // A ROS 2 bag's folder says which files are the bag: another run's file left beside
+    // them is not read into this one.
+    if let Some(listed) = listed_files(path)? {
+        let name = |p: &std::path::PathBuf| {
+            let n = p
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default();
+            n.strip_suffix(".zstd").map(str::to_owned).unwrap_or(n)
+        };
+        let storage = if listed.iter().all(|p| name(p).ends_with(".mcap")) {
+            Storage::Mcap
+        } else if listed.iter().all(|p| name(p).ends_with(".db3")) {
+            Storage::Sqlite
+        } else {
+            return Err(Error::NotABag {
+                what: format!(
+                    "{}: its files are neither all MCAP nor all SQLite",
+                    path.join("metadata.yaml").display()
+                ),
+            });
+        };
+        return Ok((storage, listed));
+    }
     let (mut mcaps, mut db3s, mut bags) = (Vec::new(), Vec::new(), Vec::new());
     for entry in std::fs::read_dir(path)? {
         let p = entry?.path();
@@ -359,6 +383,43 @@ pub fn bag_files(path: &Path) -> Result<(Storage, Vec<std::path::PathBuf>)> {
         )
     });
     Ok((storage, files))
+}
+
+/// The files `dir/metadata.yaml` names (rosbag2's `relative_file_paths`, in order), or
+/// `None` without one (or one that names none).
+///
+/// # Errors
+/// A metadata file that cannot be read, or that names a file the folder does not hold.
+fn listed_files(dir: &Path) -> Result<Option<Vec<std::path::PathBuf>>> {
+    let meta = dir.join("metadata.yaml");
+    if !meta.is_file() {
+        return Ok(None);
+    }
+    let text = std::fs::read_to_string(&meta)?;
+    let mut lines = text
+        .lines()
+        .skip_while(|l| l.trim() != "relative_file_paths:");
+    if lines.next().is_none() {
+        return Ok(None);
+    }
+    let mut files = Vec::new();
+    for line in lines {
+        let Some(item) = line.trim().strip_prefix("- ") else {
+            break;
+        };
+        let file = dir.join(item.trim().trim_matches(|c| c == '"' || c == '\''));
+        if !file.is_file() {
+            return Err(Error::NotABag {
+                what: format!(
+                    "{} names {}, which is not in the folder",
+                    meta.display(),
+                    file.display()
+                ),
+            });
+        }
+        files.push(file);
+    }
+    Ok((!files.is_empty()).then_some(files))
 }
 
 /// The first bytes of a zstd frame (RFC 8878), little-endian `0xFD2FB528`.

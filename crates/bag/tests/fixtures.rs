@@ -679,3 +679,31 @@ fn a_run_fed_live_gives_each_stop_once_as_soon_as_the_robot_leaves_it() {
         }
     }
 }
+
+/// A ROS 2 bag's folder names its files in `metadata.yaml`: a stray MCAP of another run
+/// left beside them (here the AudioStamped run, whose topics differ) is not read into
+/// this one, and a listed file that is missing is named.
+// See: issue 49
+#[test]
+fn a_ros2_bag_folder_reads_the_files_its_metadata_names() {
+    let dir = std::env::temp_dir().join(format!("iasm-bag-meta-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    for f in ["metadata.yaml", "run_ros2.mcap"] {
+        std::fs::copy(fixture("run_ros2").join(f), dir.join(f)).unwrap();
+    }
+    std::fs::copy(fixture("run_audiostamped.mcap"), dir.join("other_run.mcap")).unwrap();
+    let run = iasm_bag::read_file(&dir, &ReadOptions::default()).unwrap();
+    let alone = iasm_bag::read_file(&fixture("run_ros2"), &ReadOptions::default()).unwrap();
+    assert_eq!(run.topics, alone.topics);
+    assert!(run.topics.iter().all(|t| t.topic != "/audio/in"));
+    std::fs::remove_file(dir.join("run_ros2.mcap")).unwrap();
+    let e = iasm_bag::read_file(&dir, &ReadOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("metadata.yaml") && e.contains("run_ros2.mcap"),
+        "{e}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
