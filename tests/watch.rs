@@ -335,3 +335,32 @@ fn a_pose_table_lagging_one_stop_behind_loses_nothing() {
     let replayed = json_file(&path(&dir, "replayed.json"));
     assert_eq!(fin["sources"], replayed["sources"]);
 }
+
+/// Waiting costs no CPU: a watch with nothing arriving sleeps on file-system notifications
+/// (or its poll), and its own reading of the folder does not wake it. It used to spend 8
+/// of every 10 s of CPU waiting (the access events of its own looks woke it at once).
+// See: issue 49
+#[cfg(target_os = "linux")]
+#[test]
+fn r49_an_idle_watch_spends_no_cpu_waiting() {
+    let dir = tempdir();
+    let root = path(&dir, "ds");
+    mapping_dataset(&root, &[[1.0, 1.0]], &[]);
+    std::fs::create_dir_all(root.join("audio")).unwrap();
+    let mut child = spawn_watch(&root, &path(&dir, "w.json"), 5);
+    // CPU time (user + system, clock ticks) of the child, from /proc.
+    let cpu = |pid: u32| -> u64 {
+        let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).unwrap();
+        let after = &stat[stat.rfind(')').unwrap() + 2..];
+        let f: Vec<&str> = after.split_whitespace().collect();
+        f[11].parse::<u64>().unwrap() + f[12].parse::<u64>().unwrap()
+    };
+    std::thread::sleep(Duration::from_secs(1));
+    let before = cpu(child.id());
+    std::thread::sleep(Duration::from_secs(3));
+    let spent = cpu(child.id()) - before;
+    let _ = child.kill();
+    let _ = child.wait();
+    // Ticks are 10 ms: a busy loop spends about 300 in 3 s; waiting, none or one.
+    assert!(spent <= 10, "{spent} ticks of CPU in 3 s of waiting");
+}

@@ -295,8 +295,12 @@ fn follow(
         let _ = ctrlc::set_handler(move || stop.store(true, Ordering::SeqCst));
     }
     let (tx, rx) = std::sync::mpsc::channel::<()>();
-    let watcher = notify::recommended_watcher(move |_: notify::Result<notify::Event>| {
-        let _ = tx.send(());
+    // Only a change wakes the loop: reading the folder's files (as every look does) makes
+    // access events of its own, and waking on those kept an idle watch busy.
+    let watcher = notify::recommended_watcher(move |e: notify::Result<notify::Event>| {
+        if e.is_ok_and(|e| !e.kind.is_access()) {
+            let _ = tx.send(());
+        }
     })
     .and_then(|mut w| {
         use notify::Watcher;
@@ -339,7 +343,11 @@ fn follow(
                     eprintln!("waiting: {why}");
                     waiting = Some(why);
                 }
-                let _ = rx.recv_timeout(poll);
+                // Without notifications (the sender gone), a plain sleep: never a spin.
+                if let Err(std::sync::mpsc::RecvTimeoutError::Disconnected) = rx.recv_timeout(poll)
+                {
+                    std::thread::sleep(poll);
+                }
                 while rx.try_recv().is_ok() {}
             }
         }
