@@ -292,6 +292,127 @@ impl Log {
     }
 }
 
+/// A reader of `topic` (its DDS name and type) with `q`, as [`writer`] makes writers.
+fn reader(
+    dp: &DomainParticipant,
+    subscriber: &rustdds::Subscriber,
+    (dds_topic, dds_type): (String, String),
+    q: QosPolicies,
+) -> Result<Reader> {
+    let t = dp
+        .create_topic(dds_topic.clone(), dds_type, &q, TopicKind::NoKey)
+        .map_err(|e| anyhow!("topic {dds_topic}: {e}"))?;
+    subscriber
+        .create_datareader_no_key::<raw::Cdr, raw::Adapter>(&t, Some(q))
+        .map_err(|e| anyhow!("a reader of {dds_topic}: {e}"))
+}
+
+/// The node's subscriptions, and when each kind of message last came.
+struct Inputs {
+    subscriber: rustdds::Subscriber,
+    /// Topic -> (type, reader).
+    readers: BTreeMap<String, (String, Reader)>,
+    last_message: Option<Instant>,
+    last_pose: Option<Instant>,
+    last_audio: Option<Instant>,
+    told_no_pose: Instant,
+}
+
+impl Inputs {
+    fn new(dp: &DomainParticipant) -> Result<Self> {
+        Ok(Self {
+            subscriber: dp
+                .create_subscriber(&qos(false, false, 100))
+                .map_err(|e| anyhow!("a DDS subscriber: {e}"))?,
+            readers: BTreeMap::new(),
+            last_message: None,
+            last_pose: None,
+            last_audio: None,
+            told_no_pose: Instant::now(),
+        })
+    }
+
+    /// Subscribes to every topic DDS discovery has found a publisher of, of a type the bag
+    /// reader knows (not ours): best effort, or reliable and transient local where the
+    /// publisher offers that.
+    fn discover(&mut self, dp: &DomainParticipant) -> Result<()> {
+        for w in dp.discovered_writers() {
+            let d = &w.publication_topic_data;
+            let Some((topic, ty)) = ros_names(&d.topic_name, &d.type_name) else {
+                continue;
+            };
+            if self.readers.contains_key(&topic)
+                || Kind::of(&ty).is_none()
+                || topic.starts_with("/iasm/")
+            {
+                continue;
+            }
+            let latched = matches!(d.durability, Some(Durability::TransientLocal));
+            let q = qos(latched, latched, if latched { 1 } else { 100 });
+            let r = reader(
+                dp,
+                &self.subscriber,
+                (d.topic_name.clone(), d.type_name.clone()),
+                q,
+            )?;
+            eprintln!(
+                "subscribed to {topic} ({ty}{})",
+                if latched { ", transient local" } else { "" }
+            );
+            self.readers.insert(topic, (ty, r));
+        }
+        Ok(())
+    }
+
+    /// Hands every message waiting to `live`; how many there were.
+    fn take(&mut self, live: &mut LiveMapper, log: &mut Log) -> usize {
+        let mut got = 0usize;
+        for (topic, (ty, r)) in &mut self.readers {
+            loop {
+                match r.take_next_sample() {
+                    Ok(Some(s)) => {
+                        got += 1;
+                        let kind = Kind::of(ty);
+                        if kind.is_some_and(Kind::is_pose) || kind == Some(Kind::Tf) {
+                            self.last_pose = Some(Instant::now());
+                        } else if kind.is_some_and(Kind::is_audio) {
+                            self.last_audio = Some(Instant::now());
+                        }
+                        if let Some(w) = live.push(topic, ty, now_ns(), &s.value().0) {
+                            log.warn(&w);
+                        }
+                    }
+                    Ok(None) => break,
+                    Err(e) => {
+                        log.warn(&format!("a message of {topic} unreadable: {e:?}"));
+                        break;
+                    }
+                }
+            }
+        }
+        if got > 0 {
+            self.last_message = Some(Instant::now());
+        }
+        got
+    }
+
+    /// Warns (every 30 s at most) when audio flows but no pose has come for 10 s: no stop
+    /// can be found.
+    fn check_poses(&mut self, log: &mut Log) {
+        if self
+            .last_audio
+            .is_some_and(|t| t.elapsed() < Duration::from_secs(2))
+            && self
+                .last_pose
+                .is_none_or(|p| p.elapsed() > Duration::from_secs(10))
+            && self.told_no_pose.elapsed() > Duration::from_secs(30)
+        {
+            self.told_no_pose = Instant::now();
+            log.warn("no pose received for 10 s while audio arrives: no stop can be found (is the robot's odometry or localisation publishing?)");
+        }
+    }
+}
+
 /// Runs `iasm ros2`: the node, until Ctrl-C (or `--until-idle`); then the final map.
 ///
 /// # Errors
@@ -310,22 +431,15 @@ pub fn run(a: &Ros2Args) -> Result<Outcome> {
         let _ = ctrlc::set_handler(move || stop.store(true, Ordering::SeqCst));
     }
     let (_ctx, _node, dp) = participant(a.domain_id, &a.node_name)?;
-    let subscriber = dp
-        .create_subscriber(&qos(false, false, 100))
-        .map_err(|e| anyhow!("a DDS subscriber: {e}"))?;
+    let mut inputs = Inputs::new(&dp)?;
     let mut sink = Sink {
         out: Outputs::new(&dp)?,
         mcap: a.mcap.as_deref().map(rosmap::McapFile::new).transpose()?,
         json: a.out.clone(),
     };
-    let mut readers: BTreeMap<String, (String, Reader)> = BTreeMap::new();
     let mut log = Log::default();
     let mut last_discovery = Instant::now() - Duration::from_secs(10);
     let mut last_step = Instant::now();
-    let mut last_message: Option<Instant> = None;
-    let mut last_pose: Option<Instant> = None;
-    let mut last_audio: Option<Instant> = None;
-    let mut told_no_pose = Instant::now();
     eprintln!(
         "iasm ros2: node /{} on DDS domain {}; listening for audio, poses and the map (Ctrl-C ends the run with its final map)",
         a.node_name, a.domain_id
@@ -333,77 +447,15 @@ pub fn run(a: &Ros2Args) -> Result<Outcome> {
     while !stop.load(Ordering::SeqCst) {
         if last_discovery.elapsed() >= Duration::from_millis(250) {
             last_discovery = Instant::now();
-            for w in dp.discovered_writers() {
-                let d = &w.publication_topic_data;
-                let Some((topic, ty)) = ros_names(&d.topic_name, &d.type_name) else {
-                    continue;
-                };
-                if readers.contains_key(&topic)
-                    || Kind::of(&ty).is_none()
-                    || topic.starts_with("/iasm/")
-                {
-                    continue;
-                }
-                let latched = matches!(d.durability, Some(Durability::TransientLocal));
-                let q = qos(latched, latched, if latched { 1 } else { 100 });
-                let t = dp
-                    .create_topic(
-                        d.topic_name.clone(),
-                        d.type_name.clone(),
-                        &q,
-                        TopicKind::NoKey,
-                    )
-                    .map_err(|e| anyhow!("topic {topic}: {e}"))?;
-                let r = subscriber
-                    .create_datareader_no_key::<raw::Cdr, raw::Adapter>(&t, Some(q))
-                    .map_err(|e| anyhow!("a reader of {topic}: {e}"))?;
-                eprintln!(
-                    "subscribed to {topic} ({ty}{})",
-                    if latched { ", transient local" } else { "" }
-                );
-                readers.insert(topic, (ty, r));
-            }
+            inputs.discover(&dp)?;
         }
-        let mut got = 0usize;
-        for (topic, (ty, r)) in &mut readers {
-            loop {
-                match r.take_next_sample() {
-                    Ok(Some(s)) => {
-                        got += 1;
-                        let kind = Kind::of(ty);
-                        if kind.is_some_and(Kind::is_pose) || kind == Some(Kind::Tf) {
-                            last_pose = Some(Instant::now());
-                        } else if kind.is_some_and(Kind::is_audio) {
-                            last_audio = Some(Instant::now());
-                        }
-                        if let Some(w) = live.push(topic, ty, now_ns(), &s.value().0) {
-                            log.warn(&w);
-                        }
-                    }
-                    Ok(None) => break,
-                    Err(e) => {
-                        log.warn(&format!("a message of {topic} unreadable: {e:?}"));
-                        break;
-                    }
-                }
-            }
-        }
-        if got > 0 {
-            last_message = Some(Instant::now());
-        }
-        // A silent pose topic: audio flows but nothing says where the robot is.
-        if last_audio.is_some_and(|t| t.elapsed() < Duration::from_secs(2))
-            && last_pose.is_none_or(|p| p.elapsed() > Duration::from_secs(10))
-            && told_no_pose.elapsed() > Duration::from_secs(30)
-        {
-            told_no_pose = Instant::now();
-            log.warn("no pose received for 10 s while audio arrives: no stop can be found (is the robot's odometry or localisation publishing?)");
-        }
+        let got = inputs.take(&mut live, &mut log);
+        inputs.check_poses(&mut log);
         if last_step.elapsed() >= Duration::from_millis(200) {
             last_step = Instant::now();
             step(&mut live, &mut sink, &mut log, false)?;
         }
-        if let (Some(idle), Some(t)) = (a.until_idle, last_message)
+        if let (Some(idle), Some(t)) = (a.until_idle, inputs.last_message)
             && t.elapsed().as_secs_f64() > idle
         {
             eprintln!("no message for {idle} s: the run is over");
@@ -415,13 +467,21 @@ pub fn run(a: &Ros2Args) -> Result<Outcome> {
     }
     // The run's end: the stop the robot stands at, then the full map over every stop.
     step(&mut live, &mut sink, &mut log, true)?;
+    finish(&mut live, sink, a.seed)?;
+    // Give reliable readers a moment to take the final map before the writers go.
+    std::thread::sleep(Duration::from_millis(300));
+    Ok(Outcome::Success)
+}
+
+/// Publishes and writes the final map (the full map over every stop), says it, and ends
+/// the MCAP file.
+fn finish(live: &mut LiveMapper, mut sink: Sink, seed: u64) -> Result<()> {
     match live.finish() {
         Some(fin) => {
-            sink.publish(&live, &fin, true)?;
+            sink.publish(live, &fin, true)?;
             println!(
-                "{} stops; final map (full, seed {}): {} sources",
+                "{} stops; final map (full, seed {seed}): {} sources",
                 live.stops().len(),
-                a.seed,
                 fin.sources.len()
             );
             for (k, s) in fin.sources.iter().enumerate() {
@@ -442,9 +502,7 @@ pub fn run(a: &Ros2Args) -> Result<Outcome> {
     if let Some(f) = sink.mcap {
         f.finish()?;
     }
-    // Give reliable readers a moment to take the final map before the writers go.
-    std::thread::sleep(Duration::from_millis(300));
-    Ok(Outcome::Success)
+    Ok(())
 }
 
 fn announce(live: &LiveMapper, u: &crate::live::Update) {
@@ -550,14 +608,16 @@ fn shift_stamps(kind: Kind, data: &mut [u8], shift_ns: i64) -> Result<()> {
     }
 }
 
-/// Runs `iasm ros2-play`: the bag's messages published on their topics at their pace, stamps
-/// moved to now, as the robot that recorded them published them.
+/// A recorded message: topic, type, receipt time (ns), CDR bytes.
+type Recorded = (String, String, i64, Vec<u8>);
+
+/// A ROS 2 bag's messages of the types iasm reads, in time order.
 ///
 /// # Errors
-/// A bag that cannot be read or is not a ROS 2 bag, or DDS that cannot start.
-pub fn play(a: &Ros2PlayArgs) -> Result<Outcome> {
-    let mut msgs: Vec<(String, String, i64, Vec<u8>)> = Vec::new();
-    bag::ros2::scan_files(&a.bag, |m| {
+/// A bag that cannot be read, or a ROS 1 bag (its messages are not CDR).
+fn bag_messages(path: &std::path::Path) -> Result<Vec<Recorded>> {
+    let mut msgs = Vec::new();
+    bag::ros2::scan_files(path, |m| {
         if m.connection.encoding != bag::msg::Encoding::Cdr {
             return Err(bag::Error::Topic(format!(
                 "{} is a ROS 1 topic: ros2-play plays ROS 2 bags",
@@ -574,8 +634,69 @@ pub fn play(a: &Ros2PlayArgs) -> Result<Outcome> {
         }
         Ok(())
     })
-    .with_context(|| format!("reading {}", a.bag.display()))?;
+    .with_context(|| format!("reading {}", path.display()))?;
     msgs.sort_by_key(|m| m.2);
+    Ok(msgs)
+}
+
+/// Waits until DDS discovery has found a reader of every topic of `writers`, or `wait_s`
+/// has passed (then says which have none).
+fn wait_for_subscribers(dp: &DomainParticipant, writers: &BTreeMap<String, Writer>, wait_s: f64) {
+    let unmatched = || -> Vec<String> {
+        let readers: Vec<String> = dp
+            .discovered_readers()
+            .into_iter()
+            .map(|r| r.subscription_topic_data.topic_name)
+            .collect();
+        writers
+            .keys()
+            .filter(|t| !readers.contains(&dds_names(t, "").0))
+            .cloned()
+            .collect()
+    };
+    let t0 = Instant::now();
+    while !unmatched().is_empty() && t0.elapsed().as_secs_f64() < wait_s {
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let left = unmatched();
+    if !left.is_empty() {
+        eprintln!("warning: no subscriber to {left:?} after {wait_s} s; playing anyway");
+    }
+    // Matched by discovery is not yet matched by the writer: a moment for that.
+    std::thread::sleep(Duration::from_millis(500));
+}
+
+/// The node's sources as last heard on `/iasm/source_poses`.
+struct Listener {
+    reader: Option<Reader>,
+    heard: Vec<[f64; 2]>,
+}
+
+impl Listener {
+    /// Takes what has come.
+    fn take(&mut self) {
+        use iasm_ros::msg::Message;
+        if let Some(r) = &mut self.reader {
+            while let Ok(Some(s)) = r.take_next_sample() {
+                if let Ok(p) = iasm_ros::msg::PoseArray::from_cdr(&s.value().0) {
+                    self.heard = p
+                        .poses
+                        .iter()
+                        .map(|p| [p.position.x, p.position.y])
+                        .collect();
+                }
+            }
+        }
+    }
+}
+
+/// Runs `iasm ros2-play`: the bag's messages published on their topics at their pace, stamps
+/// moved to now, as the robot that recorded them published them.
+///
+/// # Errors
+/// A bag that cannot be read or is not a ROS 2 bag, or DDS that cannot start.
+pub fn play(a: &Ros2PlayArgs) -> Result<Outcome> {
+    let msgs = bag_messages(&a.bag)?;
     let Some(first) = msgs.first().map(|m| m.2) else {
         bail!("{}: no message of a type iasm reads", a.bag.display());
     };
@@ -592,72 +713,26 @@ pub fn play(a: &Ros2PlayArgs) -> Result<Outcome> {
         }
     }
     // The node's sources, when asked.
-    let listen = match &a.listen {
-        Some(_) => {
-            let sub = dp
-                .create_subscriber(&qos(true, false, 10))
-                .map_err(|e| anyhow!("a DDS subscriber: {e}"))?;
-            let (t, ty) = dds_names(rosmap::SOURCE_POSES_TOPIC, "geometry_msgs/msg/PoseArray");
-            let q = qos(true, false, 10);
-            let topic = dp
-                .create_topic(t, ty, &q, TopicKind::NoKey)
-                .map_err(|e| anyhow!("topic: {e}"))?;
-            Some(
-                sub.create_datareader_no_key::<raw::Cdr, raw::Adapter>(&topic, Some(q))
-                    .map_err(|e| anyhow!("a reader: {e}"))?,
-            )
-        }
-        None => None,
+    let mut listener = Listener {
+        reader: match &a.listen {
+            Some(_) => {
+                let sub = dp
+                    .create_subscriber(&qos(true, false, 10))
+                    .map_err(|e| anyhow!("a DDS subscriber: {e}"))?;
+                let names = dds_names(rosmap::SOURCE_POSES_TOPIC, "geometry_msgs/msg/PoseArray");
+                Some(reader(&dp, &sub, names, qos(true, false, 10))?)
+            }
+            None => None,
+        },
+        heard: Vec::new(),
     };
-    // Wait for a subscriber on every topic (or the time allowed): a reader that DDS
-    // discovery has found.
-    let unmatched = |dp: &DomainParticipant| -> Vec<String> {
-        let readers: Vec<String> = dp
-            .discovered_readers()
-            .into_iter()
-            .map(|r| r.subscription_topic_data.topic_name)
-            .collect();
-        writers
-            .keys()
-            .filter(|t| !readers.contains(&dds_names(t, "").0))
-            .cloned()
-            .collect()
-    };
-    let t0 = Instant::now();
-    while !unmatched(&dp).is_empty() && t0.elapsed().as_secs_f64() < a.wait_s {
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    let left = unmatched(&dp);
-    if !left.is_empty() {
-        eprintln!(
-            "warning: no subscriber to {left:?} after {} s; playing anyway",
-            a.wait_s
-        );
-    }
-    // Matched by discovery is not yet matched by the writer: a moment for that.
-    std::thread::sleep(Duration::from_millis(500));
+    wait_for_subscribers(&dp, &writers, a.wait_s);
     let start = Instant::now();
     let shift = now_ns() - first;
-    let mut heard: Vec<[f64; 2]> = Vec::new();
-    let take = |r: &mut Option<Reader>, heard: &mut Vec<[f64; 2]>| {
-        use iasm_ros::msg::Message;
-        if let Some(r) = r {
-            while let Ok(Some(s)) = r.take_next_sample() {
-                if let Ok(p) = iasm_ros::msg::PoseArray::from_cdr(&s.value().0) {
-                    *heard = p
-                        .poses
-                        .iter()
-                        .map(|p| [p.position.x, p.position.y])
-                        .collect();
-                }
-            }
-        }
-    };
-    let mut listen = listen;
     for (topic, ty, t, mut data) in msgs {
         let due = Duration::from_nanos(u64::try_from(t - first).unwrap_or(0));
         while start.elapsed() < due {
-            take(&mut listen, &mut heard);
+            listener.take();
             std::thread::sleep((due - start.elapsed()).min(Duration::from_millis(5)));
         }
         shift_stamps(Kind::of(&ty).expect("kept"), &mut data, shift)
@@ -674,14 +749,19 @@ pub fn play(a: &Ros2PlayArgs) -> Result<Outcome> {
     if let Some(path) = &a.listen {
         let until = Instant::now() + Duration::from_secs_f64(a.linger_s);
         while Instant::now() < until {
-            take(&mut listen, &mut heard);
+            listener.take();
             std::thread::sleep(Duration::from_millis(10));
         }
-        let json = serde_json::json!({ "frame_id": rosmap::FRAME, "sources": heard.iter().map(|p| serde_json::json!({"x": p[0], "y": p[1]})).collect::<Vec<_>>() });
+        let sources: Vec<serde_json::Value> = listener
+            .heard
+            .iter()
+            .map(|p| serde_json::json!({"x": p[0], "y": p[1]}))
+            .collect();
+        let json = serde_json::json!({ "frame_id": rosmap::FRAME, "sources": sources });
         crate::output::write_atomic(path, serde_json::to_string_pretty(&json)?.as_bytes())?;
         println!(
             "heard {} sources on {}",
-            heard.len(),
+            listener.heard.len(),
             rosmap::SOURCE_POSES_TOPIC
         );
     }
