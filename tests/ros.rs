@@ -422,12 +422,13 @@ ip route add 224.0.0.0/4 dev lo
 cd "$WORK"
 "$IASM" ros2 --seed 5 --out node.json --mcap node.mcap > node.log 2> node.err &
 NODE=$!
-"$IASM" ros2-play "$BAG" --listen heard.json --linger 4 > play.log 2> play.err &
+"$IASM" ros2-play "$BAG" --listen heard.json --linger 120 > play.log 2> play.err &
 PLAY=$!
 for i in $(seq 1 600); do grep -q '^played' play.log && break; sleep 0.1; done
 sleep 0.5
 kill -INT $NODE
 wait $NODE; echo "node $?"
+kill -INT $PLAY
 wait $PLAY; echo "play $?"
 "#;
     let o = std::process::Command::new("unshare")

@@ -148,7 +148,8 @@ pub struct Ros2PlayArgs {
     /// Listen to the node's /iasm/source_poses and write the last sources heard here (JSON).
     #[arg(long, value_name = "FILE")]
     pub listen: Option<PathBuf>,
-    /// With --listen: how long to go on listening after the bag is played (s).
+    /// With --listen: how long to go on listening after the bag is played (s); Ctrl-C
+    /// ends the listening sooner, and the sources heard are written.
     #[arg(long = "linger", default_value_t = 5.0, value_name = "S")]
     pub linger_s: f64,
 }

@@ -264,6 +264,26 @@ impl Outputs {
             rosmap::SOURCE_POSES_TOPIC,
         )
     }
+
+    /// Waits until every reliable reader of every topic has acknowledged what was
+    /// published, or until `max` has passed for a topic (a reader that vanished).
+    fn wait_for_acknowledgments(&self, max: Duration) {
+        for w in [
+            &self.source_poses,
+            &self.sources,
+            &self.doas,
+            &self.path,
+            &self.map,
+        ] {
+            if !matches!(w.wait_for_acknowledgments(max), Ok(true)) {
+                eprintln!(
+                    "warning: {}: not every subscriber acknowledged the final map within {} s",
+                    rustdds::TopicDescription::name(w.topic()),
+                    max.as_secs()
+                );
+            }
+        }
+    }
 }
 
 /// Warnings said on the log: the first of each kind, then at 10, 100, 1000... (every one
@@ -467,15 +487,16 @@ pub fn run(a: &Ros2Args) -> Result<Outcome> {
     }
     // The run's end: the stop the robot stands at, then the full map over every stop.
     step(&mut live, &mut sink, &mut log, true)?;
-    finish(&mut live, sink, a.seed)?;
-    // Give reliable readers a moment to take the final map before the writers go.
-    std::thread::sleep(Duration::from_millis(300));
+    let out = finish(&mut live, sink, a.seed)?;
+    // The writers go with the process: wait (a bounded time) until every reliable reader
+    // has acknowledged the final map, so that a subscriber hears it whatever the load.
+    out.wait_for_acknowledgments(Duration::from_secs(5));
     Ok(Outcome::Success)
 }
 
 /// Publishes and writes the final map (the full map over every stop), says it, and ends
-/// the MCAP file.
-fn finish(live: &mut LiveMapper, mut sink: Sink, seed: u64) -> Result<()> {
+/// the MCAP file; gives back the topics' writers.
+fn finish(live: &mut LiveMapper, mut sink: Sink, seed: u64) -> Result<Outputs> {
     match live.finish() {
         Some(fin) => {
             sink.publish(live, &fin, true)?;
@@ -502,7 +523,7 @@ fn finish(live: &mut LiveMapper, mut sink: Sink, seed: u64) -> Result<()> {
     if let Some(f) = sink.mcap {
         f.finish()?;
     }
-    Ok(())
+    Ok(sink.out)
 }
 
 fn announce(live: &LiveMapper, u: &crate::live::Update) {
@@ -747,8 +768,14 @@ pub fn play(a: &Ros2PlayArgs) -> Result<Outcome> {
         start.elapsed().as_secs_f64()
     );
     if let Some(path) = &a.listen {
+        // Listen until the linger is over or Ctrl-C (say, once the node has ended).
+        let stop = Arc::new(AtomicBool::new(false));
+        {
+            let stop = Arc::clone(&stop);
+            let _ = ctrlc::set_handler(move || stop.store(true, Ordering::SeqCst));
+        }
         let until = Instant::now() + Duration::from_secs_f64(a.linger_s);
-        while Instant::now() < until {
+        while Instant::now() < until && !stop.load(Ordering::SeqCst) {
             listener.take();
             std::thread::sleep(Duration::from_millis(10));
         }
