@@ -1,7 +1,9 @@
 #!/usr/bin/env python3
 """Writes fixtures/tables/poses.xlsx: a small workbook in the published pose tables' shape
 (a header row, then x (m), y (m), theta (deg) per stop), for the xlsx reader's tests and
-its mutation test. Run by hand (needs openpyxl); the tests read the committed file."""
+its mutation test; and poses_stray_cell.xlsx, the same table with one stray cell at
+XFD1048576, the last cell a sheet can have (a 5-KB file that names a grid of 17e9 cells).
+Run by hand (needs openpyxl); the tests read the committed files."""
 import pathlib
 
 import openpyxl
@@ -13,7 +15,12 @@ ws.title = "poses"
 ws.append(["x", "y", "theta"])
 for r in rows:
     ws.append([round(v, 3) for v in r])
-out = pathlib.Path(__file__).resolve().parent.parent / "fixtures" / "tables" / "poses.xlsx"
-out.parent.mkdir(parents=True, exist_ok=True)
+tables = pathlib.Path(__file__).resolve().parent.parent / "fixtures" / "tables"
+tables.mkdir(parents=True, exist_ok=True)
+out = tables / "poses.xlsx"
+wb.save(out)
+print(out, out.stat().st_size, "bytes")
+ws["XFD1048576"] = 1.0
+out = tables / "poses_stray_cell.xlsx"
 wb.save(out)
 print(out, out.stat().st_size, "bytes")

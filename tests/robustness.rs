@@ -498,6 +498,30 @@ fn xlsx_reader_survives_mutations() {
     assert!(t.ok > 0, "{t:?}");
 }
 
+/// A workbook names each cell: one stray cell at `XFD1048576`, the last a sheet can have,
+/// makes a 5-KB file claim a grid of 1048576 x 16384 cells (17e9). It is refused by its
+/// extent, the message naming the file and the cell, with no more heap than a small file's.
+#[test]
+fn a_workbook_cell_at_the_end_of_the_sheet_is_refused_before_a_grid_is_made() {
+    let _turn = TURN.lock().unwrap_or_else(|e| e.into_inner());
+    let path = repo("fixtures/tables/poses_stray_cell.xlsx");
+    let base = IN_USE.load(Ordering::Relaxed);
+    PEAK.store(base, Ordering::Relaxed);
+    let err = text(iasm::dataset::read_table(&path).unwrap_err());
+    let peak = PEAK.load(Ordering::Relaxed).saturating_sub(base);
+    let size = std::fs::metadata(&path).unwrap().len() as usize;
+    assert!(
+        err.contains("poses_stray_cell.xlsx")
+            && err.contains("1048576 rows x 16384 columns")
+            && err.contains("XFD1048576"),
+        "{err}"
+    );
+    assert!(peak <= ALLOC_FACTOR * size + ALLOC_SLACK, "{peak} bytes");
+    // The same table without the stray cell reads as it always did.
+    let t = iasm::dataset::read_poses(&repo("fixtures/tables/poses.xlsx"), false).unwrap();
+    assert_eq!(t.len(), 8);
+}
+
 #[test]
 fn ground_truth_reader_survives_mutations() {
     let dir = tempdir();

@@ -146,6 +146,16 @@ fn bad_scenes_are_clear_errors() {
             ),
             vec!["sources[0].wav", "talk.wav"],
         ),
+        // A 10-km room: its occupancy map at 5 cm would be 4e10 cells (40 GB); refused
+        // before anything is rendered (issue 49).
+        (
+            SMALL.replace("dims = [5.0, 4.0, 3.0]", "dims = [10000.0, 10000.0, 3.0]"),
+            vec!["bad.toml", "room.dims", "200020 x 200020 cells"],
+        ),
+        (
+            SMALL.replace("clip_s = 0.2", "clip_s = 0.2\nsnr_db = nan"),
+            vec!["bad.toml", "snr_db"],
+        ),
     ] {
         std::fs::write(&scene, edit).unwrap();
         assert_clear_error(

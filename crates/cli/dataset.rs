@@ -153,27 +153,85 @@ fn parse_cell(s: &String) -> Result<Option<f64>, &String> {
         .map_err(|_| s)
 }
 
+/// The most cells a table's first sheet may span (from its first used cell to its last):
+/// a million stops of four columns. A workbook names its cells (`XFD1048576`), so a file of
+/// a few kilobytes could otherwise claim a grid of billions.
+pub const MAX_TABLE_CELLS: u64 = 1 << 22;
+
 fn read_workbook(path: &Path) -> Result<Vec<Vec<String>>> {
-    use calamine::{Data, Reader, open_workbook_auto};
+    use calamine::{Data, Reader, Sheets, open_workbook_auto};
     let mut wb =
         open_workbook_auto(path).with_context(|| format!("reading workbook {}", path.display()))?;
-    let range = wb
-        .worksheet_range_at(0)
-        .with_context(|| format!("{}: the workbook has no sheet", path.display()))?
+    let text = |c: Data| match c {
+        Data::Empty => String::new(),
+        Data::Float(v) => v.to_string(),
+        Data::Int(v) => v.to_string(),
+        other => other.to_string(),
+    };
+    let Some(first) = wb.sheet_names().first().cloned() else {
+        bail!("{}: the workbook has no sheet", path.display());
+    };
+    let Sheets::Xlsx(xlsx) = &mut wb else {
+        // Older formats (.xls at most 65536 x 256 cells; .ods): as calamine reads them.
+        let range = wb
+            .worksheet_range(&first)
+            .with_context(|| format!("reading the first sheet of {}", path.display()))?;
+        return Ok(range
+            .rows()
+            .map(|row| row.iter().cloned().map(text).collect())
+            .collect());
+    };
+    // An xlsx sheet cell by cell: its extent checked before a grid of it is made.
+    let mut reader = xlsx
+        .worksheet_cells_reader(&first)
         .with_context(|| format!("reading the first sheet of {}", path.display()))?;
-    Ok(range
-        .rows()
-        .map(|row| {
-            row.iter()
-                .map(|c| match c {
-                    Data::Empty => String::new(),
-                    Data::Float(v) => v.to_string(),
-                    Data::Int(v) => v.to_string(),
-                    other => other.to_string(),
-                })
-                .collect()
-        })
-        .collect())
+    let mut cells = Vec::new();
+    while let Some(c) = reader
+        .next_cell()
+        .with_context(|| format!("reading the first sheet of {}", path.display()))?
+    {
+        let value = Data::from(c.get_value().clone());
+        if value != Data::Empty {
+            cells.push((c.get_position(), value));
+        }
+    }
+    let Some(((r0, c0), (r1, c1))) = cells.iter().fold(None, |b, &((r, c), _)| match b {
+        None => Some(((r, c), (r, c))),
+        Some(((r0, c0), (r1, c1))) => Some(((r0.min(r), c0.min(c)), (r1.max(r), c1.max(c)))),
+    }) else {
+        return Ok(Vec::new());
+    };
+    let (rows, cols) = (u64::from(r1 - r0) + 1, u64::from(c1 - c0) + 1);
+    if rows * cols > MAX_TABLE_CELLS {
+        bail!(
+            "{}: its first sheet spans {rows} rows x {cols} columns (cell {}), more than a \
+             table of poses or DoAs can hold ({MAX_TABLE_CELLS} cells); remove the stray cells",
+            path.display(),
+            cell_name(r1, c1)
+        );
+    }
+    let mut grid = vec![vec![String::new(); cols as usize]; rows as usize];
+    for ((r, c), v) in cells {
+        grid[(r - r0) as usize][(c - c0) as usize] = text(v);
+    }
+    Ok(grid)
+}
+
+/// A cell's name in a sheet: row 0, column 0 is `A1`; column 16383 is `XFD`.
+fn cell_name(row: u32, col: u32) -> String {
+    let mut letters = Vec::new();
+    let mut c = col + 1;
+    while c > 0 {
+        c -= 1;
+        letters.push(b'A' + (c % 26) as u8);
+        c /= 26;
+    }
+    letters.reverse();
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&letters),
+        u64::from(row) + 1
+    )
 }
 
 /// How a pose table with a header gives the heading.
@@ -647,6 +705,15 @@ pub fn array_file_toml(name: &str, positions: &[[f64; 3]]) -> Result<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn cells_are_named_as_a_spreadsheet_names_them() {
+        assert_eq!(cell_name(0, 0), "A1");
+        assert_eq!(cell_name(9, 25), "Z10");
+        assert_eq!(cell_name(0, 26), "AA1");
+        assert_eq!(cell_name(199_999, 701), "ZZ200000");
+        assert_eq!(cell_name(1_048_575, 16_383), "XFD1048576");
+    }
 
     #[test]
     fn natural_order_counts_numbers() {

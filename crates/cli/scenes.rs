@@ -76,7 +76,26 @@ pub fn preset_positions(name: &str) -> Option<Vec<[f64; 3]>> {
 /// # Errors
 /// A scene the simulator refuses (the message names the field).
 pub fn prepare(scene: Scene) -> Result<PreparedScene> {
-    Ok(scene.prepare(preset_positions)?)
+    let scene = scene.prepare(preset_positions)?;
+    // The data set's occupancy map covers the room: one that no map may be is refused
+    // before anything is rendered.
+    let [lx, ly, _] = scene.room.dims();
+    let (w, h) = map_size(lx, ly);
+    anyhow::ensure!(
+        w.saturating_mul(h) <= asm::map::MAX_CELLS,
+        "room.dims: a {lx} x {ly} m room's occupancy map at {MAP_RES} m is {w} x {h} cells, \
+         more than a map may have ({})",
+        asm::map::MAX_CELLS
+    );
+    Ok(scene)
+}
+
+/// The cells across and down of the occupancy map of a room `lx` x `ly` m.
+fn map_size(lx: f64, ly: f64) -> (usize, usize) {
+    (
+        ((lx + 2.0 * MAP_MARGIN) / MAP_RES).ceil() as usize,
+        ((ly + 2.0 * MAP_MARGIN) / MAP_RES).ceil() as usize,
+    )
 }
 
 /// Reads and checks a scene file, resolving array presets with the `ssl` crate and
@@ -152,8 +171,7 @@ fn write(path: &Path, bytes: &[u8]) -> Result<()> {
 pub fn scene_map(scene: &PreparedScene) -> asm::map::OccupancyMap {
     use asm::map::{Cell, OccupancyMap};
     let [lx, ly, _] = scene.room.dims();
-    let w = ((lx + 2.0 * MAP_MARGIN) / MAP_RES).ceil() as usize;
-    let h = ((ly + 2.0 * MAP_MARGIN) / MAP_RES).ceil() as usize;
+    let (w, h) = map_size(lx, ly);
     let mut cells = Vec::with_capacity(w * h);
     for j in 0..h {
         for i in 0..w {

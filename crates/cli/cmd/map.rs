@@ -90,6 +90,19 @@ pub fn run(a: &MapArgs) -> Result<Outcome> {
     let t0 = std::time::Instant::now();
     let result = survey.map(config, a.seed)?;
     let dt = t0.elapsed().as_secs_f64();
+    let known = survey.map.known_cells().count();
+    if result.particles == asm::MAX_PARTICLES
+        && known as f64 / config.density_d > 1.0 + result.particles as f64
+    {
+        eprintln!(
+            "warning: the map has {known} known cells: {} particles per round (the most a round \
+             has), one per {:.0} cells instead of density_d = {}; crop the map to the surveyed \
+             area for the paper's density",
+            result.particles,
+            known as f64 / result.particles as f64,
+            config.density_d
+        );
+    }
     let o = survey
         .ospa(&result, a.report.ospa_c, a.report.ospa_p)
         .map(|value| OspaReport {

@@ -279,6 +279,12 @@ impl Scene {
                 format!("{} m/s is outside [100, 2000] m/s", self.speed_of_sound),
             ));
         }
+        if let Some(snr) = self.snr_db.filter(|v| !v.is_finite()) {
+            return Err(invalid(
+                "snr_db",
+                format!("{snr} dB is not a signal-to-noise ratio; leave it out for no noise"),
+            ));
+        }
         let r = &self.room;
         // Refuses a time `t` (s) for `field` unless in (0, MAX_RT60_S] and its `travel`
         // (metres of sound per second of it) reaches at most MAX_CALIBRATION_IMAGES image
@@ -1136,6 +1142,17 @@ spacing = 0.5
                 &["room.rt60", "image sources"],
             ),
             ("clip_s = 0.2", "clip_s = 1e9", &["clip_s", "(0, 60] s"]),
+            // Noise of NaN dB once made every sample NaN (issue 49).
+            (
+                "clip_s = 0.2",
+                "clip_s = 0.2\nsnr_db = nan",
+                &["snr_db", "NaN dB"],
+            ),
+            (
+                "clip_s = 0.2",
+                "clip_s = 0.2\nsnr_db = -inf",
+                &["snr_db", "-inf dB"],
+            ),
             ("fs = 8000", "fs = 4000000000", &["fs", "384000"]),
             (
                 "fs = 8000",

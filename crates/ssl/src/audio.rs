@@ -98,12 +98,20 @@ impl Audio {
     }
 }
 
+/// The most samples (all channels) a WAV may hold: 2^26, 256 MiB as `f32` (11.6 minutes
+/// of six channels at 16 kHz, 3.9 at 48 kHz). I-ASM localises one recording per stop, a
+/// few seconds long; a recording read whole with its STFT takes about 7 bytes a sample,
+/// so a one-hour file once took 6.8 GB. A longer one is refused from its header.
+pub const MAX_WAV_SAMPLES: u64 = 1 << 26;
+
 /// Reads a WAV file: 8/16/24/32-bit integer PCM or 32-bit float, any sample rate, any
 /// number of channels.
 ///
 /// # Errors
 /// [`Error::Wav`] if the file cannot be opened or is not a WAV, [`Error::EmptyWav`] if it
-/// holds no samples, [`Error::Truncated`] if it ends before the samples its header declares.
+/// holds no samples, [`Error::TooLong`] if it holds more than [`MAX_WAV_SAMPLES`] (found
+/// from its header and size, before they are read), [`Error::Truncated`] if it ends before the samples its header
+/// declares.
 pub fn read_wav(path: &Path) -> Result<Audio> {
     let wav_err = |message: String| Error::Wav {
         path: path.to_owned(),
@@ -149,6 +157,17 @@ pub fn read_wav(path: &Path) -> Result<Audio> {
     let sample_bytes = u64::from(spec.bits_per_sample.div_ceil(8).max(1));
     let file_len = std::fs::metadata(path).map_or(u64::MAX, |m| m.len());
     let fits = (file_len / sample_bytes).min(declared);
+    // (A header declaring more than the file holds is a truncation, found below.)
+    if fits > MAX_WAV_SAMPLES {
+        let per_s = f64::from(spec.sample_rate) * n_ch as f64;
+        return Err(Error::TooLong {
+            path: path.to_owned(),
+            seconds: declared as f64 / per_s,
+            channels: spec.channels,
+            rate: spec.sample_rate,
+            limit_s: MAX_WAV_SAMPLES as f64 / per_s,
+        });
+    }
     let frames = usize::try_from(fits).unwrap_or(usize::MAX) / n_ch;
     let mut channels = vec![Vec::with_capacity(frames); n_ch];
     let truncated = |read| Error::Truncated {
@@ -314,6 +333,42 @@ mod tests {
         let e = read_wav(&p).unwrap_err();
         assert!(matches!(e, Error::Truncated { declared: 1000, .. }), "{e}");
         assert!(e.to_string().contains("cut.wav"));
+    }
+
+    #[test]
+    fn an_hour_of_six_channels_is_refused_from_its_header_before_it_is_read() {
+        // A 6-channel 48-kHz 16-bit file of one hour: 2 GB of (sparse) zeros that once took
+        // 6.8 GB to localise. It is refused at once, naming the file and its duration.
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("one_hour.wav");
+        let s = hound::WavSpec {
+            channels: 6,
+            sample_rate: 48_000,
+            bits_per_sample: 16,
+            sample_format: hound::SampleFormat::Int,
+        };
+        hound::WavWriter::create(&p, s).unwrap().finalize().unwrap();
+        let data: u32 = 48_000 * 3600 * 12;
+        let mut bytes = std::fs::read(&p).unwrap();
+        let at = bytes.windows(4).position(|w| w == b"data").unwrap() + 4;
+        bytes[at..at + 4].copy_from_slice(&data.to_le_bytes());
+        bytes[4..8].copy_from_slice(&(data + 36).to_le_bytes());
+        std::fs::write(&p, &bytes).unwrap();
+        let f = std::fs::OpenOptions::new().write(true).open(&p).unwrap();
+        f.set_len(bytes.len() as u64 + u64::from(data)).unwrap();
+        let e = read_wav(&p).unwrap_err();
+        // 2^26 samples of 6 channels at 48 kHz: 233 s.
+        assert!(matches!(e, Error::TooLong { .. }), "{e}");
+        let m = e.to_string();
+        assert!(
+            m.contains("one_hour.wav")
+                && m.contains("3600 s of 6 channels")
+                && m.contains("(233 s"),
+            "{m}"
+        );
+        // Within the bound, the same header on a short file is a truncation, as before.
+        f.set_len(bytes.len() as u64 + 1200).unwrap();
+        assert!(matches!(read_wav(&p).unwrap_err(), Error::Truncated { .. }));
     }
 
     #[test]

@@ -225,6 +225,24 @@ pub enum Error {
         /// Samples actually present.
         read: u64,
     },
+    /// A WAV longer than one localisation takes ([`crate::audio::MAX_WAV_SAMPLES`]).
+    #[error(
+        "{path}: {seconds:.0} s of {channels} channels at {rate} Hz is longer than one \
+         localisation takes ({limit_s:.0} s at this rate and channel count); a stop's \
+         recording is seconds long: cut it to the stop (e.g. `sox in.wav out.wav trim 0 10`)"
+    )]
+    TooLong {
+        /// The file.
+        path: PathBuf,
+        /// Its duration (s).
+        seconds: f64,
+        /// Its channels.
+        channels: u16,
+        /// Its sample rate (Hz).
+        rate: u32,
+        /// The longest accepted at its rate and channel count (s).
+        limit_s: f64,
+    },
     /// A WAV with no samples.
     #[error("{path}: the file holds no audio samples")]
     EmptyWav {

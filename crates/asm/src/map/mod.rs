@@ -9,4 +9,4 @@
 
 mod occupancy;
 
-pub use occupancy::{Cell, OccupancyMap};
+pub use occupancy::{Cell, MAX_CELLS, OccupancyMap};

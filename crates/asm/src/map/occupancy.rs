@@ -18,6 +18,9 @@ pub const MAX_RESOLUTION_M: f64 = 10.0;
 /// The largest extent a map may span, and the farthest its origin may lie (m): a robot's
 /// building, campus or yard, with room to spare. Bounds every size computed from a map.
 pub const MAX_EXTENT_M: f64 = 10_000.0;
+/// The most cells a map may have: a 250-m square at 5 cm, or 2.5 km at 0.5 m. Bounds the
+/// memory of a map and of its known cells (16 bytes each) to well under a gigabyte.
+pub const MAX_CELLS: usize = 25_000_000;
 
 /// An occupancy grid: `width x height` cells of `resolution` metres, row 0 at the top
 /// (image order), lower-left cell at `origin`.
@@ -119,6 +122,13 @@ impl OccupancyMap {
         }
         let width = ((hi[0] - lo[0]) / resolution).ceil() as usize;
         let height = ((hi[1] - lo[1]) / resolution).ceil() as usize;
+        if width.saturating_mul(height) > MAX_CELLS {
+            return fail(format!(
+                "the stops and a margin of {margin_m} m make a {width} x {height} grid of \
+                 {resolution} m cells, more than a map may have ({MAX_CELLS}); give a smaller \
+                 margin"
+            ));
+        }
         let mut map = Self::new(
             width,
             height,
@@ -159,7 +169,7 @@ impl OccupancyMap {
     pub fn load_with_image(yaml: &Path, image: Option<&Path>) -> Result<Self, MapError> {
         let meta = read_meta(yaml)?;
         let img_path = image.map_or_else(|| resolve_image(yaml, &meta.image), Path::to_owned);
-        let bytes = std::fs::read(&img_path).map_err(|source| match image {
+        let io_error = |source| match image {
             Some(_) => MapError::Io {
                 path: img_path.clone(),
                 source,
@@ -169,7 +179,20 @@ impl OccupancyMap {
                 image: img_path.clone(),
                 source,
             },
-        })?;
+        };
+        // The header first: an image too large to be a map is refused before it is read.
+        let mut file = std::fs::File::open(&img_path).map_err(io_error)?;
+        let mut bytes = Vec::new();
+        std::io::Read::read_to_end(&mut std::io::Read::take(&mut file, 4096), &mut bytes)
+            .map_err(io_error)?;
+        // (A header cut by the 4 KiB, past long comments, can only read smaller numbers.)
+        if let Ok((_, w, h, ..)) = pgm_header(&bytes) {
+            check_size(w, h).map_err(|message| MapError::Pgm {
+                path: img_path.clone(),
+                message,
+            })?;
+        }
+        std::io::Read::read_to_end(&mut file, &mut bytes).map_err(io_error)?;
         let (w, h, maxval, pixels) = parse_pgm(&bytes).map_err(|message| MapError::Pgm {
             path: img_path.clone(),
             message,
@@ -489,8 +512,9 @@ fn parse_yaml(text: &str) -> Result<Meta, String> {
     })
 }
 
-/// Parses a binary (P5) or plain (P2) PGM: width, height, maxval and pixels in row order.
-fn parse_pgm(bytes: &[u8]) -> Result<(usize, usize, u16, Vec<u16>), String> {
+/// A PGM's header: its magic (`P5` or `P2`), width, height, maxval, and where the pixels
+/// begin (the byte after the maxval).
+fn pgm_header(bytes: &[u8]) -> Result<(String, usize, usize, usize, usize), String> {
     let mut pos = 0;
     let mut token = || -> Result<String, String> {
         loop {
@@ -530,7 +554,25 @@ fn parse_pgm(bytes: &[u8]) -> Result<(usize, usize, u16, Vec<u16>), String> {
     if w == 0 || h == 0 || maxval == 0 || maxval > 65535 {
         return Err(format!("bad header: {w} x {h}, maxval {maxval}"));
     }
-    let n = w.checked_mul(h).ok_or("image too large")?;
+    Ok((magic, w, h, maxval, pos))
+}
+
+/// Refuses an image of more than [`MAX_CELLS`].
+fn check_size(w: usize, h: usize) -> Result<(), String> {
+    match w.checked_mul(h) {
+        Some(n) if n <= MAX_CELLS => Ok(()),
+        _ => Err(format!(
+            "a {w} x {h} image is more cells than a map may have ({MAX_CELLS}); crop it to \
+             the surveyed area or save it at a coarser resolution"
+        )),
+    }
+}
+
+/// Parses a binary (P5) or plain (P2) PGM: width, height, maxval and pixels in row order.
+fn parse_pgm(bytes: &[u8]) -> Result<(usize, usize, u16, Vec<u16>), String> {
+    let (magic, w, h, maxval, pos) = pgm_header(bytes)?;
+    check_size(w, h)?;
+    let n = w * h;
     // Every pixel takes at least one byte of the file: reserve no more than it holds, so a
     // header declaring a huge image costs nothing before the check below refuses it.
     let mut pixels = Vec::with_capacity(n.min(bytes.len()));
@@ -700,6 +742,30 @@ mod tests {
         assert!(e(&[[0.0, 0.0]], 0.0, 0.05).contains("margin"));
         assert!(e(&[[0.0, 0.0]], 3.0, -1.0).contains("resolution"));
         assert!(e(&[[0.0, 0.0], [2e4, 0.0]], 3.0, 0.05).contains("span"));
+        // A 2-km square of 5-cm cells is 40000 x 40000 = 1.6e9 cells: refused before a
+        // cell is made (the CLI's `--open-margin 1000`).
+        let big = e(&[[0.0, 0.0]], 1000.0, 0.05);
+        assert!(big.contains("more than a map may have (25000000)"), "{big}");
+    }
+
+    #[test]
+    fn an_image_of_more_cells_than_a_map_may_have_is_refused_from_its_header() {
+        // 5000 x 5000 (a 250-m square at 5 cm) is the most; one row more is refused.
+        assert!(check_size(5000, 5000).is_ok());
+        assert!(check_size(5000, 5001).is_err());
+        assert!(check_size(usize::MAX, 2).is_err());
+        // A 20000 x 20000 image (400 MB of pixels) is refused from its first bytes: the
+        // file here holds 8 KiB of them, and the message is not the short file's.
+        let dir = tempfile::tempdir().unwrap();
+        let mut pgm = b"P5\n20000 20000\n255\n".to_vec();
+        pgm.extend([254u8; 8192]);
+        let e = OccupancyMap::load(&write_map(dir.path(), YAML, &pgm))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("m.pgm") && e.contains("a 20000 x 20000 image is more cells"),
+            "{e}"
+        );
     }
 
     #[test]

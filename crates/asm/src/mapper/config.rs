@@ -52,7 +52,8 @@ impl std::fmt::Display for Variant {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct IasmConfig {
-    /// Particle density divisor `D`: `M = floor(known cells / D)`. Default: 9.
+    /// Particle density divisor `D`: `M = floor(known cells / D)`, at most
+    /// [`crate::mapper::MAX_PARTICLES`]. Default: 9.
     pub density_d: f64,
     /// Random-walk standard deviation `sigma_p` (m). Default: 0.01.
     pub sigma_p_m: f64,

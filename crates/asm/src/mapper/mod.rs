@@ -252,6 +252,13 @@ pub enum Round {
     Clutter(Vec<Ray>),
 }
 
+/// The most particles a round may have. The paper's one particle per nine 5-cm cells
+/// covers 1,100 m^2 of known cells with this many (arrangement II's map needs 4,203); on
+/// a larger map the first cloud is spread thinner (one particle per `known cells / M`
+/// cells) instead of growing without bound: a round's clustering costs about `M^2`, and
+/// 440,000 particles (a 100-m square of free cells) took five minutes a map.
+pub const MAX_PARTICLES: usize = 50_000;
+
 impl Mapper {
     /// Validates `config` and collects the map's known cells.
     ///
@@ -261,7 +268,7 @@ impl Mapper {
     pub fn new(map: &OccupancyMap, config: &IasmConfig) -> Result<Self> {
         config.validate()?;
         let cells: Vec<[f64; 2]> = map.known_cells().collect();
-        let m = (cells.len() as f64 / config.density_d).floor() as usize;
+        let m = ((cells.len() as f64 / config.density_d).floor() as usize).min(MAX_PARTICLES);
         if m == 0 {
             return Err(Error::EmptyMap);
         }
@@ -389,7 +396,8 @@ impl Mapper {
         row.len() - twins / 2
     }
 
-    /// Particles per round, `M`.
+    /// Particles per round, `M`: one per [`IasmConfig::density_d`] known cells, at most
+    /// [`MAX_PARTICLES`].
     pub fn num_particles(&self) -> usize {
         self.m
     }

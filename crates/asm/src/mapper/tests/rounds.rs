@@ -557,3 +557,25 @@ fn a_map_without_known_cells_is_refused() {
         Err(Error::EmptyMap)
     ));
 }
+
+#[test]
+fn a_map_larger_than_a_hall_spreads_the_most_particles_thinner_and_still_finds_the_source() {
+    // A 60 x 60 m open map of 5-cm cells: 1.44e6 known cells would be 160,000 particles
+    // at the paper's one per nine; the round has MAX_PARTICLES, one per 28.8 cells.
+    let (w, h) = (1200, 1200);
+    let map = OccupancyMap::new(w, h, 0.05, [-27.0, -30.0], vec![Cell::Free; w * h]);
+    let small = Mapper::new(&scene(&[], 2).0, &IasmConfig::default()).unwrap();
+    assert_eq!(small.num_particles(), 160 * 120 / 9);
+    let mapper = Mapper::new(&map, &IasmConfig::default()).unwrap();
+    assert_eq!(mapper.num_particles(), MAX_PARTICLES);
+    // A source 1.5 m beside the path of six stops is still found where it is.
+    let truth = [[3.0, 1.5]];
+    let (_, poses, doas) = scene(&truth, 6);
+    let r = mapper
+        .run(&poses, &doas, &mut StdRng::seed_from_u64(SEED))
+        .unwrap();
+    assert_eq!(r.particles, MAX_PARTICLES);
+    assert_eq!(r.sources.len(), 1, "{:?}", r.sources);
+    let s = &r.sources[0];
+    assert!((s.x - 3.0).hypot(s.y - 1.5) < 0.05, "{s:?}");
+}
