@@ -364,3 +364,74 @@ fn r49_an_idle_watch_spends_no_cpu_waiting() {
     // Ticks are 10 ms: a busy loop spends about 300 in 3 s; waiting, none or one.
     assert!(spent <= 10, "{spent} ticks of CPU in 3 s of waiting");
 }
+
+/// A robot's faults in the folder (a recording of garbage, a pose row of NaN, a recording
+/// deleted after it was mapped) cost what they touch and no more: each is a warning naming
+/// it, counted in the map's notes; the other stops are mapped with their own poses, and
+/// the run ends with its final map (it used to end at the first fault, exit 2, no map).
+// See: issue 49
+#[test]
+fn r49_a_live_run_passes_over_a_robots_faults_and_ends_with_its_final_map() {
+    let dir = tempdir();
+    let (src, live) = source_and_live(&dir);
+    let out = path(&dir, "map.json");
+    let poses = pose_lines(&src, &live);
+    let mut table = String::new();
+    for k in 1..=12 {
+        let dest = live.join(format!("audio/sub{k}.wav"));
+        if k == 4 {
+            std::fs::write(&dest, vec![0x5au8; 40_000]).unwrap();
+        } else {
+            std::fs::copy(src.join(format!("audio/sub{k}.wav")), &dest).unwrap();
+        }
+        table.push_str(if k == 7 { "nan,nan,nan" } else { &poses[k - 1] });
+        table.push('\n');
+    }
+    std::fs::write(live.join("pose/poses.csv"), &table).unwrap();
+    let child = spawn_watch(&live, &out, 14);
+    wait_for(30.0, "the map after ten stops", || {
+        stops_in(&out) == Some(10)
+    });
+    // sub1.wav, mapped as stop 1, goes; two more stops come.
+    std::fs::remove_file(live.join("audio/sub1.wav")).unwrap();
+    for k in 13..=14 {
+        std::fs::copy(
+            src.join(format!("audio/sub{k}.wav")),
+            live.join(format!("audio/sub{k}.wav")),
+        )
+        .unwrap();
+        table.push_str(&poses[k - 1]);
+        table.push('\n');
+    }
+    std::fs::write(live.join("pose/poses.csv"), &table).unwrap();
+    let (stdout, stderr) = finish(child);
+    let lines: Vec<&str> = stdout.lines().filter(|l| l.starts_with("stop ")).collect();
+    assert_eq!(lines.len(), 12, "{stdout}");
+    for (k, l) in (1..=14).filter(|&k| k != 4 && k != 7).zip(&lines) {
+        assert!(l.contains(&format!("sub{k}.wav")), "{l}");
+    }
+    let fin = json_file(&out);
+    assert_eq!(
+        (fin["stops"].as_u64(), fin["final_map"].as_bool()),
+        (Some(12), Some(true))
+    );
+    let notes: Vec<&str> = fin["notes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|n| n.as_str())
+        .collect();
+    assert_eq!(notes.len(), 3, "{notes:?}");
+    assert!(notes[0].contains("stop 4 (sub4.wav) skipped") && notes[0].contains("not a valid WAV"));
+    assert!(notes[1].contains("stop 7 (sub7.wav) skipped") && notes[1].contains("pose row 7"));
+    assert!(
+        notes[2].contains("sub1.wav (stop 1) was deleted"),
+        "{notes:?}"
+    );
+    for n in &notes {
+        assert!(stderr.contains(n), "said on stderr too: {n}");
+    }
+    // The stops that were mapped had their own poses: the sources are where they are.
+    assert_eq!(fin["sources"].as_array().unwrap().len(), 2, "{fin}");
+    assert!(fin["ospa"]["total"].as_f64().unwrap() < 0.2, "{fin}");
+}

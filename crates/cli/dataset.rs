@@ -372,35 +372,59 @@ pub fn read_poses(path: &Path, theta_in_radians: bool) -> Result<Vec<Pose>> {
     poses_from_rows(path, read_table(path)?, theta_in_radians)
 }
 
-/// The poses of a table that may still be growing (a robot appending a row per stop): for
-/// a CSV, only its complete lines (up to the last newline: a recorder may be writing the
-/// next one), and no error for a table with none yet; a workbook is read whole.
+/// The pose rows of a table that may still be growing (a robot appending a row per stop),
+/// row by row: each complete row's pose, or why it is not one (a NaN, a missing cell), so
+/// that one bad row costs one stop and not the run. For a CSV, only its complete lines (up
+/// to the last newline: a recorder may be writing the next one), and no row for a table
+/// with none yet or only a header; a workbook is read whole (one error for all of it).
 ///
 /// # Errors
-/// As [`read_poses`], for the complete lines.
-pub fn read_poses_so_far(path: &Path, theta_in_radians: bool) -> Result<Vec<Pose>> {
+/// A table that cannot be read, or a header that names no x, y or heading column.
+pub fn read_pose_rows_so_far(
+    path: &Path,
+    theta_in_radians: bool,
+) -> Result<Vec<std::result::Result<Pose, String>>> {
     if is_workbook(path) {
-        return read_poses(path, theta_in_radians);
+        return Ok(read_poses(path, theta_in_radians)?
+            .into_iter()
+            .map(Ok)
+            .collect());
     }
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("reading table {}", path.display()))?;
     let complete = &text[..text.rfind('\n').map_or(0, |i| i + 1)];
-    let mut lines = csv_lines(complete);
-    let first = lines.next();
-    if lines.next().is_none()
-        && first.is_none_or(|l| split_cells(l).iter().any(|c| parse_cell(c).is_err()))
-    {
-        // Nothing yet, or only a first line that is a header.
-        return Ok(Vec::new());
+    let mut lines = csv_lines(complete).peekable();
+    let header = match lines.peek() {
+        Some(l) if split_cells(l).iter().any(|c| parse_cell(c).is_err()) => lines.next(),
+        _ => None,
+    };
+    if let Some(h) = header {
+        // A header that names columns must name them all: checked once, on no row.
+        named_poses_from(path, &format!("{h}\n"), theta_in_radians)?;
     }
-    if let Some(poses) = named_poses_from(path, complete, theta_in_radians)? {
-        return Ok(poses);
-    }
-    poses_from_rows(
-        path,
-        read_table_from(path, Some(complete))?,
-        theta_in_radians,
-    )
+    Ok(lines
+        .enumerate()
+        .map(|(r, line)| {
+            let one = format!(
+                "{}{line}\n",
+                header.map_or(String::new(), |h| format!("{h}\n"))
+            );
+            let pose = match named_poses_from(path, &one, theta_in_radians) {
+                Ok(Some(p)) => Ok(p),
+                Ok(None) => read_table_from(path, Some(&one))
+                    .and_then(|rows| poses_from_rows(path, rows, theta_in_radians)),
+                Err(e) => Err(e),
+            };
+            match pose {
+                Ok(p) if p.len() == 1 => Ok(p[0]),
+                _ => Err(format!(
+                    "pose row {} ({:?}) is not a pose: x, y and a heading as finite numbers",
+                    r + 1,
+                    line.trim()
+                )),
+            }
+        })
+        .collect())
 }
 
 /// Reads a pose table with a time stamp per row, for a continuous recording: plain columns

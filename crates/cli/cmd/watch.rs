@@ -39,6 +39,8 @@ struct WatchReport<'a> {
     array: &'a str,
     sources: &'a [Source],
     ospa: Option<Ospa>,
+    /// What the run passed over or could not follow (skipped stops, a broken pairing).
+    notes: &'a [String],
 }
 
 /// What every stop's output needs.
@@ -49,9 +51,40 @@ struct Outputs<'a> {
     settings: &'a crate::settings::Settings,
     /// The MCAP file of every update (`--mcap`), written whole when the run ends.
     mcap: std::cell::RefCell<Option<crate::rosmap::McapFile>>,
+    /// Warnings of the run so far, each said on stderr and kept in the JSON's notes.
+    notes: std::cell::RefCell<Vec<String>>,
 }
 
 impl Outputs<'_> {
+    /// Says a warning and keeps it for the map's notes.
+    fn note(&self, w: String) {
+        eprintln!("warning: {w}");
+        self.notes.borrow_mut().push(w);
+    }
+
+    /// Maps `audio` as the next stop and writes the map; a recording the session cannot
+    /// use (channels, sample rate, samples) is a note, and the run goes on.
+    fn add(
+        &self,
+        session: &mut Session,
+        file: &Path,
+        pose: asm::Pose,
+        audio: &ssl::Audio,
+        records: &mut Vec<StopRecord>,
+        read_ms: f64,
+    ) -> Result<()> {
+        match session.add_recording(&file_name(file), pose, audio) {
+            Ok(mut r) => {
+                r.ssl_ms += read_ms;
+                println!("{}", line(&r));
+                self.write(session, &session.map(), false)?;
+                records.push(r);
+            }
+            Err(e) => self.note(format!("{}: skipped: {e:#}", file.display())),
+        }
+        Ok(())
+    }
+
     /// Writes the map JSON and picture, each whole.
     fn write(&self, session: &Session, map: &MapResult, final_map: bool) -> Result<()> {
         let ospa = session.ospa(map);
@@ -74,6 +107,7 @@ impl Outputs<'_> {
                 array: self.settings.array.as_deref().unwrap_or(DEFAULT_ARRAY),
                 sources: &map.sources,
                 ospa,
+                notes: &self.notes.borrow(),
             };
             crate::output::write_atomic(out, serde_json::to_string_pretty(&report)?.as_bytes())?;
         }
@@ -181,6 +215,7 @@ pub fn run(a: &WatchArgs) -> Result<Outcome> {
                 .map(crate::rosmap::McapFile::new)
                 .transpose()?,
         ),
+        notes: std::cell::RefCell::new(Vec::new()),
     };
     let theta_rad = a.theta_unit == AngleUnit::Rad;
     let mut records: Vec<StopRecord> = Vec::new();
@@ -209,6 +244,15 @@ pub fn run(a: &WatchArgs) -> Result<Outcome> {
         a.seed,
         fin.sources.len()
     );
+    let notes = out.notes.borrow();
+    if !notes.is_empty() {
+        println!(
+            "{} warnings (in the map's notes): {}",
+            notes.len(),
+            notes.join("; ")
+        );
+    }
+    drop(notes);
     if let Some(c) = &a.curve {
         crate::output::write_atomic(c, curve_csv(&records).as_bytes())?;
     }
@@ -261,13 +305,13 @@ fn replay(
     let k = a.stops.unwrap_or(poses.len()).min(poses.len());
     for (file, pose) in ds.audio.iter().zip(&poses).take(k) {
         let t0 = Instant::now();
-        let audio = ssl::read_wav(file)?;
-        let read_ms = 1e3 * t0.elapsed().as_secs_f64();
-        let mut r = session.add_recording(&file_name(file), *pose, &audio)?;
-        r.ssl_ms += read_ms;
-        println!("{}", line(&r));
-        out.write(session, &session.map(), false)?;
-        records.push(r);
+        match ssl::read_wav(file) {
+            Ok(audio) => {
+                let read_ms = 1e3 * t0.elapsed().as_secs_f64();
+                out.add(session, file, *pose, &audio, records, read_ms)?;
+            }
+            Err(e) => out.note(format!("{}: skipped: {e}", file.display())),
+        }
     }
     Ok(())
 }
@@ -329,14 +373,23 @@ fn follow(
         Duration::from_secs_f64(a.give_up_s.max(0.0)),
     );
     let mut waiting: Option<String> = None;
-    while !stop.load(Ordering::SeqCst) && a.stops.is_none_or(|k| records.len() < k) {
-        match follower.poll()? {
+    while !stop.load(Ordering::SeqCst) && a.stops.is_none_or(|k| follower.done() < k) {
+        let next = follower.poll()?;
+        for w in follower.take_warnings() {
+            out.note(w);
+        }
+        match next {
             Next::Ready { file, audio, pose } => {
                 waiting = None;
-                let r = session.add_recording(&file_name(&file), pose, &audio)?;
-                println!("{}", line(&r));
-                out.write(session, &session.map(), false)?;
-                records.push(r);
+                out.add(session, &file, pose, &audio, records, 0.0)?;
+            }
+            Next::Skipped { file, reason } => {
+                waiting = None;
+                out.note(format!(
+                    "stop {} ({}) skipped: {reason}",
+                    follower.done(),
+                    file_name(&file)
+                ));
             }
             Next::Waiting(why) => {
                 if waiting.as_deref() != Some(why.as_str()) {
