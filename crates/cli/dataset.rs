@@ -160,8 +160,16 @@ pub const MAX_TABLE_CELLS: u64 = 1 << 22;
 
 fn read_workbook(path: &Path) -> Result<Vec<Vec<String>>> {
     use calamine::{Data, Reader, Sheets, open_workbook_auto};
-    let mut wb =
-        open_workbook_auto(path).with_context(|| format!("reading workbook {}", path.display()))?;
+    // calamine's messages already hold their causes: said once (as a context chain, each
+    // cause would be said again after it), with the file.
+    let said =
+        |what: &str, e: &dyn std::fmt::Display| anyhow::anyhow!("{what} {}: {e}", path.display());
+    ensure!(
+        !path.is_dir(),
+        "{}: a folder, not a workbook",
+        path.display()
+    );
+    let mut wb = open_workbook_auto(path).map_err(|e| said("reading workbook", &e))?;
     let text = |c: Data| match c {
         Data::Empty => String::new(),
         Data::Float(v) => v.to_string(),
@@ -175,7 +183,7 @@ fn read_workbook(path: &Path) -> Result<Vec<Vec<String>>> {
         // Older formats (.xls at most 65536 x 256 cells; .ods): as calamine reads them.
         let range = wb
             .worksheet_range(&first)
-            .with_context(|| format!("reading the first sheet of {}", path.display()))?;
+            .map_err(|e| said("reading the first sheet of", &e))?;
         return Ok(range
             .rows()
             .map(|row| row.iter().cloned().map(text).collect())
@@ -184,11 +192,11 @@ fn read_workbook(path: &Path) -> Result<Vec<Vec<String>>> {
     // An xlsx sheet cell by cell: its extent checked before a grid of it is made.
     let mut reader = xlsx
         .worksheet_cells_reader(&first)
-        .with_context(|| format!("reading the first sheet of {}", path.display()))?;
+        .map_err(|e| said("reading the first sheet of", &e))?;
     let mut cells = Vec::new();
     while let Some(c) = reader
         .next_cell()
-        .with_context(|| format!("reading the first sheet of {}", path.display()))?
+        .map_err(|e| said("reading the first sheet of", &e))?
     {
         let value = Data::from(c.get_value().clone());
         if value != Data::Empty {
@@ -729,6 +737,23 @@ pub fn array_file_toml(name: &str, positions: &[[f64; 3]]) -> Result<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_broken_workbook_is_named_and_its_cause_said_once() {
+        // calamine's message holds its causes; as a context chain each was said twice
+        // ("...: Zip error: i/o error: ...: Zip error: i/o error: ...").
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("poses.xlsx");
+        std::fs::write(&p, b"PK\x03\x04 not a zip archive").unwrap();
+        let e = format!("{:#}", read_table(&p).unwrap_err());
+        assert!(e.contains("poses.xlsx"), "{e}");
+        assert_eq!(e.matches("Zip error").count(), 1, "{e}");
+        // A folder named like a workbook is said to be a folder.
+        let d = dir.path().join("doas.xlsx");
+        std::fs::create_dir(&d).unwrap();
+        let e = format!("{:#}", read_table(&d).unwrap_err());
+        assert!(e.contains("doas.xlsx: a folder, not a workbook"), "{e}");
+    }
 
     #[test]
     fn cells_are_named_as_a_spreadsheet_names_them() {

@@ -40,7 +40,7 @@ impl RobotNoise {
             return Ok(None);
         };
         let audio = read_recording(path, settings.channels.as_deref())
-            .with_context(|| format!("the recording of the robot alone {}", path.display()))?;
+            .context("the recording of the robot alone")?;
         Ok(Some(Self {
             path: path.clone(),
             audio,
