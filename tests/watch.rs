@@ -392,18 +392,20 @@ fn r49_a_live_run_passes_over_a_robots_faults_and_ends_with_its_final_map() {
     wait_for(30.0, "the map after ten stops", || {
         stops_in(&out) == Some(10)
     });
-    // sub1.wav, mapped as stop 1, goes; two more stops come.
+    // sub1.wav, mapped as stop 1, goes; two more stops come, their rows appended.
     std::fs::remove_file(live.join("audio/sub1.wav")).unwrap();
+    let mut rows = std::fs::OpenOptions::new()
+        .append(true)
+        .open(live.join("pose/poses.csv"))
+        .unwrap();
     for k in 13..=14 {
         std::fs::copy(
             src.join(format!("audio/sub{k}.wav")),
             live.join(format!("audio/sub{k}.wav")),
         )
         .unwrap();
-        table.push_str(&poses[k - 1]);
-        table.push('\n');
+        std::io::Write::write_all(&mut rows, format!("{}\n", poses[k - 1]).as_bytes()).unwrap();
     }
-    std::fs::write(live.join("pose/poses.csv"), &table).unwrap();
     let (stdout, stderr) = finish(child);
     let lines: Vec<&str> = stdout.lines().filter(|l| l.starts_with("stop ")).collect();
     assert_eq!(lines.len(), 12, "{stdout}");

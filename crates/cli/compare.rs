@@ -19,7 +19,7 @@ use crate::dataset::{Dataset, Table, read_table};
 use crate::pipeline::{
     Survey, SurveyInputs, VariantStats, evaluate, first_columns, localise_files, mapped_table,
 };
-use crate::rules::{RuleCensus, run_census};
+use crate::rules::{Recordings, RuleCensus, Truth, run_census};
 use crate::score::{Diagnostics, DoaScore, diagnose, score_doas};
 use crate::settings::Settings;
 
@@ -206,18 +206,19 @@ pub fn compare(
         let mut r = row(&survey, method.name().to_owned(), "ssl", Some(ms), &s, opts)?;
         if opts.rules {
             tell(format!("{method}: why near sources were missed"));
-            r.rules = Some(run_census(
-                &ds.audio,
-                &array,
-                s.channels.as_deref(),
-                noise.as_ref(),
-                &s.ssl,
-                &files,
-                &survey.poses,
-                survey.truth.as_deref().unwrap_or_default(),
-                HIT_DEG,
-                survey.mirror_axis_deg,
-            )?);
+            let rec = Recordings {
+                files: &ds.audio,
+                array: &array,
+                channels: s.channels.as_deref(),
+                noise: noise.as_ref(),
+            };
+            let truth = Truth {
+                poses: &survey.poses,
+                sources: survey.truth.as_deref().unwrap_or_default(),
+                tol_deg: HIT_DEG,
+                mirror_axis_deg: survey.mirror_axis_deg,
+            };
+            r.rules = Some(run_census(&rec, &s.ssl, &files, &truth)?);
         }
         rows.push(r);
     }

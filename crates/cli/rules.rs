@@ -337,26 +337,57 @@ pub fn census(stops: &[Stop], config: &SslConfig, tol_deg: f64) -> RuleCensus {
     c
 }
 
+/// The recordings of a census and how they are localised: the files, the array, the
+/// channels taken from them, the robot's noise subtracted.
+pub struct Recordings<'a> {
+    /// The WAV files, one per stop.
+    pub files: &'a [PathBuf],
+    /// The array that made them.
+    pub array: &'a MicArray,
+    /// The channels used (all when `None`).
+    pub channels: Option<&'a [usize]>,
+    /// The recording of the robot alone, subtracted when given.
+    pub noise: Option<&'a crate::pipeline::RobotNoise>,
+}
+
+/// What a census scores against: each stop's pose, the true sources (m), how near a DoA
+/// must be to a true bearing, and a linear array's axis (its DoAs and the bearings folded
+/// as the score folds them).
+pub struct Truth<'a> {
+    /// The robot's pose at each stop.
+    pub poses: &'a [Pose],
+    /// The true sources (m).
+    pub sources: &'a [[f64; 2]],
+    /// A hit lies within this of a true bearing (degrees).
+    pub tol_deg: f64,
+    /// A linear array's axis (degrees), or `None`.
+    pub mirror_axis_deg: Option<f64>,
+}
+
 /// The census of a data set: `rows` are its recordings' DoAs found with `config` (in the
-/// order of `files`, the robot's `noise` subtracted when given), heard at `poses`, scored against `sources` (m); each recording is
-/// localised again with [`without`] no rule, each rule in turn and every rule. For a linear array
-/// at `mirror_axis_deg`, DoAs and bearings are folded as the score folds them.
+/// order of `rec.files`), scored against `truth`; each recording is localised again with
+/// [`without`] no rule, each rule in turn and every rule.
 ///
 /// # Errors
 /// As [`localise_files`]; or if the rows, files and poses differ in length.
-#[allow(clippy::too_many_arguments)]
 pub fn run_census(
-    files: &[PathBuf],
-    array: &MicArray,
-    channels: Option<&[usize]>,
-    noise: Option<&crate::pipeline::RobotNoise>,
+    rec: &Recordings<'_>,
     config: &SslConfig,
     rows: &[FileDoas],
-    poses: &[Pose],
-    sources: &[[f64; 2]],
-    tol_deg: f64,
-    mirror_axis_deg: Option<f64>,
+    truth: &Truth<'_>,
 ) -> Result<RuleCensus> {
+    let Recordings {
+        files,
+        array,
+        channels,
+        noise,
+    } = *rec;
+    let Truth {
+        poses,
+        sources,
+        tol_deg,
+        mirror_axis_deg,
+    } = *truth;
     ensure!(
         rows.len() == files.len() && rows.len() == poses.len(),
         "{} recordings, {} rows of DoAs and {} poses",

@@ -65,7 +65,7 @@ struct OspaReport {
     value: Ospa,
 }
 
-/// Runs `iasm map`.
+/// Runs `iasm map`: the survey and settings, the map, its report written and printed.
 ///
 /// # Errors
 /// Bad survey or settings, or files that cannot be written.
@@ -73,23 +73,44 @@ pub fn run(a: &MapArgs) -> Result<Outcome> {
     if let Some(png) = &a.png {
         crate::figure::Format::of(png)?;
     }
+    let (settings, survey) = gather(a)?;
+    let localised = a.input.doas.is_none();
+    let config = &survey.mapper_config(&settings.iasm);
+    let t0 = std::time::Instant::now();
+    let result = survey.map(config, a.seed)?;
+    let dt = t0.elapsed().as_secs_f64();
+    warn_if_thinned(&survey, config, &result);
+    let report = report(a, &survey, &settings, config, &result, localised);
+    write_files(a, &survey, &report, &result)?;
+    if a.report.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        print_map(a, &survey, &report, &result, dt);
+    }
+    Ok(Outcome::Success)
+}
+
+/// The settings (with `--variant`) and the survey, the notes a user should see said.
+fn gather(a: &MapArgs) -> Result<(crate::settings::Settings, Survey)> {
     let mut settings = a.input.settings()?;
     if let Some(v) = a.variant {
         settings.iasm.variant = v;
     }
     let survey = Survey::load(&a.input.survey_inputs(), &settings)?;
-    let localised = a.input.doas.is_none();
     if let Some(note) = survey.map_note() {
         eprintln!("{note}");
     }
     crate::robot_noise::tell(&settings, &survey);
-    if localised && let Some(note) = crate::pipeline::linear_array_note(&settings.mic_array()?) {
+    if a.input.doas.is_none()
+        && let Some(note) = crate::pipeline::linear_array_note(&settings.mic_array()?)
+    {
         eprintln!("{note}");
     }
-    let config = &survey.mapper_config(&settings.iasm);
-    let t0 = std::time::Instant::now();
-    let result = survey.map(config, a.seed)?;
-    let dt = t0.elapsed().as_secs_f64();
+    Ok((settings, survey))
+}
+
+/// Says when the map was too large for the paper's particle density (`asm::MAX_PARTICLES`).
+fn warn_if_thinned(survey: &Survey, config: &IasmConfig, result: &MapResult) {
     let known = survey.map.known_cells().count();
     if result.particles == asm::MAX_PARTICLES
         && known as f64 / config.density_d > 1.0 + result.particles as f64
@@ -103,8 +124,19 @@ pub fn run(a: &MapArgs) -> Result<Outcome> {
             config.density_d
         );
     }
-    let o = survey
-        .ospa(&result, a.report.ospa_c, a.report.ospa_p)
+}
+
+/// The run's report: the map, and against the truth when there is one.
+fn report<'a>(
+    a: &MapArgs,
+    survey: &'a Survey,
+    settings: &'a crate::settings::Settings,
+    config: &'a IasmConfig,
+    result: &'a MapResult,
+    localised: bool,
+) -> MapReport<'a> {
+    let ospa = survey
+        .ospa(result, a.report.ospa_c, a.report.ospa_p)
         .map(|value| OspaReport {
             p: a.report.ospa_p,
             c: a.report.ospa_c,
@@ -114,9 +146,9 @@ pub fn run(a: &MapArgs) -> Result<Outcome> {
         .truth
         .as_deref()
         .and_then(|t| asm::align::align(&result.positions(), t, a.report.ospa_c));
-    let explanation = a.explain.then(|| {
+    let explain = a.explain.then(|| {
         explain(
-            &result,
+            result,
             &survey.poses,
             &survey.doas_deg,
             survey.cut.as_deref(),
@@ -125,7 +157,7 @@ pub fn run(a: &MapArgs) -> Result<Outcome> {
             crate::compare::HIT_DEG,
         )
     });
-    let report = MapReport {
+    MapReport {
         schema_version: SCHEMA_VERSION,
         frame_id: crate::rosmap::FRAME,
         doas: &survey.doa_source,
@@ -140,19 +172,29 @@ pub fn run(a: &MapArgs) -> Result<Outcome> {
         removed_sources: result.removed,
         refused: &result.refused,
         sources: &result.sources,
-        ospa: o,
+        ospa,
         alignment,
         open_margin_m: survey.open_margin_m,
-        explain: explanation,
-    };
+        explain,
+    }
+}
+
+/// The files asked for: the JSON, the CSV, the truth in the map's frame, the picture, the
+/// MCAP.
+fn write_files(
+    a: &MapArgs,
+    survey: &Survey,
+    report: &MapReport<'_>,
+    result: &MapResult,
+) -> Result<()> {
     if let Some(out) = &a.out {
-        crate::output::write_atomic(out, serde_json::to_string_pretty(&report)?.as_bytes())?;
+        crate::output::write_atomic(out, serde_json::to_string_pretty(report)?.as_bytes())?;
     }
     if let Some(csv) = &a.csv {
-        write_sources_csv(csv, &result)?;
+        write_sources_csv(csv, result)?;
     }
     if let Some(path) = &a.write_aligned_truth {
-        let (Some(truth), Some(fit)) = (survey.truth.as_deref(), alignment) else {
+        let (Some(truth), Some(fit)) = (survey.truth.as_deref(), report.alignment) else {
             anyhow::bail!(
                 "--write-aligned-truth {}: the map needs the truth and three sources matched to it within c = {} m",
                 path.display(),
@@ -170,52 +212,67 @@ pub fn run(a: &MapArgs) -> Result<Outcome> {
         crate::output::write_atomic(path, text.as_bytes())?;
     }
     if let Some(png) = &a.png {
-        let name = |p: &Path| {
-            p.file_name().map_or_else(
-                || p.display().to_string(),
-                |n| n.to_string_lossy().into_owned(),
-            )
-        };
-        let inputs = a.input.survey_inputs();
-        let data = inputs
-            .dataset
-            .as_deref()
-            .or(inputs.poses.as_deref())
-            .map_or_else(|| "survey".to_owned(), name);
-        let doas = survey
-            .doa_source
-            .strip_prefix("ssl:")
-            .map_or_else(|| name(Path::new(&survey.doa_source)), str::to_owned);
-        let ospa = o.map_or(String::new(), |o| format!(", OSPA {:.3} m", o.value.total));
-        let title = format!(
-            "{data}: {doas}, {}, {} sources found{ospa}",
-            config.variant.name(),
-            result.sources.len()
-        );
-        crate::figure::map(
-            png,
-            &MapFigure {
-                title,
-                map: &survey.map,
-                poses: &survey.poses,
-                result: &result,
-                truth: survey.truth.as_deref(),
-                full_map: a.figure.full_map,
-                width: a.figure.figure_width,
-            },
-        )?;
+        write_figure(a, png, survey, report, result)?;
     }
     if let Some(path) = &a.mcap {
-        let messages = crate::rosmap::of_survey(&survey, &result);
+        let messages = crate::rosmap::of_survey(survey, result);
         crate::rosmap::write_mcap(path, &messages, messages.path.header.stamp.ns())?;
     }
-    if a.report.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
-        return Ok(Outcome::Success);
-    }
+    Ok(())
+}
+
+/// The map's picture, titled with the data, the DoAs' origin, the variant and the score.
+fn write_figure(
+    a: &MapArgs,
+    png: &Path,
+    survey: &Survey,
+    report: &MapReport<'_>,
+    result: &MapResult,
+) -> Result<()> {
+    let name = |p: &Path| {
+        p.file_name().map_or_else(
+            || p.display().to_string(),
+            |n| n.to_string_lossy().into_owned(),
+        )
+    };
+    let inputs = a.input.survey_inputs();
+    let data = inputs
+        .dataset
+        .as_deref()
+        .or(inputs.poses.as_deref())
+        .map_or_else(|| "survey".to_owned(), name);
+    let doas = survey
+        .doa_source
+        .strip_prefix("ssl:")
+        .map_or_else(|| name(Path::new(&survey.doa_source)), str::to_owned);
+    let ospa = report
+        .ospa
+        .map_or(String::new(), |o| format!(", OSPA {:.3} m", o.value.total));
+    let title = format!(
+        "{data}: {doas}, {}, {} sources found{ospa}",
+        report.params.variant.name(),
+        result.sources.len()
+    );
+    crate::figure::map(
+        png,
+        &MapFigure {
+            title,
+            map: &survey.map,
+            poses: &survey.poses,
+            result,
+            truth: survey.truth.as_deref(),
+            full_map: a.figure.full_map,
+            width: a.figure.figure_width,
+        },
+    )
+}
+
+/// The map on the terminal: a line on the run, a row per source, the score, where the
+/// DoAs went (`--explain`) and the frames' agreement.
+fn print_map(a: &MapArgs, survey: &Survey, report: &MapReport<'_>, result: &MapResult, dt: f64) {
     println!(
         "I-ASM ({}) on {} stops, DoAs from {}: {} sources in {} rounds of {} particles ({:.0} ms, seed {})",
-        config.variant.name(),
+        report.params.variant.name(),
         survey.poses.len(),
         survey.doa_source,
         result.sources.len(),
@@ -252,7 +309,7 @@ pub fn run(a: &MapArgs) -> Result<Outcome> {
             );
         }
     }
-    if let Some(o) = o {
+    if let Some(o) = report.ospa {
         println!(
             "OSPA (p = {}, c = {} m): {:.3} m (localisation {:.3}, cardinality {:.3})",
             o.p, o.c, o.value.total, o.value.localization, o.value.cardinality
@@ -261,7 +318,7 @@ pub fn run(a: &MapArgs) -> Result<Outcome> {
     if let Some(e) = &report.explain {
         print_explanation(e, a.report.ospa_c);
     }
-    if let Some(f) = alignment {
+    if let Some(f) = report.alignment {
         println!(
             "Matched sources {:.3} m from the truth; {:.3} m after the best similarity transform of the map (scale {:.3}, rotation {:+.2}°, shift ({:+.3}, {:+.3}) m; {} pairs): much less means the poses' and the truth's frames disagree",
             f.mean_before_m,
@@ -273,7 +330,6 @@ pub fn run(a: &MapArgs) -> Result<Outcome> {
             f.pairs
         );
     }
-    Ok(Outcome::Success)
 }
 
 /// `--explain` on the terminal: one line per source, per stop with DoAs left, per missed

@@ -12,7 +12,7 @@ use crate::Outcome;
 use crate::args::SslArgs;
 use crate::dataset::{Dataset, Table, read_poses, read_sources, read_table};
 use crate::pipeline::{FileDoas, doa_table, localise_files};
-use crate::rules::{RuleCensus, run_census};
+use crate::rules::{Recordings, RuleCensus, Truth, run_census};
 use crate::score::{Diagnostics, DoaScore, diagnose, score_doas};
 
 /// Version of the JSON this command prints.
@@ -41,7 +41,30 @@ pub fn write_doa_csv(path: &Path, table: &Table, header: bool) -> Result<()> {
     crate::output::write_atomic(path, s.as_bytes())
 }
 
-/// Runs `iasm ssl`.
+/// What every part of the command needs: the settings, the array and its SSL settings,
+/// the robot's noise.
+struct Setup {
+    settings: crate::settings::Settings,
+    array: MicArray,
+    config: SslConfig,
+    noise: Option<crate::pipeline::RobotNoise>,
+}
+
+impl Setup {
+    /// The recordings `files`, localised with this setup.
+    fn localise(&self, files: &[std::path::PathBuf]) -> Result<Vec<FileDoas>> {
+        localise_files(
+            files,
+            &self.array,
+            self.settings.channels.as_deref(),
+            &self.config,
+            self.noise.as_ref(),
+        )
+    }
+}
+
+/// Runs `iasm ssl`: DoAs of the files given, or a data set's DoA table, and with
+/// `--score` its score against the truth, printed and checked against the thresholds.
 ///
 /// # Errors
 /// Bad settings, unreadable or mismatched files.
@@ -51,58 +74,26 @@ pub fn run(args: &SslArgs) -> Result<Outcome> {
         .settings()?
         .with_dataset_array(args.dataset.as_deref())
         .with_dataset_noise(args.dataset.as_deref())?;
-    let array = settings.mic_array()?;
-    let config = settings.ssl.clone();
-    let noise = crate::pipeline::RobotNoise::of(&settings)?;
-    let mirror = array.mirror_axis_deg();
-    if let Some(note) = crate::pipeline::linear_array_note(&array) {
+    let setup = Setup {
+        array: settings.mic_array()?,
+        config: settings.ssl.clone(),
+        noise: crate::pipeline::RobotNoise::of(&settings)?,
+        settings,
+    };
+    if let Some(note) = crate::pipeline::linear_array_note(&setup.array) {
         eprintln!("{note}");
     }
     let Some(dir) = &args.dataset else {
-        let rows = localise_files(
-            &args.files,
-            &array,
-            settings.channels.as_deref(),
-            &config,
-            noise.as_ref(),
-        )?;
+        let rows = setup.localise(&args.files)?;
         crate::pipeline::warn_recordings(&rows);
-        print_rows(&rows, &config, &array, args.json)?;
+        print_rows(&rows, &setup.config, &setup.array, args.json)?;
         return Ok(Outcome::Success);
     };
     let ds = Dataset::open(dir)?;
-    anyhow::ensure!(
-        !ds.audio.is_empty(),
-        "{}: no WAV file in {}",
-        dir.display(),
-        dir.join("audio").display()
-    );
-    let t0 = Instant::now();
-    let rows = localise_files(
-        &ds.audio,
-        &array,
-        settings.channels.as_deref(),
-        &config,
-        noise.as_ref(),
-    )?;
-    let elapsed = t0.elapsed().as_secs_f64();
-    crate::pipeline::warn_recordings(&rows);
-    eprintln!(
-        "{}: {} recordings localised with {} in {:.2} s ({:.1} ms per recording){}{}",
-        dir.display(),
-        rows.len(),
-        config.method,
-        elapsed,
-        1e3 * elapsed / rows.len() as f64,
-        pooling_note(&rows, config.pooling),
-        match &settings.noise {
-            Some(p) => format!("; the robot's own noise in {} subtracted", p.display()),
-            None => String::new(),
-        }
-    );
-    let table = doa_table(rows.iter().map(|r| &r.doas[..]), config.num_peaks);
+    let (rows, elapsed) = localise_dataset(&setup, &ds, dir)?;
+    let table = doa_table(rows.iter().map(|r| &r.doas[..]), setup.config.num_peaks);
     // Without a recording of the robot alone: does the robot's own noise show?
-    if settings.noise.is_none()
+    if setup.settings.noise.is_none()
         && let Some(p) = &ds.poses
         && let Ok(poses) = read_poses(p, false)
         && let Some(note) = crate::robot_noise::note(&poses, &table)
@@ -113,11 +104,59 @@ pub fn run(args: &SslArgs) -> Result<Outcome> {
         write_doa_csv(out, &table, args.header)?;
         eprintln!("wrote {}", out.display());
     } else if !args.score {
-        print_rows(&rows, &config, &array, args.json)?;
+        print_rows(&rows, &setup.config, &setup.array, args.json)?;
     }
     if !args.score {
         return Ok(Outcome::Success);
     }
+    let report = score(args, &setup, &ds, &rows, &table, elapsed)?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        print_score(&report, &setup.config, args.tol_deg);
+    }
+    check(args, &report, &setup.config, dir)
+}
+
+/// The data set's recordings localised, and the time it took (s), said on stderr.
+fn localise_dataset(setup: &Setup, ds: &Dataset, dir: &Path) -> Result<(Vec<FileDoas>, f64)> {
+    anyhow::ensure!(
+        !ds.audio.is_empty(),
+        "{}: no WAV file in {}",
+        dir.display(),
+        dir.join("audio").display()
+    );
+    let t0 = Instant::now();
+    let rows = setup.localise(&ds.audio)?;
+    let elapsed = t0.elapsed().as_secs_f64();
+    crate::pipeline::warn_recordings(&rows);
+    eprintln!(
+        "{}: {} recordings localised with {} in {:.2} s ({:.1} ms per recording){}{}",
+        dir.display(),
+        rows.len(),
+        setup.config.method,
+        elapsed,
+        1e3 * elapsed / rows.len() as f64,
+        pooling_note(&rows, setup.config.pooling),
+        match &setup.settings.noise {
+            Some(p) => format!("; the robot's own noise in {} subtracted", p.display()),
+            None => String::new(),
+        }
+    );
+    Ok((rows, elapsed))
+}
+
+/// The score of our DoA `table` and of the data set's published tables against its truth,
+/// with `--by-distance` and `--rules` diagnostics.
+fn score(
+    args: &SslArgs,
+    setup: &Setup,
+    ds: &Dataset,
+    rows: &[FileDoas],
+    table: &Table,
+    elapsed: f64,
+) -> Result<ScoreReport> {
+    let dir = &ds.root;
     let poses_path = ds
         .poses
         .as_ref()
@@ -131,16 +170,29 @@ pub fn run(args: &SslArgs) -> Result<Outcome> {
     };
     let poses = read_poses(poses_path, false)?;
     let sources = read_sources(sources_path)?;
-    let n = config.num_peaks;
-    let ours = score_doas(&table, &poses, &sources, n, args.tol_deg, mirror)
+    let (n, mirror, config) = (
+        setup.config.num_peaks,
+        setup.array.mirror_axis_deg(),
+        &setup.config,
+    );
+    let ours = score_doas(table, &poses, &sources, n, args.tol_deg, mirror)
         .with_context(|| format!("scoring against {}", poses_path.display()))?;
     let diag = |t: &Table| -> Result<Option<Diagnostics>> {
         args.by_distance
             .then(|| diagnose(t, &poses, &sources, n, MATCH_DEG, args.tol_deg, mirror))
             .transpose()
     };
-    let mut diagnostics = vec![(format!("iasm {}", config.method), diag(&table)?)];
-    let mut published: Vec<(String, DoaScore)> = Vec::new();
+    let mut diagnostics: Vec<NamedDiagnostics> = Vec::new();
+    let mut named = |table: String, d: Option<Diagnostics>| {
+        if let Some(d) = d {
+            diagnostics.push(NamedDiagnostics {
+                table,
+                diagnostics: d,
+            });
+        }
+    };
+    named(format!("iasm {}", config.method), diag(table)?);
+    let mut published: Vec<PublishedScore> = Vec::new();
     for t in &ds.doa_tables {
         let name = t
             .file_name()
@@ -154,113 +206,108 @@ pub fn run(args: &SslArgs) -> Result<Outcome> {
             ))
         });
         match scored {
-            Ok((s, d)) => {
-                published.push((name.clone(), s));
-                diagnostics.push((name, d));
+            Ok((score, d)) => {
+                published.push(PublishedScore {
+                    table: name.clone(),
+                    score,
+                });
+                named(name, d);
             }
             Err(e) => eprintln!("warning: cannot score {}: {e:#}", t.display()),
         }
     }
     let rules = if args.rules {
-        Some(run_census(
-            &ds.audio,
-            &array,
-            settings.channels.as_deref(),
-            noise.as_ref(),
-            &config,
-            &rows,
-            &poses,
-            &sources,
-            args.tol_deg,
-            mirror,
-        )?)
+        let rec = Recordings {
+            files: &ds.audio,
+            array: &setup.array,
+            channels: setup.settings.channels.as_deref(),
+            noise: setup.noise.as_ref(),
+        };
+        let truth = Truth {
+            poses: &poses,
+            sources: &sources,
+            tol_deg: args.tol_deg,
+            mirror_axis_deg: mirror,
+        };
+        Some(run_census(&rec, config, rows, &truth)?)
     } else {
         None
     };
-    let report = ScoreReport {
+    Ok(ScoreReport {
         schema_version: SCHEMA_VERSION,
         method: config.method.name(),
         num: n,
         tol_deg: args.tol_deg,
         recordings: rows.len(),
         ms_per_recording: 1e3 * elapsed / rows.len() as f64,
-        ours: ours.clone(),
-        diagnostics: diagnostics
-            .iter()
-            .filter_map(|(name, d)| {
-                d.clone().map(|d| NamedDiagnostics {
-                    table: name.clone(),
-                    diagnostics: d,
-                })
-            })
-            .collect(),
-        published: published
-            .iter()
-            .map(|(n, s)| PublishedScore {
-                table: n.clone(),
-                score: s.clone(),
-            })
-            .collect(),
+        ours,
+        diagnostics,
+        published,
         rules,
-    };
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
-    } else {
-        println!(
-            "DoA score (first {n} DoAs, hit within {} deg of a true bearing)",
-            args.tol_deg
-        );
-        println!(
-            "{:<28} {:>6} {:>6} {:>7} {:>10}",
-            "table", "hits", "total", "score", "mean err"
-        );
-        // An angle, or "-" where there was nothing to average (no hit, an empty band).
-        let deg = |v: f64| {
-            if v.is_finite() {
-                format!("{v:.2}°")
-            } else {
-                "-".to_owned()
-            }
-        };
-        let line = |name: &str, s: &DoaScore| {
-            println!(
-                "{:<28} {:>6} {:>6} {:>7.3} {:>10}",
-                name,
-                s.hits,
-                s.total,
-                s.score,
-                deg(s.mean_hit_error_deg)
-            )
-        };
-        line(&format!("iasm {}", config.method), &ours);
-        for (name, s) in &published {
-            line(name, s);
+    })
+}
+
+/// The score on the terminal: a row per table, the diagnostics by distance, the census.
+fn print_score(report: &ScoreReport, config: &SslConfig, tol_deg: f64) {
+    println!(
+        "DoA score (first {} DoAs, hit within {tol_deg} deg of a true bearing)",
+        report.num
+    );
+    println!(
+        "{:<28} {:>6} {:>6} {:>7} {:>10}",
+        "table", "hits", "total", "score", "mean err"
+    );
+    // An angle, or "-" where there was nothing to average (no hit, an empty band).
+    let deg = |v: f64| {
+        if v.is_finite() {
+            format!("{v:.2}°")
+        } else {
+            "-".to_owned()
         }
-        for (name, d) in &diagnostics {
-            let Some(d) = d else { continue };
-            println!(
-                "\n{name}: DoAs within {} deg of a source, by its distance; recall of sources within 3 m {:.3} ({} pairs)",
-                d.match_deg, d.recall_3m, d.near_pairs
-            );
+    };
+    let line = |name: &str, s: &DoaScore| {
+        println!(
+            "{:<28} {:>6} {:>6} {:>7.3} {:>10}",
+            name,
+            s.hits,
+            s.total,
+            s.score,
+            deg(s.mean_hit_error_deg)
+        )
+    };
+    line(&format!("iasm {}", config.method), &report.ours);
+    for p in &report.published {
+        line(&p.table, &p.score);
+    }
+    for nd in &report.diagnostics {
+        let (name, d) = (&nd.table, &nd.diagnostics);
+        println!(
+            "\n{name}: DoAs within {} deg of a source, by its distance; recall of sources within 3 m {:.3} ({} pairs)",
+            d.match_deg, d.recall_3m, d.near_pairs
+        );
+        println!(
+            "  {:<10} {:>5} {:>10} {:>12} {:>11}",
+            "distance", "DoAs", "mean |err|", "median |err|", "axis bias"
+        );
+        for b in &d.bands {
             println!(
                 "  {:<10} {:>5} {:>10} {:>12} {:>11}",
-                "distance", "DoAs", "mean |err|", "median |err|", "axis bias"
+                b.band,
+                b.doas,
+                deg(b.mean_abs_err_deg),
+                deg(b.median_abs_err_deg),
+                deg(b.axis_bias_deg)
             );
-            for b in &d.bands {
-                println!(
-                    "  {:<10} {:>5} {:>10} {:>12} {:>11}",
-                    b.band,
-                    b.doas,
-                    deg(b.mean_abs_err_deg),
-                    deg(b.median_abs_err_deg),
-                    deg(b.axis_bias_deg)
-                );
-            }
-        }
-        if let Some(c) = &report.rules {
-            print_census(&format!("iasm {}", config.method), c, args.tol_deg);
         }
     }
+    if let Some(c) = &report.rules {
+        print_census(&format!("iasm {}", config.method), c, tol_deg);
+    }
+}
+
+/// `--min-score` and `--beat-published`.
+fn check(args: &SslArgs, report: &ScoreReport, config: &SslConfig, dir: &Path) -> Result<Outcome> {
+    let ours = &report.ours;
     let mut failed = false;
     if let Some(min) = args.min_score
         && ours.score < min
@@ -270,14 +317,15 @@ pub fn run(args: &SslArgs) -> Result<Outcome> {
     }
     if args.beat_published {
         let key = config.method.name().replace('-', "").to_ascii_lowercase();
-        let same = published
+        let same = report
+            .published
             .iter()
-            .find(|(n, _)| n.replace('-', "").to_ascii_lowercase().contains(&key));
+            .find(|p| p.table.replace('-', "").to_ascii_lowercase().contains(&key));
         match same {
-            Some((name, s)) if ours.score < s.score => {
+            Some(p) if ours.score < p.score.score => {
                 eprintln!(
-                    "FAIL: score {:.3} is below the published {name} ({:.3})",
-                    ours.score, s.score
+                    "FAIL: score {:.3} is below the published {} ({:.3})",
+                    ours.score, p.table, p.score.score
                 );
                 failed = true;
             }

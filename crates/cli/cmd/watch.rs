@@ -62,8 +62,10 @@ impl Outputs<'_> {
         self.notes.borrow_mut().push(w);
     }
 
-    /// Maps `audio` as the next stop and writes the map; a recording the session cannot
-    /// use (channels, sample rate, samples) is a note, and the run goes on.
+    /// Maps `audio` as the next stop and writes the map. A recording the session cannot
+    /// use (channels, sample rate, samples) ends a replay, or a live run that has mapped
+    /// nothing yet (the settings do not fit the recorder: said at once, not per stop);
+    /// later in a live run it is a note, and the run goes on.
     fn add(
         &self,
         session: &mut Session,
@@ -80,6 +82,7 @@ impl Outputs<'_> {
                 self.write(session, &session.map(), false)?;
                 records.push(r);
             }
+            Err(e) if self.a.replay || records.is_empty() => return Err(e),
             Err(e) => self.note(format!("{}: skipped: {e:#}", file.display())),
         }
         Ok(())
@@ -305,13 +308,9 @@ fn replay(
     let k = a.stops.unwrap_or(poses.len()).min(poses.len());
     for (file, pose) in ds.audio.iter().zip(&poses).take(k) {
         let t0 = Instant::now();
-        match ssl::read_wav(file) {
-            Ok(audio) => {
-                let read_ms = 1e3 * t0.elapsed().as_secs_f64();
-                out.add(session, file, *pose, &audio, records, read_ms)?;
-            }
-            Err(e) => out.note(format!("{}: skipped: {e}", file.display())),
-        }
+        let audio = ssl::read_wav(file)?;
+        let read_ms = 1e3 * t0.elapsed().as_secs_f64();
+        out.add(session, file, *pose, &audio, records, read_ms)?;
     }
     Ok(())
 }
