@@ -4,17 +4,17 @@ use anyhow::{Context, Result, bail};
 
 use crate::Outcome;
 use crate::args::BagArgs;
-use crate::bagset::{picked_channels, read_bag, write_dataset};
+use crate::bagset::{BagRun, picked_channels, read_bag, write_dataset};
 use crate::output::replace_dir;
 
-/// Runs `iasm bag`.
+/// Runs `iasm bag`: the run read, what it holds and the stops it has said, and with
+/// `--out` the data set written.
 ///
 /// # Errors
 /// A bag that cannot be read, options refused, no stop found with `--out`, or an output
 /// folder that is refused or cannot be written.
 pub fn run(a: &BagArgs) -> Result<Outcome> {
-    let read = a.run.read_options()?;
-    let stops = a.run.stop_options()?;
+    let (read, stops) = (a.run.read_options()?, a.run.stop_options()?);
     let array = a
         .array
         .as_deref()
@@ -32,8 +32,51 @@ pub fn run(a: &BagArgs) -> Result<Outcome> {
         array.as_ref(),
     )
     .with_context(|| format!("the bag {}", a.bag.display()))?;
-    let run = &got.run;
+    print_run(a, &got);
+    print_stops(&got);
+    let too_few = (got.stops.len() < 3).then(|| too_few(a, got.stops.len()));
+    let Some(out) = &a.out else {
+        if let Some(w) = &too_few {
+            eprintln!("warning: {w}");
+        }
+        return Ok(Outcome::Success);
+    };
+    if got.stops.is_empty() {
+        bail!(
+            "nothing written to {}: {}",
+            out.display(),
+            too_few.unwrap_or_default()
+        );
+    }
+    if let Some(w) = &too_few {
+        eprintln!("warning: {w}");
+    }
+    replace_dir(out, a.force, |dir| {
+        write_dataset(&got, &picked, array.as_ref(), dir)
+    })?;
+    println!(
+        "written to {} (audio/, pose/poses.csv, stops.csv{}{}); next: iasm map --dataset {} --png map.png",
+        out.display(),
+        match (got.run.map.is_some(), array.is_some()) {
+            (true, true) => ", map/, array.toml",
+            (true, false) => ", map/",
+            (false, true) => ", array.toml",
+            (false, false) => "",
+        },
+        if got.noise.is_some() {
+            ", noise/robot.wav"
+        } else {
+            ""
+        },
+        out.display()
+    );
+    Ok(Outcome::Success)
+}
 
+/// What the bag holds: its length and topics, the audio, the poses, the map, its notes,
+/// and the recording of the robot alone.
+fn print_run(a: &BagArgs, got: &BagRun) {
+    let run = &got.run;
     let duration = run.topics.iter().map(|t| t.span_s.1).fold(0.0, f64::max);
     println!(
         "{}: {:.1} s, {} topics{}",
@@ -107,6 +150,10 @@ pub fn run(a: &BagArgs) -> Result<Outcome> {
             }
         );
     }
+}
+
+/// The stops: when the robot listened, and where it stood.
+fn print_stops(got: &BagRun) {
     println!("stop  listen (s in the bag)  pose (x m, y m, theta deg)");
     for (i, s) in got.stops.iter().enumerate() {
         println!(
@@ -121,8 +168,12 @@ pub fn run(a: &BagArgs) -> Result<Outcome> {
     }
     let listened: f64 = got.stops.iter().map(|s| s.listen_s.1 - s.listen_s.0).sum();
     println!("{} stops, {listened:.1} s of audio", got.stops.len());
-    let n = got.stops.len();
-    let too_few = format!(
+}
+
+/// Why `n` stops (fewer than the three a source needs) were all the bag gave: the rules
+/// that make a stop, with the options that set them.
+fn too_few(a: &BagArgs, n: usize) -> String {
+    format!(
         "{} found (a stop: the robot within {} m and {} deg, --still-radius and --still-turn, \
          for {} s of audio, --min-listen, after {} s of settling, --settle, and before a {}-s \
          margin, --end-margin); a source needs three stops",
@@ -136,37 +187,5 @@ pub fn run(a: &BagArgs) -> Result<Outcome> {
         a.run.min_listen,
         a.run.settle,
         a.run.end_margin,
-    );
-    let Some(out) = &a.out else {
-        if got.stops.len() < 3 {
-            eprintln!("warning: {too_few}");
-        }
-        return Ok(Outcome::Success);
-    };
-    if got.stops.is_empty() {
-        bail!("nothing written to {}: {too_few}", out.display());
-    }
-    if got.stops.len() < 3 {
-        eprintln!("warning: {too_few}");
-    }
-    replace_dir(out, a.force, |dir| {
-        write_dataset(&got, &picked, array.as_ref(), dir)
-    })?;
-    println!(
-        "written to {} (audio/, pose/poses.csv, stops.csv{}{}); next: iasm map --dataset {} --png map.png",
-        out.display(),
-        match (run.map.is_some(), array.is_some()) {
-            (true, true) => ", map/, array.toml",
-            (true, false) => ", map/",
-            (false, true) => ", array.toml",
-            (false, false) => "",
-        },
-        if got.noise.is_some() {
-            ", noise/robot.wav"
-        } else {
-            ""
-        },
-        out.display()
-    );
-    Ok(Outcome::Success)
+    )
 }

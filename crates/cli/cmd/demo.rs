@@ -50,6 +50,40 @@ pub fn run(seed: u64, png: &Path, mcap: Option<&Path>, figure: &FigureArgs) -> R
         sim.poses().len(),
         t0.elapsed().as_secs_f64()
     );
+    print_map(&sim, &run);
+    crate::figure::map(
+        png,
+        &MapFigure {
+            title: format!(
+                "iasm demo (seed {seed}): mvdr, {}, {} of {} sources found, OSPA {:.3} m",
+                scene_settings(&Settings::default(), Method::Mvdr, N)
+                    .iasm
+                    .variant
+                    .name(),
+                run.map.sources.len(),
+                sim.truth.len(),
+                run.ospa.total
+            ),
+            map: &sim.map,
+            poses: sim.poses(),
+            result: &run.map,
+            truth: Some(&sim.truth),
+            full_map: figure.full_map,
+            width: figure.figure_width,
+        },
+    )?;
+    println!("map drawn to {}", png.display());
+    if let Some(path) = mcap {
+        let messages = crate::rosmap::of_survey(&run.survey, &run.map);
+        crate::rosmap::write_mcap(path, &messages, messages.path.header.stamp.ns())?;
+        println!("map written as ROS 2 messages to {}", path.display());
+    }
+    Ok(Outcome::Success)
+}
+
+/// The demo's map beside the truth: the DoA score, a row per source with the nearest true
+/// one, and the OSPA.
+fn print_map(sim: &Simulated, run: &SceneRun) {
     println!(
         "DoA score {:.3} (first {} DoAs per stop within 5 deg of a true bearing)",
         run.score.score, N
@@ -86,32 +120,4 @@ pub fn run(seed: u64, png: &Path, mcap: Option<&Path>, figure: &FigureArgs) -> R
         run.ospa.localization,
         run.ospa.cardinality
     );
-    crate::figure::map(
-        png,
-        &MapFigure {
-            title: format!(
-                "iasm demo (seed {seed}): mvdr, {}, {} of {} sources found, OSPA {:.3} m",
-                scene_settings(&Settings::default(), Method::Mvdr, N)
-                    .iasm
-                    .variant
-                    .name(),
-                run.map.sources.len(),
-                sim.truth.len(),
-                run.ospa.total
-            ),
-            map: &sim.map,
-            poses: sim.poses(),
-            result: &run.map,
-            truth: Some(&sim.truth),
-            full_map: figure.full_map,
-            width: figure.figure_width,
-        },
-    )?;
-    println!("map drawn to {}", png.display());
-    if let Some(path) = mcap {
-        let messages = crate::rosmap::of_survey(&run.survey, &run.map);
-        crate::rosmap::write_mcap(path, &messages, messages.path.header.stamp.ns())?;
-        println!("map written as ROS 2 messages to {}", path.display());
-    }
-    Ok(Outcome::Success)
 }

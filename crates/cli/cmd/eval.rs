@@ -24,7 +24,8 @@ struct EvalReport<'a> {
     variants: &'a [VariantStats],
 }
 
-/// Runs `iasm eval`.
+/// Runs `iasm eval`: the survey, every variant mapped `--runs` times, the table printed
+/// (or the JSON) and the thresholds checked.
 ///
 /// # Errors
 /// Bad survey or settings.
@@ -61,67 +62,80 @@ pub fn run(a: &EvalArgs) -> Result<Outcome> {
         };
         println!("{}", serde_json::to_string_pretty(&r)?);
     } else {
-        println!(
-            "I-ASM Monte Carlo: {} runs per variant, DoAs from {}, OSPA p = {}, c = {} m ({:.1} s)",
-            a.runs, survey.doa_source, a.report.ospa_p, a.report.ospa_c, secs
-        );
-        println!(
-            "{:<8} {:>10} {:>10} {:>10} {:>10} {:>9} {:>11} {:>17}",
-            "variant",
-            "mean (m)",
-            "median (m)",
-            "loc. (m)",
-            "card. (m)",
-            "sources",
-            "right count",
-            "worst (m, seed)"
-        );
-        for s in &stats {
-            println!(
-                "{:<8} {:>10.3} {:>10.3} {:>10.3} {:>10.3} {:>9.2} {:>10.0}% {:>10.3} ({:>4})",
-                s.variant.name().to_uppercase(),
-                s.mean,
-                s.median,
-                s.mean_localization,
-                s.mean_cardinality,
-                s.mean_sources,
-                100.0 * s.right_count,
-                s.worst,
-                s.worst_seed
-            );
-        }
-        if let Some(f) = stats
-            .iter()
-            .find(|s| s.variant == Variant::Ca)
-            .and_then(|s| s.aligned)
-        {
-            println!(
-                "CA: matched sources {:.3} m from the truth, {:.3} m after each run's best similarity transform of the map (mean scale {:.3}, rotation {:+.2}°; {} runs): much less means the poses' and the truth's frames disagree",
-                f.mean_before_m, f.mean_after_m, f.scale, f.rotation_deg, f.runs
-            );
-        }
-        if let Some(m) = stats
-            .iter()
-            .find(|s| s.variant == Variant::Ca)
-            .map(|s| s.missed)
-            .filter(|m| m.missed > 0.0)
-        {
-            println!(
-                "CA: {:.2} true sources missed per run; made and refused by the mapper's rules: {:.2} for stops that heard nothing there (absence_ratio), {:.2} too thinly heard (vote_min_thresholded_stops), {:.2} on the path, beyond the map or behind a wall (min_range_m, beyond_map_m, wall_clearance_m), {:.2} whose DoAs fit other sources better (reassociate); {:.2} never made a source (`iasm map --explain` shows where their DoAs went)",
-                m.missed,
-                m.spoken_against,
-                m.thinly_heard,
-                m.misplaced,
-                m.reassigned,
-                m.never_made()
-            );
-        }
+        print_table(a, &survey.doa_source, &stats, secs);
     }
-    let ca = stats
+    Ok(if check(a, &stats) {
+        Outcome::Success
+    } else {
+        Outcome::ThresholdFailed
+    })
+}
+
+/// CA's statistics (always evaluated).
+fn ca(stats: &[VariantStats]) -> &VariantStats {
+    stats
         .iter()
         .find(|s| s.variant == Variant::Ca)
-        .expect("CA is always evaluated");
-    let mut failed = false;
+        .expect("CA is always evaluated")
+}
+
+/// The table: a row per variant, then CA's frame fit and what its missed sources became.
+fn print_table(a: &EvalArgs, doas: &str, stats: &[VariantStats], secs: f64) {
+    println!(
+        "I-ASM Monte Carlo: {} runs per variant, DoAs from {doas}, OSPA p = {}, c = {} m ({secs:.1} s)",
+        a.runs, a.report.ospa_p, a.report.ospa_c
+    );
+    println!(
+        "{:<8} {:>10} {:>10} {:>10} {:>10} {:>9} {:>11} {:>17}",
+        "variant",
+        "mean (m)",
+        "median (m)",
+        "loc. (m)",
+        "card. (m)",
+        "sources",
+        "right count",
+        "worst (m, seed)"
+    );
+    for s in stats {
+        println!(
+            "{:<8} {:>10.3} {:>10.3} {:>10.3} {:>10.3} {:>9.2} {:>10.0}% {:>10.3} ({:>4})",
+            s.variant.name().to_uppercase(),
+            s.mean,
+            s.median,
+            s.mean_localization,
+            s.mean_cardinality,
+            s.mean_sources,
+            100.0 * s.right_count,
+            s.worst,
+            s.worst_seed
+        );
+    }
+    let ca = ca(stats);
+    if let Some(f) = ca.aligned {
+        println!(
+            "CA: matched sources {:.3} m from the truth, {:.3} m after each run's best similarity transform of the map (mean scale {:.3}, rotation {:+.2}°; {} runs): much less means the poses' and the truth's frames disagree",
+            f.mean_before_m, f.mean_after_m, f.scale, f.rotation_deg, f.runs
+        );
+    }
+    let m = ca.missed;
+    if m.missed > 0.0 {
+        println!(
+            "CA: {:.2} true sources missed per run; made and refused by the mapper's rules: {:.2} for stops that heard nothing there (absence_ratio), {:.2} too thinly heard (vote_min_thresholded_stops), {:.2} on the path, beyond the map or behind a wall (min_range_m, beyond_map_m, wall_clearance_m), {:.2} whose DoAs fit other sources better (reassociate); {:.2} never made a source (`iasm map --explain` shows where their DoAs went)",
+            m.missed,
+            m.spoken_against,
+            m.thinly_heard,
+            m.misplaced,
+            m.reassigned,
+            m.never_made()
+        );
+    }
+}
+
+/// `--max-mean-ospa`, `--max-aligned` and `--expect-ablation`: whether all hold (each that
+/// fails is said).
+fn check(a: &EvalArgs, stats: &[VariantStats]) -> bool {
+    let ca = ca(stats);
+    let mut ok = true;
     if let Some(max) = a.max_mean_ospa
         && ca.mean > max
     {
@@ -129,7 +143,7 @@ pub fn run(a: &EvalArgs) -> Result<Outcome> {
             "FAIL: CA mean OSPA {:.3} m is above --max-mean-ospa {max}",
             ca.mean
         );
-        failed = true;
+        ok = false;
     }
     if let Some(max) = a.max_aligned {
         match ca.aligned {
@@ -139,11 +153,11 @@ pub fn run(a: &EvalArgs) -> Result<Outcome> {
                     "FAIL: CA's matched sources lie {:.3} m from the truth after the frame fit, above --max-aligned {max}",
                     f.mean_after_m
                 );
-                failed = true;
+                ok = false;
             }
             None => {
                 eprintln!("FAIL: --max-aligned: no run matched three sources to the truth");
-                failed = true;
+                ok = false;
             }
         }
     }
@@ -156,13 +170,9 @@ pub fn run(a: &EvalArgs) -> Result<Outcome> {
                     s.mean,
                     ca.mean
                 );
-                failed = true;
+                ok = false;
             }
         }
     }
-    Ok(if failed {
-        Outcome::ThresholdFailed
-    } else {
-        Outcome::Success
-    })
+    ok
 }

@@ -203,13 +203,12 @@ pub fn run(a: &WatchArgs) -> Result<Outcome> {
     if a.recompute {
         session = session.recompute_every_stop();
     }
-    let name = a.dir.file_name().map_or_else(
-        || a.dir.display().to_string(),
-        |n| n.to_string_lossy().into_owned(),
-    );
     let out = Outputs {
         a,
-        name,
+        name: a.dir.file_name().map_or_else(
+            || a.dir.display().to_string(),
+            |n| n.to_string_lossy().into_owned(),
+        ),
         map,
         settings: &settings,
         mcap: std::cell::RefCell::new(
@@ -228,10 +227,23 @@ pub fn run(a: &WatchArgs) -> Result<Outcome> {
     } else {
         follow(a, theta_rad, &mut session, &out, &mut records)?;
     }
+    finish(&mut session, &out, &records, t_run)?;
+    Ok(Outcome::Success)
+}
+
+/// The run's end: the final map (a full map over every stop) written and said beside the
+/// last live one, the warnings counted, the curve and its plot written.
+fn finish(
+    session: &mut Session,
+    out: &Outputs<'_>,
+    records: &[StopRecord],
+    t_run: Instant,
+) -> Result<()> {
+    let a = out.a;
     let live = session.map();
     let live_ospa = session.ospa(&live);
     let fin = session.finish();
-    out.write(&session, &fin, true)?;
+    out.write(session, &fin, true)?;
     if let Some(file) = out.mcap.take() {
         file.finish()?;
     }
@@ -255,9 +267,8 @@ pub fn run(a: &WatchArgs) -> Result<Outcome> {
             notes.join("; ")
         );
     }
-    drop(notes);
     if let Some(c) = &a.curve {
-        crate::output::write_atomic(c, curve_csv(&records).as_bytes())?;
+        crate::output::write_atomic(c, curve_csv(records).as_bytes())?;
     }
     let plot = a
         .plot
@@ -269,13 +280,13 @@ pub fn run(a: &WatchArgs) -> Result<Outcome> {
             &Curve {
                 title: format!(
                     "{}: the map after each stop ({}, seed {})",
-                    out.name, settings.ssl.method, a.seed
+                    out.name, out.settings.ssl.method, a.seed
                 ),
-                records: &records,
+                records,
             },
         )?;
     }
-    Ok(Outcome::Success)
+    Ok(())
 }
 
 /// A finished data set, stop by stop, as fast as it goes.
