@@ -149,7 +149,7 @@ pub struct Ros2PlayArgs {
     #[arg(long, value_name = "FILE")]
     pub listen: Option<PathBuf>,
     /// With --listen: how long to go on listening after the bag is played (s); Ctrl-C
-    /// ends the listening sooner, and the sources heard are written.
+    /// ends the listening sooner (half a second later), and the sources heard are written.
     #[arg(long = "linger", default_value_t = 5.0, value_name = "S")]
     pub linger_s: f64,
 }

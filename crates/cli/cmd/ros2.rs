@@ -490,6 +490,9 @@ pub fn run(a: &Ros2Args) -> Result<Outcome> {
     let out = finish(&mut live, sink, a.seed)?;
     // The writers go with the process: wait (a bounded time) until every reliable reader
     // has acknowledged the final map, so that a subscriber hears it whatever the load.
+    // A write reaches the writer's history through DDS's own thread: asked at once, the
+    // wait would find the samples before it already acknowledged and return.
+    std::thread::sleep(Duration::from_millis(200));
     out.wait_for_acknowledgments(Duration::from_secs(5));
     Ok(Outcome::Success)
 }
@@ -691,6 +694,8 @@ fn wait_for_subscribers(dp: &DomainParticipant, writers: &BTreeMap<String, Write
 struct Listener {
     reader: Option<Reader>,
     heard: Vec<[f64; 2]>,
+    /// Updates taken.
+    updates: usize,
 }
 
 impl Listener {
@@ -700,6 +705,7 @@ impl Listener {
         if let Some(r) = &mut self.reader {
             while let Ok(Some(s)) = r.take_next_sample() {
                 if let Ok(p) = iasm_ros::msg::PoseArray::from_cdr(&s.value().0) {
+                    self.updates += 1;
                     self.heard = p
                         .poses
                         .iter()
@@ -746,6 +752,7 @@ pub fn play(a: &Ros2PlayArgs) -> Result<Outcome> {
             None => None,
         },
         heard: Vec::new(),
+        updates: 0,
     };
     wait_for_subscribers(&dp, &writers, a.wait_s);
     let start = Instant::now();
@@ -754,7 +761,10 @@ pub fn play(a: &Ros2PlayArgs) -> Result<Outcome> {
         let due = Duration::from_nanos(u64::try_from(t - first).unwrap_or(0));
         while start.elapsed() < due {
             listener.take();
-            std::thread::sleep((due - start.elapsed()).min(Duration::from_millis(5)));
+            std::thread::sleep(
+                due.saturating_sub(start.elapsed())
+                    .min(Duration::from_millis(5)),
+            );
         }
         shift_stamps(Kind::of(&ty).expect("kept"), &mut data, shift)
             .with_context(|| format!("a message of {topic}"))?;
@@ -779,6 +789,13 @@ pub fn play(a: &Ros2PlayArgs) -> Result<Outcome> {
             listener.take();
             std::thread::sleep(Duration::from_millis(10));
         }
+        // After Ctrl-C, half a second more: what the node sent last (its final map, just
+        // before it ended) may still be on its way from the reader's DDS thread.
+        let drain = Instant::now() + Duration::from_millis(500);
+        while Instant::now() < drain {
+            listener.take();
+            std::thread::sleep(Duration::from_millis(10));
+        }
         let sources: Vec<serde_json::Value> = listener
             .heard
             .iter()
@@ -787,9 +804,10 @@ pub fn play(a: &Ros2PlayArgs) -> Result<Outcome> {
         let json = serde_json::json!({ "frame_id": rosmap::FRAME, "sources": sources });
         crate::output::write_atomic(path, serde_json::to_string_pretty(&json)?.as_bytes())?;
         println!(
-            "heard {} sources on {}",
+            "heard {} sources on {} (the last of {} updates)",
             listener.heard.len(),
-            rosmap::SOURCE_POSES_TOPIC
+            rosmap::SOURCE_POSES_TOPIC,
+            listener.updates
         );
     }
     Ok(Outcome::Success)
