@@ -23,6 +23,27 @@
 //!
 //! The commands ([`cmd`]): `ssl`, `map`, `eval`, `compare`, `simulate`, `regress`, `demo`, one module
 //! each; none imports another.
+//!
+//! The pipeline from Rust, end to end: a scene rendered by the image-source method (one
+//! talker at (3.5, 3.2) m, a robot passing it), every stop localised with MVDR and the stops
+//! mapped by I-ASM, as `iasm simulate` and then `iasm map` do.
+//!
+//! ```
+//! use iasm::pipeline::{Simulated, scene_settings};
+//! use iasm::scenes::{parse_scene, prepare};
+//! use iasm::settings::Settings;
+//!
+//! # fn main() -> anyhow::Result<()> {
+//! let (scene, _) = parse_scene(include_str!("../../fixtures/rooms/one_source.toml"))?;
+//! let simulated = Simulated::render(prepare(scene)?, "one source".into())?;
+//! let settings = scene_settings(&Settings::default(), ssl::Method::Mvdr, 3);
+//! let run = simulated.run(&settings, 1)?;
+//! assert_eq!(run.map.sources.len(), 1);
+//! let s = &run.map.sources[0];
+//! assert!((s.x - 3.5).hypot(s.y - 3.2) < 0.05, "{s:?}");
+//! # Ok(())
+//! # }
+//! ```
 
 pub mod args;
 pub mod bagset;

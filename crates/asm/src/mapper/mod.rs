@@ -310,7 +310,7 @@ impl Mapper {
     ///
     /// # Panics
     /// If `poses` and `bearings` differ in length.
-    pub fn associate(
+    pub(crate) fn associate(
         &self,
         source: [f64; 2],
         poses: &[Pose],
@@ -322,7 +322,7 @@ impl Mapper {
     /// One stop's DoAs (array-frame azimuths, rad) as world bearings, non-finite ones
     /// dropped; for a linear array, each followed by its mirror image
     /// ([`IasmConfig::mirror_axis_deg`]).
-    pub fn stop_bearings(&self, pose: &Pose, doas_rad: &[f64]) -> Vec<f64> {
+    pub(crate) fn stop_bearings(&self, pose: &Pose, doas_rad: &[f64]) -> Vec<f64> {
         let mut row = Vec::with_capacity(2 * doas_rad.len());
         for &a in doas_rad.iter().filter(|a| a.is_finite()) {
             let b = pose.world_bearing(a);

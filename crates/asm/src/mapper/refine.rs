@@ -37,7 +37,7 @@ pub(crate) fn refit(
 
 /// A DoA that misses the bearing to a source by this many `sigma` or more, and another
 /// mapped source's by less than one `sigma`, is that other source's: it does not excuse
-/// its stop's silence towards the first ([`Mapper::absences`]).
+/// its stop's silence towards the first (`Mapper::absences`).
 ///
 /// Why: within `gamma` (15 degrees) of a ghost's bearing there is often a real source's
 /// DoA, from every stop that sees both in similar directions. The ghost of

@@ -88,7 +88,7 @@ impl Mapper {
     /// Whether a row of `len` DoAs holds every peak the SSL let through: not cut at `N`
     /// when the SSL says (`cut`), else shorter than `N`. The one rule behind
     /// [`Mapper::run_rows`], [`Mapper::complete_by_length`] and the online mapper.
-    pub fn complete(&self, len: usize, cut: Option<bool>) -> bool {
+    pub(crate) fn complete(&self, len: usize, cut: Option<bool>) -> bool {
         cut.map_or(len < self.config.num_doas, |cut| !cut)
     }
 
@@ -184,7 +184,7 @@ impl Mapper {
     /// Whether a row of `len` DoAs is one the mapper takes: at most `N`, or, in a row the
     /// SSL says it cut at `N` (`cut`), `N` more beyond them (the extra DoAs its octaves
     /// heard: `ssl::Located::extra`).
-    pub fn row_fits(&self, len: usize, cut: Option<bool>) -> bool {
+    pub(crate) fn row_fits(&self, len: usize, cut: Option<bool>) -> bool {
         let n = self.config.num_doas;
         len <= n || (cut == Some(true) && len <= 2 * n)
     }
@@ -310,7 +310,7 @@ impl Mapper {
     /// stop's remaining bearings, resampling when `N_eff < ceil(M / C)`, and stopping early
     /// once the cloud's largest covariance eigenvalue is below `lambda_thresh`. Returns the
     /// cloud and whether it was ever resampled. `heard` holds each stop's DoAs as the SSL
-    /// gave them (world bearings, strongest first: [`Mapper::stop_bearings`]), which
+    /// gave them (world bearings, strongest first: `Mapper::stop_bearings`), which
     /// ranks the remaining ones for [`IasmConfig::rank_gain`].
     ///
     /// # Panics

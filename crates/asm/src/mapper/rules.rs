@@ -503,7 +503,7 @@ impl Mapper {
     /// one of `others` by less than `sigma`), it lies no further than `reach` from `q`
     /// (the furthest stop that heard it), and none of `others` (the other sources) is
     /// nearer than `|q - stop| / ratio`; in stop order, none when the ratio is 0.
-    pub fn absences(
+    pub(crate) fn absences(
         &self,
         q: [f64; 2],
         reach: f64,
