@@ -603,139 +603,47 @@ impl IasmConfig {
     /// only cost memory and time (a particle per hundredth of a cell, a million passes) or
     /// give nonsense (a random walk of 1e300 m).
     fn check_ranges(&self) -> Result<(), ConfigError> {
+        // Each setting, the range it is held to, and that range in words: a table, one
+        // setting a row.
+        #[rustfmt::skip]
+        let reals: [(&'static str, f64, f64, f64, &'static str); 15] = [
+            ("density_d", self.density_d, 1.0, 1e6, "1 to 1e6 known cells per particle (a particle is drawn from a cell; fewer than one cell each leaves particles without a place)"),
+            ("sigma_p_m", self.sigma_p_m, 1e-6, 1.0, "1e-6 to 1 m per step (a random walk of more than a metre never settles)"),
+            ("sigma_deg", self.sigma_deg, 0.01, 90.0, "0.01 to 90 degrees"),
+            ("beta_m", self.beta_m, 1e-3, 1e4, "0.001 to 10000 m"),
+            ("lambda_thresh_m2", self.lambda_thresh_m2, 1e-9, 1e4, "1e-9 to 10000 m^2"),
+            ("dbscan_eps_m", self.dbscan_eps_m, 1e-3, 100.0, "0.001 to 100 m"),
+            ("gamma_sigmas", self.gamma_sigmas, 0.01, 100.0, "0.01 to 100 sigma"),
+            ("merge_dist_m", self.merge_dist_m, 0.0, 1e4, "0 to 10000 m"),
+            ("min_range_m", self.min_range_m, 0.0, 1e4, "0 to 10000 m"),
+            ("beyond_map_m", self.beyond_map_m, 0.0, 1e4, "0 to 10000 m"),
+            ("wall_clearance_m", self.wall_clearance_m, 0.0, 1e4, "0 to 10000 m"),
+            ("absence_ratio", self.absence_ratio, 0.0, 1e4, "0 to 10000"),
+            ("share_gate_sigmas", self.share_gate_sigmas, 0.0, 100.0, "0 to 100 sigma"),
+            ("trim_mads", self.trim_mads, 0.0, 1e4, "0 to 10000"),
+            ("trim_floor_deg", self.trim_floor_deg, 0.0, 180.0, "0 to 180 degrees"),
+        ];
+        #[rustfmt::skip]
+        let counts: [(&'static str, usize, usize, usize, &'static str); 7] = [
+            ("passes", self.passes, 1, 100, "1 to 100 passes over the stops (the paper makes two)"),
+            ("max_rounds", self.max_rounds, 1, 10_000, "1 to 10000 rounds"),
+            ("retries", self.retries, 0, 100, "0 to 100 failed rounds in a row"),
+            ("num_doas", self.num_doas, 1, 64, "1 to 64 DoAs per stop (no array resolves more sources at once)"),
+            ("min_observations", self.min_observations, 1, 100_000, "1 to 100000 stops"),
+            ("vote_min_stops", self.vote_min_stops, 0, 100_000, "0 to 100000 stops"),
+            ("vote_min_thresholded_stops", self.vote_min_thresholded_stops, 0, 100_000, "0 to 100000 stops"),
+        ];
         let out = |name, value: String, range| ConfigError::OutOfRange { name, value, range };
-        let f = |name, v: f64, lo: f64, hi: f64, range| {
-            if v.is_finite() && (lo..=hi).contains(&v) {
-                Ok(())
-            } else {
-                Err(out(name, format!("{v:?}"), range))
+        for (name, v, lo, hi, range) in reals {
+            if !(v.is_finite() && (lo..=hi).contains(&v)) {
+                return Err(out(name, format!("{v:?}"), range));
             }
-        };
-        let n = |name, v: usize, lo: usize, hi: usize, range| {
-            if (lo..=hi).contains(&v) {
-                Ok(())
-            } else {
-                Err(out(name, v.to_string(), range))
+        }
+        for (name, v, lo, hi, range) in counts {
+            if !(lo..=hi).contains(&v) {
+                return Err(out(name, v.to_string(), range));
             }
-        };
-        f(
-            "density_d",
-            self.density_d,
-            1.0,
-            1e6,
-            "1 to 1e6 known cells per particle (a particle is drawn from a cell; fewer than one cell each leaves particles without a place)",
-        )?;
-        f(
-            "sigma_p_m",
-            self.sigma_p_m,
-            1e-6,
-            1.0,
-            "1e-6 to 1 m per step (a random walk of more than a metre never settles)",
-        )?;
-        f(
-            "sigma_deg",
-            self.sigma_deg,
-            0.01,
-            90.0,
-            "0.01 to 90 degrees",
-        )?;
-        f("beta_m", self.beta_m, 1e-3, 1e4, "0.001 to 10000 m")?;
-        f(
-            "lambda_thresh_m2",
-            self.lambda_thresh_m2,
-            1e-9,
-            1e4,
-            "1e-9 to 10000 m^2",
-        )?;
-        f(
-            "dbscan_eps_m",
-            self.dbscan_eps_m,
-            1e-3,
-            100.0,
-            "0.001 to 100 m",
-        )?;
-        f(
-            "gamma_sigmas",
-            self.gamma_sigmas,
-            0.01,
-            100.0,
-            "0.01 to 100 sigma",
-        )?;
-        f("merge_dist_m", self.merge_dist_m, 0.0, 1e4, "0 to 10000 m")?;
-        f("min_range_m", self.min_range_m, 0.0, 1e4, "0 to 10000 m")?;
-        f("beyond_map_m", self.beyond_map_m, 0.0, 1e4, "0 to 10000 m")?;
-        f(
-            "wall_clearance_m",
-            self.wall_clearance_m,
-            0.0,
-            1e4,
-            "0 to 10000 m",
-        )?;
-        f("absence_ratio", self.absence_ratio, 0.0, 1e4, "0 to 10000")?;
-        f(
-            "share_gate_sigmas",
-            self.share_gate_sigmas,
-            0.0,
-            100.0,
-            "0 to 100 sigma",
-        )?;
-        f("trim_mads", self.trim_mads, 0.0, 1e4, "0 to 10000")?;
-        f(
-            "trim_floor_deg",
-            self.trim_floor_deg,
-            0.0,
-            180.0,
-            "0 to 180 degrees",
-        )?;
-        n(
-            "passes",
-            self.passes,
-            1,
-            100,
-            "1 to 100 passes over the stops (the paper makes two)",
-        )?;
-        n(
-            "max_rounds",
-            self.max_rounds,
-            1,
-            10_000,
-            "1 to 10000 rounds",
-        )?;
-        n(
-            "retries",
-            self.retries,
-            0,
-            100,
-            "0 to 100 failed rounds in a row",
-        )?;
-        n(
-            "num_doas",
-            self.num_doas,
-            1,
-            64,
-            "1 to 64 DoAs per stop (no array resolves more sources at once)",
-        )?;
-        n(
-            "min_observations",
-            self.min_observations,
-            1,
-            100_000,
-            "1 to 100000 stops",
-        )?;
-        n(
-            "vote_min_stops",
-            self.vote_min_stops,
-            0,
-            100_000,
-            "0 to 100000 stops",
-        )?;
-        n(
-            "vote_min_thresholded_stops",
-            self.vote_min_thresholded_stops,
-            0,
-            100_000,
-            "0 to 100000 stops",
-        )?;
+        }
         Ok(())
     }
 }
