@@ -223,10 +223,7 @@ pub fn compare(
         rows.push(r);
     }
     for t in &ds.doa_tables {
-        let name = t.file_name().map_or_else(
-            || t.display().to_string(),
-            |f| f.to_string_lossy().into_owned(),
-        );
+        let name = crate::dataset::file_name(t);
         tell(format!("{name}: {} maps", opts.runs));
         let table = first_columns(read_table(t)?, n, t);
         let survey = survey(table, t.display().to_string(), None, settings)?;

@@ -45,6 +45,15 @@ fn trim_zeros(d: &[u8]) -> &[u8] {
     &d[k.min(d.len().saturating_sub(1))..]
 }
 
+/// A file's name for messages and titles: its last component, or the whole path when it
+/// has none (`..`, `/`).
+pub fn file_name(p: &Path) -> String {
+    p.file_name().map_or_else(
+        || p.display().to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    )
+}
+
 /// The files in `dir` with extension `ext` (case-insensitive), in natural name order.
 ///
 /// # Errors

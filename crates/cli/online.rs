@@ -17,7 +17,7 @@ use asm::{MapResult, Mapper, OnlineMapper, Pose};
 use serde::Serialize;
 use ssl::{Audio, Localizer, MicArray, Scratch, SslConfig};
 
-use crate::dataset::list_files;
+use crate::dataset::{file_name, list_files};
 use crate::settings::Settings;
 
 /// What one stop did, one row of the curve.
@@ -424,7 +424,7 @@ impl Follower {
                 format!(
                     "{} (stop {}) was deleted after it was taken; its stop stays, and the \
                      recordings after it keep their pose rows",
-                    name_of(f),
+                    file_name(f),
                     k + 1
                 )
             })
@@ -437,14 +437,14 @@ impl Follower {
             return Ok(None);
         };
         if let Some(last) = self.taken.last()
-            && crate::dataset::natural_cmp(&name_of(&next), &name_of(last)).is_lt()
+            && crate::dataset::natural_cmp(&file_name(&next), &file_name(last)).is_lt()
         {
             let w = format!(
                 "{} appeared after {}, which sorts after it, was taken: it is stop {}, \
                  paired with pose row {} (recordings are paired with rows in the order they \
                  appear)",
-                name_of(&next),
-                name_of(last),
+                file_name(&next),
+                file_name(last),
                 self.taken.len() + 1,
                 self.taken.len() + 1
             );
@@ -579,14 +579,6 @@ impl Follower {
     }
 }
 
-/// A file's name, for messages.
-fn name_of(p: &Path) -> String {
-    p.file_name().map_or_else(
-        || p.display().to_string(),
-        |n| n.to_string_lossy().into_owned(),
-    )
-}
-
 /// Whether two poses of a table are the same row (to the table's printed precision).
 fn same_pose(a: &Pose, b: &Pose) -> bool {
     (a.x - b.x).abs() < 1e-9 && (a.y - b.y).abs() < 1e-9 && (a.theta - b.theta).abs() < 1e-9
@@ -595,20 +587,10 @@ fn same_pose(a: &Pose, b: &Pose) -> bool {
 /// Whether `file` could still become a WAV: fewer bytes than a RIFF header's first twelve,
 /// or those bytes are `RIFF`/`RF64`/`RIFX` ... `WAVE` (a recorder writes its header first).
 fn looks_like_wav(file: &Path) -> bool {
-    let mut head = [0u8; 12];
-    let n = std::fs::File::open(file)
-        .and_then(|mut f| {
-            let mut n = 0;
-            while n < head.len() {
-                match std::io::Read::read(&mut f, &mut head[n..])? {
-                    0 => break,
-                    m => n += m,
-                }
-            }
-            Ok(n)
-        })
-        .unwrap_or(0);
-    n < head.len() || (matches!(&head[..4], b"RIFF" | b"RF64" | b"RIFX") && &head[8..] == b"WAVE")
+    let mut head = Vec::new();
+    let _ = std::fs::File::open(file)
+        .and_then(|f| std::io::Read::read_to_end(&mut std::io::Read::take(f, 12), &mut head));
+    head.len() < 12 || (matches!(&head[..4], b"RIFF" | b"RF64" | b"RIFX") && &head[8..] == b"WAVE")
 }
 
 #[cfg(test)]
@@ -658,9 +640,14 @@ pub(crate) mod tests {
     fn next(f: &mut Follower) -> String {
         match f.poll().unwrap() {
             Next::Ready { file, audio, pose } => {
-                format!("{} n={} x={}", name_of(&file), audio.num_samples(), pose.x)
+                format!(
+                    "{} n={} x={}",
+                    file_name(&file),
+                    audio.num_samples(),
+                    pose.x
+                )
             }
-            Next::Skipped { file, reason } => format!("skip {} ({reason})", name_of(&file)),
+            Next::Skipped { file, reason } => format!("skip {} ({reason})", file_name(&file)),
             Next::Waiting(_) => "wait".into(),
         }
     }
@@ -847,13 +834,13 @@ mod mutations {
                     .expect("a follower never errs on a recorder's faults")
                 {
                     Next::Ready { file, audio, pose } => {
-                        let name = name_of(&file);
+                        let name = file_name(&file);
                         assert_eq!(Some(pose.x), rows[k], "seed {seed}: {name}");
                         let n: usize = name[1..name.len() - 4].parse().unwrap();
                         assert_eq!(audio.num_samples(), n, "seed {seed}: {name}'s samples");
                         name
                     }
-                    Next::Skipped { file, .. } => name_of(&file),
+                    Next::Skipped { file, .. } => file_name(&file),
                     Next::Waiting(_) => return,
                 };
                 assert_eq!(

@@ -11,6 +11,7 @@ use ssl::SslConfig;
 
 use crate::Outcome;
 use crate::args::MapArgs;
+use crate::dataset::file_name;
 use crate::explain::{Explanation, explain};
 use crate::figure::MapFigure;
 use crate::pipeline::Survey;
@@ -229,22 +230,16 @@ fn write_figure(
     report: &MapReport<'_>,
     result: &MapResult,
 ) -> Result<()> {
-    let name = |p: &Path| {
-        p.file_name().map_or_else(
-            || p.display().to_string(),
-            |n| n.to_string_lossy().into_owned(),
-        )
-    };
     let inputs = a.input.survey_inputs();
     let data = inputs
         .dataset
         .as_deref()
         .or(inputs.poses.as_deref())
-        .map_or_else(|| "survey".to_owned(), name);
+        .map_or_else(|| "survey".to_owned(), file_name);
     let doas = survey
         .doa_source
         .strip_prefix("ssl:")
-        .map_or_else(|| name(Path::new(&survey.doa_source)), str::to_owned);
+        .map_or_else(|| file_name(Path::new(&survey.doa_source)), str::to_owned);
     let ospa = report
         .ospa
         .map_or(String::new(), |o| format!(", OSPA {:.3} m", o.value.total));

@@ -14,7 +14,7 @@ use ssl::SslConfig;
 
 use crate::Outcome;
 use crate::args::{AngleUnit, WatchArgs};
-use crate::dataset::{Dataset, first_with_ext, load_map, read_poses, read_sources};
+use crate::dataset::{Dataset, file_name, first_with_ext, load_map, read_poses, read_sources};
 use crate::figure::{Curve, Format, MapFigure};
 use crate::online::{Follower, Next, Session, StopRecord, curve_csv};
 use crate::settings::DEFAULT_ARRAY;
@@ -205,10 +205,7 @@ pub fn run(a: &WatchArgs) -> Result<Outcome> {
     }
     let out = Outputs {
         a,
-        name: a.dir.file_name().map_or_else(
-            || a.dir.display().to_string(),
-            |n| n.to_string_lossy().into_owned(),
-        ),
+        name: file_name(&a.dir),
         map,
         settings: &settings,
         mcap: std::cell::RefCell::new(
@@ -324,13 +321,6 @@ fn replay(
         out.add(session, file, *pose, &audio, records, read_ms)?;
     }
     Ok(())
-}
-
-fn file_name(p: &Path) -> String {
-    p.file_name().map_or_else(
-        || p.display().to_string(),
-        |n| n.to_string_lossy().into_owned(),
-    )
 }
 
 /// Follows the folder until `--stops` or Ctrl-C.

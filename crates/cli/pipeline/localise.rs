@@ -190,12 +190,7 @@ fn listed(names: &[&str]) -> String {
 pub fn warn_recordings(rows: &[FileDoas]) {
     let names: Vec<String> = rows
         .iter()
-        .map(|r| {
-            r.file.file_name().map_or_else(
-                || r.file.display().to_string(),
-                |n| n.to_string_lossy().into(),
-            )
-        })
+        .map(|r| crate::dataset::file_name(&r.file))
         .collect();
     for w in faulty_channel_warnings(
         names
