@@ -37,8 +37,8 @@
 
 use rand::SeedableRng;
 
-use crate::error::{Error, Result};
-use crate::mapper::{MapResult, Mapper, Round, Source, Variant, refit};
+use crate::error::Result;
+use crate::mapper::{MapResult, Mapper, Search, Source, Stops, Variant, refit};
 use crate::pf::{ParticleFilter, covariance, mean};
 use crate::{MapRng, Pose};
 
@@ -65,15 +65,8 @@ pub struct StopUpdate {
 pub struct OnlineMapper {
     mapper: Mapper,
     seed: u64,
-    poses: Vec<Pose>,
-    /// Every stop's DoAs (world bearings, rad).
-    bearings: Vec<Vec<f64>>,
-    /// Whether each stop's row holds every peak the SSL let through (see
-    /// [`Mapper::run_rows`]).
-    complete: Vec<bool>,
-    /// Whether the SSL said it cut each stop's row at `N` (see
-    /// [`Mapper::drop_implausible_cut`]).
-    said_cut: Vec<bool>,
+    /// Every stop so far.
+    stops: Stops,
     /// Every stop's unexplained DoAs.
     pool: Vec<Vec<f64>>,
     sources: Vec<Source>,
@@ -100,10 +93,7 @@ impl OnlineMapper {
         Self {
             mapper,
             seed,
-            poses: Vec::new(),
-            bearings: Vec::new(),
-            complete: Vec::new(),
-            said_cut: Vec::new(),
+            stops: Stops::default(),
             pool: Vec::new(),
             sources: Vec::new(),
             rounds: 0,
@@ -117,7 +107,7 @@ impl OnlineMapper {
 
     /// Stops taken so far.
     pub fn stops(&self) -> usize {
-        self.poses.len()
+        self.stops.len()
     }
 
     /// The mapper's parameters and particle budget.
@@ -129,7 +119,8 @@ impl OnlineMapper {
     /// first, at most `N`; non-finite ones are skipped as empty cells).
     ///
     /// # Errors
-    /// [`Error::NonFinitePose`] or [`Error::TooManyDoas`], naming the stop; the map is
+    /// [`Error::NonFinitePose`](crate::Error::NonFinitePose) or
+    /// [`Error::TooManyDoas`](crate::Error::TooManyDoas), naming the stop; the map is
     /// unchanged.
     pub fn add_stop(&mut self, pose: Pose, doas_rad: &[f64]) -> Result<StopUpdate> {
         self.add_row(pose, doas_rad, None)
@@ -147,24 +138,10 @@ impl OnlineMapper {
         doas_rad: &[f64],
         cut: Option<bool>,
     ) -> Result<StopUpdate> {
-        let stop = self.poses.len();
-        if !pose.is_finite() {
-            return Err(Error::NonFinitePose { index: stop });
-        }
-        if !self.mapper.row_fits(doas_rad.len(), cut) {
-            return Err(Error::TooManyDoas {
-                index: stop,
-                got: doas_rad.len(),
-                n: self.mapper.config().num_doas,
-            });
-        }
-        let heard = doas_rad.iter().filter(|a| a.is_finite()).count();
-        let row = self.mapper.stop_bearings(&pose, doas_rad);
-        self.poses.push(pose);
-        self.complete.push(self.mapper.complete(heard, cut));
-        self.said_cut.push(cut == Some(true));
-        self.bearings.push(row.clone());
-        self.pool.push(row);
+        let stop = self.stops.len();
+        self.mapper
+            .push_stop(&mut self.stops, pose, doas_rad, cut)?;
+        self.pool.push(self.stops.heard()[stop].clone());
 
         let (associated, returned) = self.reassociate();
         let mut update = StopUpdate {
@@ -172,8 +149,8 @@ impl OnlineMapper {
             associated,
             ..StopUpdate::default()
         };
-        if self.poses.len() >= self.next_full {
-            while self.next_full <= self.poses.len() {
+        if self.stops.len() >= self.next_full {
+            while self.next_full <= self.stops.len() {
                 self.next_full *= 2;
             }
             update.rounds = self.consolidate();
@@ -183,14 +160,9 @@ impl OnlineMapper {
                 self.search(&mut update);
             }
             // As the batch mapper ends its search.
-            let removed = self.mapper.settle(
-                &mut self.sources,
-                &self.poses,
-                &self.bearings,
-                &self.complete,
-                &self.said_cut,
-                &mut self.pool,
-            );
+            let removed = self
+                .mapper
+                .settle(&mut self.sources, &self.stops, &mut self.pool);
             self.removed += removed.len();
             self.refused.extend(removed);
         }
@@ -207,24 +179,17 @@ impl OnlineMapper {
     /// mapper's seed: what [`Mapper::run`] gives on the same stops and seed. Returns the
     /// rounds it ran.
     pub fn consolidate(&mut self) -> usize {
-        if self.last_full == self.poses.len() {
+        if self.last_full == self.stops.len() {
             return 0;
         }
         let mut rng = MapRng::seed_from_u64(self.seed);
-        let mut pool = self.bearings.clone();
-        let r = self.mapper.run_bearings_complete(
-            &self.poses,
-            &mut pool,
-            &self.complete,
-            &self.said_cut,
-            &mut rng,
-        );
-        self.pool = pool;
+        let r = self.mapper.run_stops(&self.stops, &mut rng);
+        self.pool = r.unexplained_bearings;
         self.rounds += r.rounds;
         self.sources = r.sources;
         self.removed = r.removed;
         self.refused = r.refused;
-        self.last_full = self.poses.len();
+        self.last_full = self.stops.len();
         r.rounds
     }
 
@@ -243,7 +208,7 @@ impl OnlineMapper {
     /// [`IasmConfig::refine`]: crate::IasmConfig::refine
     /// [`IasmConfig::min_observations`]: crate::IasmConfig::min_observations
     fn reassociate(&mut self) -> (usize, bool) {
-        let last = self.poses.len() - 1;
+        let last = self.stops.len() - 1;
         let c = self.mapper.config();
         let (refine, needed, variant, sigma_p) =
             (c.refine, c.min_observations, c.variant, c.sigma_p_m);
@@ -261,7 +226,7 @@ impl OnlineMapper {
             let s = &mut self.sources[i];
             let mut rays = self
                 .mapper
-                .associate([s.x, s.y], &self.poses, &mut self.pool);
+                .associate([s.x, s.y], self.stops.poses(), &mut self.pool);
             if let Some(new) = rays.iter().find(|r| r.stop == last) {
                 taken += 1;
                 // One filter step on the source's own cloud with the ray it took.
@@ -298,79 +263,36 @@ impl OnlineMapper {
         let mut k = dissolved.iter();
         self.sources
             .retain(|_| !*k.next().expect("one flag per source"));
-        let contradicted = self.mapper.drop_implausible_cut(
-            &mut self.sources,
-            &self.poses,
-            &self.bearings,
-            &self.complete,
-            &self.said_cut,
-            &mut self.pool,
-        );
+        let contradicted =
+            self.mapper
+                .drop_implausible(&mut self.sources, &self.stops, &mut self.pool);
         self.removed += contradicted.len();
         let any = !contradicted.is_empty();
         self.refused.extend(contradicted);
         (taken, dissolved.contains(&true) || any)
     }
 
-    /// Filtering rounds over the pool until one fails (or `max_rounds` have run at this
-    /// stop): the next full map searches with the batch mapper's retries.
+    /// The batch mapper's search ([`Mapper::search`]) over the pool, from the rounds run
+    /// so far: rounds until one fails (the next full map searches with the batch mapper's
+    /// retries), each source required to explain a DoA of the new stop, then the vote.
     fn search(&mut self, update: &mut StopUpdate) {
-        let max_rounds = self.mapper.config().max_rounds;
-        let last = self.poses.len() - 1;
-        while update.rounds < max_rounds {
-            update.rounds += 1;
-            self.rounds += 1;
-            match self.mapper.round(
-                &self.poses,
-                &mut self.pool,
-                &self.bearings,
-                self.rounds,
-                &mut self.rng,
-            ) {
-                // Everything the earlier stops' DoAs could show was searched at those stops:
-                // a source new at this stop explains one of its DoAs. One that does not is
-                // another draw landing on old clutter; its DoAs go back, and the round failed.
-                Round::Found(s) if s.rays.iter().any(|r| r.stop == last) => {
-                    update.found += 1;
-                    self.sources.push(s);
-                }
-                Round::Found(s) => {
-                    for r in s.rays {
-                        r.give_back(&mut self.pool);
-                    }
-                    break;
-                }
-                // Clutter where this draw settled; the vote below judges its DoAs anew,
-                // as the batch mapper's does.
-                Round::Clutter(rays) if self.mapper.config().vote_min_stops > 0 => {
-                    for r in rays {
-                        r.give_back(&mut self.pool);
-                    }
-                    break;
-                }
-                Round::NoCluster | Round::NothingExplained | Round::Clutter(_) => break,
-            }
-        }
-        // Then the vote, as the batch mapper runs it after its rounds: deterministic, and
-        // checked against the sources mapped so far (see `Mapper::vote`).
-        while self.mapper.config().vote_min_stops > 0 && update.rounds < max_rounds {
-            let mapped: Vec<[f64; 2]> = self.sources.iter().map(|s| [s.x, s.y]).collect();
-            let Some(s) = self.mapper.vote_noting(
-                &self.poses,
-                &mut self.pool,
-                &self.bearings,
-                &self.complete,
-                &mapped,
-                self.rounds + 1,
-                &mut self.refused,
-            ) else {
-                break;
-            };
-            update.rounds += 1;
-            self.rounds += 1;
-            update.found += 1;
-            self.sources.push(s);
-        }
+        let plan = Search {
+            first_round: self.rounds + 1,
+            retries: 0,
+            new_stop: Some(self.stops.len() - 1),
+        };
+        let before = self.sources.len();
+        let rounds = self.mapper.search(
+            &self.stops,
+            &mut self.pool,
+            &mut self.sources,
+            &mut self.refused,
+            plan,
+            &mut self.rng,
+        );
+        update.rounds += rounds;
+        self.rounds += rounds;
+        update.found += self.sources.len() - before;
     }
 
     /// The map after the stops so far.
@@ -381,7 +303,7 @@ impl OnlineMapper {
             sources,
             rounds: self.rounds,
             particles: self.mapper.num_particles(),
-            unexplained: self.mapper.unexplained(&self.poses, &self.pool),
+            unexplained: self.mapper.unexplained(self.stops.poses(), &self.pool),
             unexplained_bearings: self.pool.clone(),
             removed: self.removed,
             refused: self.refused.clone(),
@@ -393,6 +315,7 @@ impl OnlineMapper {
 mod tests {
     use super::*;
     use crate::IasmConfig;
+    use crate::error::Error;
     use crate::map::{Cell, OccupancyMap};
     use crate::ospa::ospa;
     use crate::wrap_rad;

@@ -213,7 +213,7 @@ pub struct IasmConfig {
     /// runs, ours and the authors' tables in both profiles).
     ///
     /// A cut row's strongest DoA counts its stop in full, in this quorum and in the
-    /// thinly-heard rule ([`Mapper::drop_implausible_cut`]): the rate is for what a row of
+    /// thinly-heard rule ([`Mapper::drop_implausible`]): the rate is for what a row of
     /// many peaks holds beside its sources (reflections, which rank below the direct paths
     /// that make them), and a row's first DoA is a source's in 98-100 % of the synthetic
     /// scenes' rows (see [`IasmConfig::rank_gain`]). Why: with three stops one cut row
@@ -321,7 +321,7 @@ pub struct IasmConfig {
     /// is thresholded (the rows of [`IasmConfig::vote_min_thresholded_stops`]: every peak
     /// the SSL's thresholds let through, none a filler); such a stop counts at the cut
     /// rows' rate, `vote_min_thresholded_stops / vote_min_stops`, in the vote's quorums and
-    /// in the three stops' worth a source needs ([`Mapper::drop_implausible_cut`]), and
+    /// in the three stops' worth a source needs ([`Mapper::drop_implausible`]), and
     /// the DoA stays with the source that explained it first ([`Ray::shared`]). 0 turns it
     /// off. Not in the paper. Default: 0.5 (the paper profile: 0, and it needs the vote).
     ///

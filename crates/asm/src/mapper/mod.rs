@@ -6,6 +6,7 @@
 //! | file | the step |
 //! |---|---|
 //! | `config.rs` | [`IasmConfig`]: the paper's parameters, the rules', the profiles |
+//! | `stops.rs` | [`Stops`]: the stops a map is made from, built once |
 //! | `rounds.rs` | the paper's rounds: filter, cluster, associate ([`Mapper::run`], [`Mapper::round`]) |
 //! | `vote.rs` | the vote after the rounds ([`Mapper::vote`]) |
 //! | `rules.rs` | what cannot be a source ([`Mapper::drop_implausible`]), thin sources, merging |
@@ -71,7 +72,7 @@
 //!   ([`IasmConfig::absence_ratio`]), one whose DoAs meet beyond the map or behind a wall as
 //!   the wall's mirror image of another source ([`IasmConfig::beyond_map_m`],
 //!   [`IasmConfig::wall_clearance_m`]), and one with too little evidence once rows cut at
-//!   `N` count for less ([`Mapper::drop_implausible_cut`]). What they remove is reported
+//!   `N` count for less ([`Mapper::drop_implausible`]). What they remove is reported
 //!   with the rule and the stops ([`MapResult::refused`]), so that a user can see which
 //!   rule, and which setting, kept a source out.
 //! - **Each DoA to the source it fits best** ([`Mapper::reassociate`]): implicit
@@ -97,6 +98,7 @@ mod reassociation;
 mod refine;
 mod rounds;
 mod rules;
+mod stops;
 #[cfg(test)]
 mod tests;
 mod vote;
@@ -104,6 +106,7 @@ mod vote;
 pub use config::*;
 pub use refine::*;
 pub use rounds::*;
+pub use stops::Stops;
 use vote::*;
 
 /// One mapped source.
@@ -153,7 +156,7 @@ pub struct Refused {
     pub rule: Refusal,
 }
 
-/// The rule that refused a source ([`Refused`]); see [`Mapper::drop_implausible_cut`].
+/// The rule that refused a source ([`Refused`]); see [`Mapper::drop_implausible`].
 #[derive(Clone, Debug, PartialEq, Eq, Serialize)]
 #[serde(tag = "rule", rename_all = "snake_case")]
 pub enum Refusal {

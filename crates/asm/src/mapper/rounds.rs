@@ -38,125 +38,24 @@ impl Mapper {
         cut: Option<&[bool]>,
         rng: &mut impl Rng,
     ) -> Result<MapResult> {
-        if let Some(cut) = cut
-            && cut.len() != poses.len()
-        {
-            return Err(Error::CutMismatch {
-                poses: poses.len(),
-                cut: cut.len(),
-            });
-        }
-        let mut bearings = self.world_bearings_cut(poses, doas_rad, cut)?;
-        let complete: Vec<bool> = doas_rad
-            .iter()
-            .enumerate()
-            .map(|(k, row)| {
-                let heard = row.iter().filter(|a| a.is_finite()).count();
-                self.complete(heard, cut.map(|c| c[k]))
-            })
-            .collect();
-        let said_cut = cut.map_or_else(|| vec![false; poses.len()], <[bool]>::to_vec);
-        Ok(self.run_bearings_complete(poses, &mut bearings, &complete, &said_cut, rng))
+        Ok(self.run_stops(&self.stops(poses, doas_rad, cut)?, rng))
     }
 
-    /// [`Mapper::run`] on checked world bearings ([`Mapper::world_bearings`]), which are
-    /// left holding the DoAs no source explains.
-    ///
-    /// # Panics
-    /// If `poses` and `bearings` differ in length.
-    pub fn run_bearings(
-        &self,
-        poses: &[Pose],
-        bearings: &mut [Vec<f64>],
-        rng: &mut impl Rng,
-    ) -> MapResult {
-        let complete: Vec<bool> = poses
-            .iter()
-            .zip(bearings.iter())
-            .map(|(p, row)| self.complete(self.doas_in(p, row), None))
-            .collect();
-        self.run_bearings_complete(poses, bearings, &complete, &vec![false; poses.len()], rng)
-    }
-
-    /// Which of `rows` (each stop's DoAs) hold every peak the SSL let through, when
-    /// nothing else says: those with fewer than `N` DoAs (a full row may have been cut at
-    /// `N`; see [`Mapper::run_rows`]).
-    pub fn complete_by_length(&self, rows: &[Vec<f64>]) -> Vec<bool> {
-        rows.iter().map(|r| self.complete(r.len(), None)).collect()
-    }
-
-    /// Whether a row of `len` DoAs holds every peak the SSL let through: not cut at `N`
-    /// when the SSL says (`cut`), else shorter than `N`. The one rule behind
-    /// [`Mapper::run_rows`], [`Mapper::complete_by_length`] and the online mapper.
-    pub(crate) fn complete(&self, len: usize, cut: Option<bool>) -> bool {
-        cut.map_or(len < self.config.num_doas, |cut| !cut)
-    }
-
-    /// [`Mapper::run_rows`] on checked world bearings, with the rows that hold every peak
-    /// the SSL let through marked in `complete`, and those the SSL said it cut at `N` in
-    /// `said_cut`.
-    pub(crate) fn run_bearings_complete(
-        &self,
-        poses: &[Pose],
-        bearings: &mut [Vec<f64>],
-        complete: &[bool],
-        said_cut: &[bool],
-        rng: &mut impl Rng,
-    ) -> MapResult {
-        let c = &self.config;
-        let heard = bearings.to_vec();
+    /// [`Mapper::run`] on [`Stops`] already built: the search (the rounds, then the
+    /// vote), the rules ([`Mapper::drop_implausible`]) and the reassociation
+    /// ([`Mapper::reassociate`]), the mirrors marked and the refusals one per place. The map's
+    /// [`MapResult::unexplained_bearings`] is the pool the search leaves.
+    pub fn run_stops(&self, stops: &Stops, rng: &mut impl Rng) -> MapResult {
+        let mut pool = stops.pool();
         let mut sources: Vec<Source> = Vec::new();
-        let mut rounds = 0;
-        let mut failed = 0;
-        let mut clutter: Vec<Ray> = Vec::new();
-        while rounds < c.max_rounds {
-            rounds += 1;
-            match self.round(poses, bearings, &heard, rounds, rng) {
-                Round::Found(s) => {
-                    failed = 0;
-                    sources.push(s);
-                }
-                // One retry policy for every round that finds no source: each is one
-                // random draw's bad luck until `retries + 1` happen in a row (see the
-                // module documentation). A clutter round has at least taken its DoAs out
-                // of the rounds; they are kept for the vote.
-                failure => {
-                    if let Round::Clutter(rays) = failure {
-                        clutter.extend(rays);
-                    }
-                    failed += 1;
-                    if failed > c.retries {
-                        break;
-                    }
-                }
-            }
-        }
         let mut refused = Vec::new();
-        if c.vote_min_stops > 0 {
-            // The rounds' clutter was clutter where their clouds settled; the vote,
-            // deterministic and with its own quorum, judges those DoAs anew (see
-            // `IasmConfig::vote_min_stops`).
-            for r in &clutter {
-                r.give_back(bearings);
-            }
-            while rounds < c.max_rounds {
-                let mapped: Vec<[f64; 2]> = sources.iter().map(|s| [s.x, s.y]).collect();
-                let Some(s) = self.vote_noting(
-                    poses,
-                    bearings,
-                    &heard,
-                    complete,
-                    &mapped,
-                    rounds + 1,
-                    &mut refused,
-                ) else {
-                    break;
-                };
-                rounds += 1;
-                sources.push(s);
-            }
-        }
-        let removed = self.settle(&mut sources, poses, &heard, complete, said_cut, bearings);
+        let plan = Search {
+            first_round: 1,
+            retries: self.config.retries,
+            new_stop: None,
+        };
+        let rounds = self.search(stops, &mut pool, &mut sources, &mut refused, plan, rng);
+        let removed = self.settle(&mut sources, stops, &mut pool);
         let count = removed.len();
         refused.extend(removed);
         self.mark_mirrors(&mut sources);
@@ -165,84 +64,106 @@ impl Mapper {
             sources,
             rounds,
             particles: self.m,
-            unexplained: self.unexplained(poses, bearings),
-            unexplained_bearings: bearings.to_vec(),
+            unexplained: self.unexplained(stops.poses(), &pool),
+            unexplained_bearings: pool,
             removed: count,
             refused,
         }
     }
 
-    /// Checks the inputs and turns every DoA into a world bearing, `wrap(azimuth + theta)`,
-    /// dropping non-finite DoAs (missing cells of a table).
+    /// The search for new sources among the DoAs of `pool` that none explains, the one
+    /// stage the batch map ([`Mapper::run_stops`]) and the online mapper's stops share:
+    /// filtering rounds ([`Mapper::round`]) until `plan.retries + 1` fail in a row, then
+    /// (with [`IasmConfig::vote_min_stops`]) the vote ([`Mapper::vote`]) until it proposes
+    /// nothing, at most [`IasmConfig::max_rounds`] in all. What they find is added to
+    /// `sources` (which the vote checks its proposals against), what the vote refuses to
+    /// `refused`. Rounds are numbered from `plan.first_round`; returns how many ran.
     ///
-    /// # Errors
-    /// As [`Mapper::run`].
-    pub fn world_bearings(&self, poses: &[Pose], doas_rad: &[Vec<f64>]) -> Result<Vec<Vec<f64>>> {
-        self.world_bearings_cut(poses, doas_rad, None)
-    }
-
-    /// Whether a row of `len` DoAs is one the mapper takes: at most `N`, or, in a row the
-    /// SSL says it cut at `N` (`cut`), `N` more beyond them (the extra DoAs its octaves
-    /// heard: `ssl::Located::extra`).
-    pub(crate) fn row_fits(&self, len: usize, cut: Option<bool>) -> bool {
-        let n = self.config.num_doas;
-        len <= n || (cut == Some(true) && len <= 2 * n)
-    }
-
-    /// [`Mapper::world_bearings`], with each row's cut flag when the SSL gives them
-    /// ([`Mapper::row_fits`]).
-    pub(super) fn world_bearings_cut(
+    /// A round's clutter ([`Round::Clutter`]) was clutter where its cloud settled: its DoAs
+    /// stay out of the rounds and go back for the vote, which is deterministic and has its
+    /// own quorum. With `plan.new_stop`, a source must explain a DoA of that stop (whatever
+    /// the earlier stops alone showed was searched at those stops); one that does not is a
+    /// draw landing on old clutter, and its round failed.
+    pub(crate) fn search(
         &self,
-        poses: &[Pose],
-        doas_rad: &[Vec<f64>],
-        cut: Option<&[bool]>,
-    ) -> Result<Vec<Vec<f64>>> {
-        if poses.is_empty() {
-            return Err(Error::NoPoses);
+        stops: &Stops,
+        pool: &mut [Vec<f64>],
+        sources: &mut Vec<Source>,
+        refused: &mut Vec<Refused>,
+        plan: Search,
+        rng: &mut impl Rng,
+    ) -> usize {
+        let c = &self.config;
+        let mut rounds = 0;
+        let mut failed = 0;
+        let mut clutter: Vec<Ray> = Vec::new();
+        while rounds < c.max_rounds {
+            rounds += 1;
+            match self.round(stops, pool, plan.first_round + rounds - 1, rng) {
+                Round::Found(s)
+                    if plan
+                        .new_stop
+                        .is_none_or(|k| s.rays.iter().any(|r| r.stop == k)) =>
+                {
+                    failed = 0;
+                    sources.push(s);
+                }
+                // One retry policy for every round that finds no source: each is one
+                // random draw's bad luck until `retries + 1` happen in a row (see the
+                // module documentation).
+                failure => {
+                    match failure {
+                        Round::Found(s) => {
+                            for r in s.rays {
+                                r.give_back(pool);
+                            }
+                        }
+                        Round::Clutter(rays) => clutter.extend(rays),
+                        Round::NoCluster | Round::NothingExplained => {}
+                    }
+                    failed += 1;
+                    if failed > plan.retries {
+                        break;
+                    }
+                }
+            }
         }
-        if poses.len() != doas_rad.len() {
-            return Err(Error::LengthMismatch {
-                poses: poses.len(),
-                doas: doas_rad.len(),
-            });
+        if c.vote_min_stops > 0 {
+            for r in &clutter {
+                r.give_back(pool);
+            }
+            while rounds < c.max_rounds {
+                let mapped: Vec<[f64; 2]> = sources.iter().map(|s| [s.x, s.y]).collect();
+                let round = plan.first_round + rounds;
+                let Some(s) = self.vote_noting(stops, pool, &mapped, round, refused) else {
+                    break;
+                };
+                rounds += 1;
+                sources.push(s);
+            }
         }
-        if let Some(index) = poses.iter().position(|p| !p.is_finite()) {
-            return Err(Error::NonFinitePose { index });
-        }
-        let fits = |k: usize| self.row_fits(doas_rad[k].len(), cut.map(|c| c[k]));
-        if let Some(index) = (0..doas_rad.len()).find(|&k| !fits(k)) {
-            return Err(Error::TooManyDoas {
-                index,
-                got: doas_rad[index].len(),
-                n: self.config.num_doas,
-            });
-        }
-        Ok(doas_rad
-            .iter()
-            .zip(poses)
-            .map(|(row, p)| self.stop_bearings(p, row))
-            .collect())
+        rounds
     }
 
     /// One round of the paper's loop: [filter](Mapper::filter) a fresh cloud over the
-    /// remaining `bearings`, take the [largest cluster](largest_cluster) as a source and
-    /// [associate](crate::assoc::associate) it, removing the DoAs it explains; then, in the
-    /// robust profile, refine it and require [`IasmConfig::min_observations`] stops.
-    /// `heard` holds each stop's DoAs as the SSL gave them, which rank the remaining ones
-    /// ([`Mapper::filter`]); `round` is the round's number, recorded in the source.
+    /// DoAs of `pool` (one row per stop) that no source explains yet, take the
+    /// [largest cluster](largest_cluster) as a source and
+    /// [associate](crate::assoc::associate) it, removing the DoAs it explains from `pool`;
+    /// then, in the robust profile, refine it and require
+    /// [`IasmConfig::min_observations`] stops. `round` is the round's number, recorded in
+    /// the source.
     ///
     /// # Panics
-    /// If `poses`, `bearings` and `heard` differ in length (use
-    /// [`Mapper::world_bearings`]).
+    /// If `pool` has not one row per stop.
     pub fn round(
         &self,
-        poses: &[Pose],
-        bearings: &mut [Vec<f64>],
-        heard: &[Vec<f64>],
+        stops: &Stops,
+        pool: &mut [Vec<f64>],
         round: usize,
         rng: &mut impl Rng,
     ) -> Round {
-        let (mut pf, resampled) = self.filter(poses, bearings, heard, rng);
+        let poses = stops.poses();
+        let (mut pf, resampled) = self.filter(stops, pool, rng);
         // DBSCAN counts particles, not weights: if the adaptive resampling never ran (few
         // stops), the cloud is still the uniform initial draw and all the evidence is in
         // its weights, so it is resampled once to turn them into density. Otherwise the
@@ -272,14 +193,14 @@ impl Mapper {
             Variant::Ws => weighted_mean,
             Variant::Ca | Variant::Wdp => mean(&cluster),
         };
-        let mut rays = self.associate(est, poses, bearings);
+        let mut rays = self.associate(est, poses, pool);
         if rays.is_empty() {
             return Round::NothingExplained;
         }
         let mut est = est;
         let mut refined = false;
         if self.config.refine
-            && let Some(p) = refit(est, &mut rays, self.sigma, self.trim, bearings)
+            && let Some(p) = refit(est, &mut rays, self.sigma, self.trim, pool)
         {
             (est, refined) = (p, true);
         }
@@ -307,33 +228,32 @@ impl Mapper {
 
     /// The filtering step: `M` particles drawn from the map's known cells, then the stops
     /// visited `passes` times, each time predicting (random walk), weighting with the
-    /// stop's remaining bearings, resampling when `N_eff < ceil(M / C)`, and stopping early
-    /// once the cloud's largest covariance eigenvalue is below `lambda_thresh`. Returns the
-    /// cloud and whether it was ever resampled. `heard` holds each stop's DoAs as the SSL
-    /// gave them (world bearings, strongest first: `Mapper::stop_bearings`), which
-    /// ranks the remaining ones for [`IasmConfig::rank_gain`].
+    /// stop's remaining DoAs (its row of `pool`), resampling when `N_eff < ceil(M / C)`,
+    /// and stopping early once the cloud's largest covariance eigenvalue is below
+    /// `lambda_thresh`. Returns the cloud and whether it was ever resampled. The DoAs as
+    /// the SSL gave them ([`Stops::heard`], strongest first) rank the remaining ones for
+    /// [`IasmConfig::rank_gain`].
     ///
     /// # Panics
-    /// If `poses`, `bearings` and `heard` differ in length.
+    /// If `pool` has not one row per stop.
     pub fn filter(
         &self,
-        poses: &[Pose],
-        bearings: &[Vec<f64>],
-        heard: &[Vec<f64>],
+        stops: &Stops,
+        pool: &[Vec<f64>],
         rng: &mut impl Rng,
     ) -> (ParticleFilter, bool) {
-        assert_eq!(poses.len(), bearings.len(), "one row of bearings per pose");
-        let c = &self.config;
+        assert_eq!(stops.len(), pool.len(), "one row of the pool per stop");
+        let (c, poses) = (&self.config, stops.poses());
         let k_stops = poses.len();
-        let gains = (c.rank_gain < 1.0).then(|| self.rank_gains(bearings, heard));
+        let gains = (c.rank_gain < 1.0).then(|| self.rank_gains(pool, stops.heard()));
         let mut pf = ParticleFilter::from_cells(&self.cells, self.m, rng);
         let mut resampled = false;
         for step in 0..c.passes * k_stops {
             let k = step % k_stops;
             pf.predict(c.sigma_p_m, rng);
             let neff = match &gains {
-                Some(g) => pf.update_gained(poses[k].position(), &bearings[k], &g[k], &self.lik),
-                None => pf.update(poses[k].position(), &bearings[k], &self.lik),
+                Some(g) => pf.update_gained(poses[k].position(), &pool[k], &g[k], &self.lik),
+                None => pf.update(poses[k].position(), &pool[k], &self.lik),
             };
             if neff < self.resample_below {
                 pf.resample(rng);
@@ -351,14 +271,7 @@ impl Mapper {
     /// (strongest first; a linear array's mirror pair counts as one DoA). A DoA not in
     /// `heard` ranks last.
     ///
-    /// # Panics
-    /// If `bearings` and `heard` differ in length.
-    pub(crate) fn rank_gains(&self, bearings: &[Vec<f64>], heard: &[Vec<f64>]) -> Vec<Vec<f64>> {
-        assert_eq!(
-            bearings.len(),
-            heard.len(),
-            "one row heard per row of bearings"
-        );
+    fn rank_gains(&self, bearings: &[Vec<f64>], heard: &[Vec<f64>]) -> Vec<Vec<f64>> {
         let per = if self.mirror.is_some() { 2 } else { 1 };
         bearings
             .iter()
@@ -378,6 +291,19 @@ impl Mapper {
             })
             .collect()
     }
+}
+
+/// How a search ([`Mapper::search`]) runs: the batch map's from round 1 with the
+/// configured retries; an online stop's from the rounds run so far, no retry (the next full
+/// map retries), its sources required to explain a DoA of the new stop.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Search {
+    /// The number of the search's first round.
+    pub first_round: usize,
+    /// Failed rounds in a row that end the rounds, less one.
+    pub retries: usize,
+    /// The stop whose DoAs a new source must explain.
+    pub new_stop: Option<usize>,
 }
 
 /// Stops a source found by the densest-cell fallback must explain.

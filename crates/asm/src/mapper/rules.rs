@@ -7,12 +7,12 @@ use super::*;
 impl Mapper {
     /// What follows the search for sources, in the batch map and between the online map's
     /// full maps: the sources that cannot be are removed
-    /// ([`Mapper::drop_implausible_cut`]), then, with [`IasmConfig::reassociate`], every
+    /// ([`Mapper::drop_implausible`]), then, with [`IasmConfig::reassociate`], every
     /// DoA goes to the source it fits best ([`Mapper::reassociate`]; merged first, since two
     /// estimates of one source closer than the merge distance would split its DoAs between
     /// them and move apart) and the removals are checked once more on the DoAs each source
     /// then keeps, and sources closer than [`IasmConfig::merge_dist_m`] are merged. Returns
-    /// the removed sources with their rules; their DoAs go back to `bearings`.
+    /// the removed sources with their rules; their DoAs go back to `pool`.
     ///
     /// Why the second check: a round's cloud that settles short of a talker, on the
     /// talker's rays, passes the first with the talker's DoAs; reassociated, it keeps only
@@ -24,26 +24,20 @@ impl Mapper {
     /// over the scenes 0.0870 -> 0.0864 m.
     ///
     /// # Panics
-    /// As [`Mapper::drop_implausible_cut`].
+    /// As [`Mapper::drop_implausible`].
     pub(crate) fn settle(
         &self,
         sources: &mut Vec<Source>,
-        poses: &[Pose],
-        heard: &[Vec<f64>],
-        complete: &[bool],
-        said_cut: &[bool],
-        bearings: &mut [Vec<f64>],
+        stops: &Stops,
+        pool: &mut [Vec<f64>],
     ) -> Vec<Refused> {
-        let mut removed =
-            self.drop_implausible_cut(sources, poses, heard, complete, said_cut, bearings);
+        let mut removed = self.drop_implausible(sources, stops, pool);
         if self.config.reassociate {
             self.merge(sources);
-            removed.extend(self.reassociate(sources, bearings));
+            removed.extend(self.reassociate(sources, pool));
             // Judged again on the DoAs each source now keeps: a cloud that settled on a
             // talker's rays passed with the talker's DoAs and keeps only its own.
-            removed.extend(
-                self.drop_implausible_cut(sources, poses, heard, complete, said_cut, bearings),
-            );
+            removed.extend(self.drop_implausible(sources, stops, pool));
         }
         self.merge(sources);
         removed
@@ -69,32 +63,17 @@ impl Mapper {
 
     /// Removes the sources that cannot be: nearer a stop than [`IasmConfig::min_range_m`],
     /// or spoken against by more stops than leave them the
-    /// [`IasmConfig::min_observations`] (see
-    /// [`IasmConfig::absence_ratio`]), repeated until none falls, since a source removed
-    /// masks no stop's silence towards the others; their DoAs go back to `bearings`. `heard` holds
-    /// every stop's DoAs (world bearings). Returns the removed sources, each with the rule
-    /// that removed it.
+    /// [`IasmConfig::min_observations`] (see [`IasmConfig::absence_ratio`]), repeated
+    /// until none falls, since a source removed masks no stop's silence towards the
+    /// others; their DoAs go back to `pool` (one row per stop of the DoAs no source
+    /// explains). Returns the removed sources, each with the rule that removed it.
     ///
-    /// # Panics
-    /// If `poses`, `heard` and `bearings` differ in length.
-    pub fn drop_implausible(
-        &self,
-        sources: &mut Vec<Source>,
-        poses: &[Pose],
-        heard: &[Vec<f64>],
-        complete: &[bool],
-        bearings: &mut [Vec<f64>],
-    ) -> Vec<Refused> {
-        let said_cut = vec![false; poses.len()];
-        self.drop_implausible_cut(sources, poses, heard, complete, &said_cut, bearings)
-    }
-
-    /// [`Mapper::drop_implausible`], told which rows the SSL cut at `N` (`said_cut`): a
-    /// source must also have three stops' worth of evidence once those rows count at the
-    /// vote's exchange rate (see [`IasmConfig::vote_min_thresholded_stops`]). Two sources
-    /// that each lack it are first joined into one when their rays, together, meet where
-    /// every stop's DoA lies within the vote's gate (2 `sigma`) and the joint source has
-    /// it: one source's stops, split between two by the rounds.
+    /// Where the SSL said it cut rows at `N` ([`Stops::said_cut`]), a source must also have
+    /// three stops' worth of evidence once those rows count at the vote's exchange rate
+    /// (see [`IasmConfig::vote_min_thresholded_stops`]). Two sources that each lack it are
+    /// first joined into one when their rays, together, meet where every stop's DoA lies
+    /// within the vote's gate (2 `sigma`) and the joint source has it: one source's stops,
+    /// split between two by the rounds.
     ///
     /// Why: a row the SSL cut held more peaks above its thresholds than `N`: a crowded or
     /// reverberant stop, whose `N` DoAs are mostly reflections in a hard room, so that
@@ -104,28 +83,25 @@ impl Mapper {
     /// two). Only where the SSL said so: a row of a published table is full whatever its
     /// stop heard, and there (arrangement II, the authors' GCC-PHAT table, 50 runs) counting
     /// full rows so lost a source seen from four stops in most runs (0.170 -> 0.235 m).
-    /// Measured (`BENCHMARKS.md`, session 17): over the suite's and `fixtures/heldout`'s
-    /// renderings with five draws each, 2.1 -> 1.1 ghosts per set of maps, 0.2 fewer real
-    /// sources (`reverberant_low_snr`, MVDR, one in three draws of one rendering);
-    /// `reverberant_low_snr` in the suite 0.342 / 0.291 -> 0.312 / 0.193 m; every other
-    /// scene, and arrangement II from raw audio (50 runs), unchanged.
+    /// Measured (`docs/decisions/0007-robust-mapper-profile.md`): over the suite's and
+    /// `fixtures/heldout`'s renderings with five draws each, 2.1 -> 1.1 ghosts per set of
+    /// maps, 0.2 fewer real sources (`reverberant_low_snr`, MVDR, one in three draws of one
+    /// rendering); `reverberant_low_snr` in the suite 0.342 / 0.291 -> 0.312 / 0.193 m;
+    /// every other scene, and arrangement II from raw audio (50 runs), unchanged.
     ///
     /// # Panics
-    /// If `poses`, `heard`, `complete`, `said_cut` and `bearings` differ in length.
-    pub fn drop_implausible_cut(
+    /// If `pool` has not one row per stop.
+    pub fn drop_implausible(
         &self,
         sources: &mut Vec<Source>,
-        poses: &[Pose],
-        heard: &[Vec<f64>],
-        complete: &[bool],
-        said_cut: &[bool],
-        bearings: &mut [Vec<f64>],
+        stops: &Stops,
+        pool: &mut [Vec<f64>],
     ) -> Vec<Refused> {
-        assert_eq!(poses.len(), heard.len(), "one row of DoAs per pose");
-        assert_eq!(poses.len(), complete.len(), "one flag per pose");
-        assert_eq!(poses.len(), said_cut.len(), "one flag per pose");
-        self.join_thin(sources, poses, said_cut, heard, bearings);
-        self.feed_thin(sources, poses, said_cut, heard, bearings);
+        assert_eq!(stops.len(), pool.len(), "one row of the pool per stop");
+        let bearings = pool;
+        let poses = stops.poses();
+        self.join_thin(sources, stops, bearings);
+        self.feed_thin(sources, stops, bearings);
         let at: Vec<[f64; 2]> = sources.iter().map(|s| [s.x, s.y]).collect();
         // What does not depend on the other sources, once: where the robot stood, and
         // where the source's own rays meet.
@@ -135,7 +111,7 @@ impl Mapper {
                     (0..at.len()).filter(|&j| j != i).map(|j| at[j]).collect();
                 if self.misplaced(at[i], &sources[i].rays, poses, &others) {
                     Some(Refusal::Misplaced)
-                } else if self.thinly_heard(&sources[i].rays, poses, said_cut, heard) {
+                } else if self.thinly_heard(&sources[i].rays, stops) {
                     Some(Refusal::ThinlyHeard)
                 } else {
                     None
@@ -154,7 +130,7 @@ impl Mapper {
                         .filter(|&j| j != i && why[j].is_none())
                         .map(|j| at[j])
                         .collect();
-                    self.spoken_against(at[i], &sources[i].rays, poses, heard, complete, &others)
+                    self.spoken_against(at[i], &sources[i].rays, stops, &others)
                 })
                 .collect();
             if next == why {
@@ -208,15 +184,13 @@ impl Mapper {
     pub(super) fn feed_thin(
         &self,
         sources: &mut [Source],
-        poses: &[Pose],
-        said_cut: &[bool],
-        heard: &[Vec<f64>],
+        stops: &Stops,
         bearings: &mut [Vec<f64>],
     ) {
+        let poses = stops.poses();
         let gate = 2.0 * self.sigma;
         for s in sources.iter_mut() {
-            if !self.thinly_heard(&s.rays, poses, said_cut, heard)
-                || self.misplaced([s.x, s.y], &s.rays, poses, &[])
+            if !self.thinly_heard(&s.rays, stops) || self.misplaced([s.x, s.y], &s.rays, poses, &[])
             {
                 continue;
             }
@@ -237,7 +211,7 @@ impl Mapper {
                 continue;
             };
             if all.iter().any(|r| r.miss(p) > gate)
-                || self.thinly_heard(&all, poses, said_cut, heard)
+                || self.thinly_heard(&all, stops)
                 || self.misplaced(p, &all, poses, &[])
             {
                 continue;
@@ -270,16 +244,15 @@ impl Mapper {
     pub(super) fn join_thin(
         &self,
         sources: &mut Vec<Source>,
-        poses: &[Pose],
-        said_cut: &[bool],
-        heard: &[Vec<f64>],
+        stops: &Stops,
         bearings: &mut [Vec<f64>],
     ) {
+        let poses = stops.poses();
         let gate = 2.0 * self.sigma;
         loop {
             let thin: Vec<usize> = (0..sources.len())
                 .filter(|&i| {
-                    self.thinly_heard(&sources[i].rays, poses, said_cut, heard)
+                    self.thinly_heard(&sources[i].rays, stops)
                         && !self.misplaced(
                             [sources[i].x, sources[i].y],
                             &sources[i].rays,
@@ -314,7 +287,7 @@ impl Mapper {
                         }
                     }
                     if best.iter().any(|r| r.miss(p) > gate)
-                        || self.thinly_heard(&best, poses, said_cut, heard)
+                        || self.thinly_heard(&best, stops)
                         || self.misplaced(p, &best, poses, &[])
                     {
                         continue;
@@ -415,23 +388,18 @@ impl Mapper {
     }
 
     /// Whether the stops of `rays` are too few for a source once the rows the SSL cut
-    /// (`said_cut`) count at the vote's exchange rate (`vote_min_thresholded_stops /
-    /// vote_min_stops`, 3/5 with the defaults; see [`Mapper::drop_implausible_cut`]), and
+    /// ([`Stops::said_cut`]) count at the vote's exchange rate (`vote_min_thresholded_stops /
+    /// vote_min_stops`, 3/5 with the defaults; see [`Mapper::drop_implausible`]), and
     /// a stop it shares with another source ([`Ray::shared`]) at that rate again: fewer
     /// than [`IasmConfig::min_observations`] in all, every other stop counting one, and a
-    /// cut row whose strongest DoA (in `heard`) is the ray's too (see
+    /// cut row whose strongest DoA ([`Stops::heard`]) is the ray's too (see
     /// [`IasmConfig::vote_min_thresholded_stops`]). Never with the vote off (the paper
     /// profile).
-    pub(super) fn thinly_heard(
-        &self,
-        rays: &[Ray],
-        poses: &[Pose],
-        said_cut: &[bool],
-        heard: &[Vec<f64>],
-    ) -> bool {
+    pub(super) fn thinly_heard(&self, rays: &[Ray], stops: &Stops) -> bool {
         let Some(rate) = self.cut_rate() else {
             return false;
         };
+        let (poses, said_cut, heard) = (stops.poses(), stops.said_cut(), stops.heard());
         let cut = |r: &Ray| {
             said_cut[r.stop] && !self.strongest(&poses[r.stop], &heard[r.stop], r.bearing)
         };
@@ -482,23 +450,21 @@ impl Mapper {
         &self,
         q: [f64; 2],
         rays: &[Ray],
-        poses: &[Pose],
-        heard: &[Vec<f64>],
-        complete: &[bool],
+        stops: &Stops,
         others: &[[f64; 2]],
     ) -> Option<Refusal> {
         let reach = rays
             .iter()
             .map(|r| (r.from[0] - q[0]).hypot(r.from[1] - q[1]))
             .fold(0.0, f64::max);
-        let against = self.absences(q, reach, poses, heard, complete, others);
+        let against = self.absences(q, reach, stops, others);
         (rays.len() < self.config.min_observations + against.len().saturating_sub(1))
             .then_some(Refusal::SpokenAgainst { against })
     }
 
     /// The stops that speak against a source at `q` (see [`IasmConfig::absence_ratio`]):
-    /// their row of `heard` is complete (`complete`: every peak the SSL let through; see
-    /// [`Mapper::run_rows`]) and not empty, none within `gamma` of the bearing to `q` but
+    /// their row ([`Stops::heard`]) is complete ([`Stops::complete`]: every peak the SSL
+    /// let through; see [`Mapper::run_rows`]) and not empty, none within `gamma` of the bearing to `q` but
     /// another source's (a DoA that misses `q` by [`TAKEN_MISS_SIGMAS`] `sigma` or more and
     /// one of `others` by less than `sigma`), it lies no further than `reach` from `q`
     /// (the furthest stop that heard it), and none of `others` (the other sources) is
@@ -507,11 +473,10 @@ impl Mapper {
         &self,
         q: [f64; 2],
         reach: f64,
-        poses: &[Pose],
-        heard: &[Vec<f64>],
-        complete: &[bool],
+        stops: &Stops,
         others: &[[f64; 2]],
     ) -> Vec<usize> {
+        let (poses, heard, complete) = (stops.poses(), stops.heard(), stops.complete());
         let ratio = self.config.absence_ratio;
         if ratio <= 0.0 {
             return Vec::new();

@@ -4,61 +4,43 @@
 use super::*;
 
 impl Mapper {
-    /// One source found by voting over the remaining `bearings` (see
-    /// [`IasmConfig::vote_min_stops`] and [`IasmConfig::vote_min_thresholded_stops`]), its
-    /// DoAs removed; `None` (and `bearings` as they were) when no proposal explains enough
-    /// stops. `complete` marks the stops whose row, as the SSL gave it, holds every peak
-    /// its thresholds let through (not cut at `N`; see [`Mapper::run_rows`]).
+    /// One source found by voting over the DoAs of `pool` that no source explains yet
+    /// (see [`IasmConfig::vote_min_stops`] and
+    /// [`IasmConfig::vote_min_thresholded_stops`]), its DoAs removed; `None` (and `pool`
+    /// as it was) when no proposal explains enough stops. The stops' complete rows
+    /// ([`Stops::complete`]) count in full; `mapped` holds the sources mapped so far, which
+    /// mask a stop's silence.
     ///
     /// # Panics
-    /// If `poses`, `bearings` and `complete` differ in length.
+    /// If `pool` has not one row per stop.
     pub fn vote(
         &self,
-        poses: &[Pose],
-        bearings: &mut [Vec<f64>],
-        heard: &[Vec<f64>],
-        complete: &[bool],
+        stops: &Stops,
+        pool: &mut [Vec<f64>],
         mapped: &[[f64; 2]],
         round: usize,
     ) -> Option<Source> {
-        let mut refused = Vec::new();
-        self.vote_noting(
-            poses,
-            bearings,
-            heard,
-            complete,
-            mapped,
-            round,
-            &mut refused,
-        )
+        self.vote_noting(stops, pool, mapped, round, &mut Vec::new())
     }
 
     /// [`Mapper::vote`], adding to `refused` the proposals it refused for a rule of
-    /// [`Mapper::drop_implausible_cut`] (see [`MapResult::refused`]).
-    #[allow(clippy::too_many_arguments)]
+    /// [`Mapper::drop_implausible`] (see [`MapResult::refused`]).
     pub(crate) fn vote_noting(
         &self,
-        poses: &[Pose],
-        bearings: &mut [Vec<f64>],
-        heard: &[Vec<f64>],
-        complete: &[bool],
+        stops: &Stops,
+        pool: &mut [Vec<f64>],
         mapped: &[[f64; 2]],
         round: usize,
         refused: &mut Vec<Refused>,
     ) -> Option<Source> {
-        assert_eq!(poses.len(), bearings.len(), "one row of bearings per pose");
-        assert_eq!(poses.len(), complete.len(), "one flag per pose");
-        assert_eq!(poses.len(), heard.len(), "one row of heard DoAs per pose");
-        let check = Plausible {
-            heard,
-            complete,
-            mapped,
-        };
+        assert_eq!(stops.len(), pool.len(), "one row of the pool per stop");
+        let check = Plausible { stops, mapped };
         let c = &self.config;
         if c.vote_min_stops == 0 {
             return None;
         }
-        let rays: Vec<([f64; 2], f64, usize)> = bearings
+        let poses = stops.poses();
+        let rays: Vec<([f64; 2], f64, usize)> = pool
             .iter()
             .enumerate()
             .flat_map(|(k, row)| row.iter().map(move |&b| (k, b)))
@@ -78,12 +60,13 @@ impl Mapper {
                 .into_iter()
                 .filter(|&(_, need)| need > 0)
                 .find_map(|(rate, need)| {
-                    let weights: Vec<f64> = complete
+                    let weights: Vec<f64> = stops
+                        .complete()
                         .iter()
                         .map(|&k| if k { 1.0 } else { rate })
                         .collect();
                     let need = need.max(c.min_observations);
-                    self.vote_among(poses, bearings, &rays, &weights, need, &check, refused)
+                    self.vote_among(pool, &rays, &weights, need, &check, refused)
                 })?;
         // The crossings of its rays near it stand for its cloud (the picture's particles
         // and the covariance ellipse).
@@ -133,10 +116,8 @@ impl Mapper {
     /// of 10 found); every other scene of the suite and of `fixtures/heldout`, and
     /// arrangement II (50 runs, ours and the authors' tables), unchanged; the suite's run
     /// time unchanged (37.9 against 38.0 s).
-    #[allow(clippy::too_many_arguments)]
     pub(super) fn vote_among(
         &self,
-        poses: &[Pose],
         bearings: &mut [Vec<f64>],
         rays: &[([f64; 2], f64, usize)],
         counts: &[f64],
@@ -151,10 +132,15 @@ impl Mapper {
         // The most the stops could give: a remaining DoA counts in full, a DoA that may
         // only be shared (`IasmConfig::share_gate_sigmas`) at the share rate.
         let share = self.share_rate();
+        let (poses, heard, complete) = (
+            check.stops.poses(),
+            check.stops.heard(),
+            check.stops.complete(),
+        );
         // A counted stop's strongest DoA counts in full, as in `Mapper::thinly_heard`.
         let count = |k: usize, b: f64| {
             let c = counts[k];
-            if c > 0.0 && self.strongest(&poses[k], &check.heard[k], b) {
+            if c > 0.0 && self.strongest(&poses[k], &heard[k], b) {
                 1.0
             } else {
                 c
@@ -165,7 +151,7 @@ impl Mapper {
             .zip(counts)
             .enumerate()
             .filter_map(|(k, (r, &c))| {
-                let sharable = share > 0.0 && check.complete[k] && !check.heard[k].is_empty();
+                let sharable = share > 0.0 && complete[k] && !heard[k].is_empty();
                 let most = r.iter().map(|&b| count(k, b)).fold(c, f64::max);
                 match (c > 0.0, r.is_empty()) {
                     (true, false) => Some(most),
@@ -200,7 +186,7 @@ impl Mapper {
                     total += count(k, row[at]);
                     weight += vote_weight(best, self.sigma);
                 } else if share > 0.0 {
-                    let taken = nearest(&check.heard[k]);
+                    let taken = nearest(&heard[k]);
                     if self.shares(taken, k, check) {
                         n += 1;
                         total += c * share;
@@ -239,13 +225,13 @@ impl Mapper {
             let mut rays = self.associate(q, poses, bearings);
             let est = refit(q, &mut rays, self.sigma, self.trim, bearings).unwrap_or(q);
             if share > 0.0 {
-                self.share_rays(est, poses, check, &mut rays);
+                self.share_rays(est, check, &mut rays);
             }
             let kept = rays.iter().filter(|r| counts[r.stop] > 0.0);
             let weight = |r: &Ray| count(r.stop, r.bearing) * if r.shared { share } else { 1.0 };
             let enough = quorum(kept.clone().map(weight).sum(), kept.count());
             if enough {
-                match self.implausible(est, &rays, poses, check) {
+                match self.implausible(est, &rays, check) {
                     None => return Some((est, rays)),
                     Some(rule) => refused.push(Refused {
                         x: est[0],
@@ -276,21 +262,16 @@ impl Mapper {
     /// Whether stop `k`'s DoA at `miss` (rad) from the bearing to a proposal may be shared
     /// with it ([`IasmConfig::share_gate_sigmas`]).
     pub(super) fn shares(&self, miss: f64, k: usize, check: &Plausible) -> bool {
-        check.complete[k] && miss < self.config.share_gate_sigmas * self.sigma
+        check.stops.complete()[k] && miss < self.config.share_gate_sigmas * self.sigma
     }
 
     /// Adds to `rays` (a vote's source at `q`) a shared ray ([`Ray::shared`]) for every
     /// stop not among them whose heard DoA may be shared with it
     /// ([`IasmConfig::share_gate_sigmas`]): a DoA that another source explains and this
     /// one as well.
-    pub(super) fn share_rays(
-        &self,
-        q: [f64; 2],
-        poses: &[Pose],
-        check: &Plausible,
-        rays: &mut Vec<Ray>,
-    ) {
-        for (k, (p, row)) in poses.iter().zip(check.heard).enumerate() {
+    pub(super) fn share_rays(&self, q: [f64; 2], check: &Plausible, rays: &mut Vec<Ray>) {
+        let stops = check.stops;
+        for (k, (p, row)) in stops.poses().iter().zip(stops.heard()).enumerate() {
             if rays.iter().any(|r| r.stop == k) {
                 continue;
             }
@@ -314,13 +295,12 @@ impl Mapper {
         &self,
         q: [f64; 2],
         rays: &[Ray],
-        poses: &[Pose],
         check: &Plausible,
     ) -> Option<Refusal> {
-        if self.misplaced(q, rays, poses, check.mapped) {
+        if self.misplaced(q, rays, check.stops.poses(), check.mapped) {
             return Some(Refusal::Misplaced);
         }
-        self.spoken_against(q, rays, poses, check.heard, check.complete, check.mapped)
+        self.spoken_against(q, rays, check.stops, check.mapped)
     }
 }
 
@@ -352,11 +332,10 @@ pub(super) fn stops_of(rays: &[Ray]) -> Vec<usize> {
     stops
 }
 
-/// What the vote needs to tell whether a proposal can be a source: every stop's DoAs as
-/// the SSL gave them, which rows are complete, and the sources mapped so far.
+/// What the vote needs to tell whether a proposal can be a source: the stops (their DoAs
+/// as the SSL gave them, which rows are complete), and the sources mapped so far.
 pub(super) struct Plausible<'a> {
-    heard: &'a [Vec<f64>],
-    complete: &'a [bool],
+    stops: &'a Stops,
     mapped: &'a [[f64; 2]],
 }
 

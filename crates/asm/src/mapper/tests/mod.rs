@@ -135,8 +135,31 @@ pub(super) fn against_the_ghost(
     heard: &[Vec<f64>],
     others: &[[f64; 2]],
 ) -> Vec<usize> {
-    let complete = mapper.complete_by_length(heard);
-    mapper.absences([2.0, 1.5], 3.36, poses, heard, &complete, others)
+    mapper.absences([2.0, 1.5], 3.36, &by_length(mapper, poses, heard), others)
+}
+
+/// The stops of `poses` that heard `heard` (world bearings): a row complete when it is
+/// shorter than `N`, none said cut (a DoA table's stops).
+pub(super) fn by_length(mapper: &Mapper, poses: &[Pose], heard: &[Vec<f64>]) -> Stops {
+    let said_cut = vec![false; poses.len()];
+    stops_with(poses, heard, &mapper.complete_by_length(heard), &said_cut)
+}
+
+/// The stops of `poses` that heard `heard` (world bearings), with the rows `complete`
+/// marks complete and those `said_cut` marks cut.
+pub(super) fn stops_with(
+    poses: &[Pose],
+    heard: &[Vec<f64>],
+    complete: &[bool],
+    said_cut: &[bool],
+) -> Stops {
+    let (p, h, c, s) = (
+        poses.to_vec(),
+        heard.to_vec(),
+        complete.to_vec(),
+        said_cut.to_vec(),
+    );
+    Stops::new(p, h, c, s).expect("one entry per stop")
 }
 
 /// Nine stops along y = 0 (x = 0..8, heading 0), N = 3, every one hearing a talker at

@@ -24,12 +24,9 @@ fn stops_the_ssl_cut_count_at_the_votes_rate() {
         let mut sources = vec![heard_from(talker, &poses, stops)];
         let said_cut: Vec<bool> = (0..poses.len()).map(|k| cut.contains(&k)).collect();
         let mut left = vec![Vec::new(); poses.len()];
-        mapper.drop_implausible_cut(
+        mapper.drop_implausible(
             &mut sources,
-            &poses,
-            &heard,
-            &complete,
-            &said_cut,
+            &stops_with(&poses, &heard, &complete, &said_cut),
             &mut left,
         );
         sources.len()
@@ -53,13 +50,7 @@ fn nearer_stops_that_heard_nothing_unmake_a_source_of_three_stops() {
     assert_eq!(against_the_ghost(&mapper, &poses, &heard, &others).len(), 3);
     assert_eq!(
         mapper
-            .drop_implausible(
-                &mut sources,
-                &poses,
-                &heard,
-                &mapper.complete_by_length(&heard),
-                &mut left
-            )
+            .drop_implausible(&mut sources, &by_length(&mapper, &poses, &heard), &mut left)
             .len(),
         1
     );
@@ -118,13 +109,7 @@ fn full_rows_and_a_single_miss_speak_against_nothing() {
     let mut left = vec![Vec::new(); poses.len()];
     assert_eq!(
         mapper
-            .drop_implausible(
-                &mut sources,
-                &poses,
-                &heard,
-                &mapper.complete_by_length(&heard),
-                &mut left
-            )
+            .drop_implausible(&mut sources, &by_length(&mapper, &poses, &heard), &mut left)
             .len(),
         0
     );
@@ -132,13 +117,7 @@ fn full_rows_and_a_single_miss_speak_against_nothing() {
     let (mapper, poses, heard, mut sources) = ghost_survey(&[1, 3]);
     assert_eq!(
         mapper
-            .drop_implausible(
-                &mut sources,
-                &poses,
-                &heard,
-                &mapper.complete_by_length(&heard),
-                &mut left
-            )
+            .drop_implausible(&mut sources, &by_length(&mapper, &poses, &heard), &mut left)
             .len(),
         0
     );
@@ -147,13 +126,7 @@ fn full_rows_and_a_single_miss_speak_against_nothing() {
     let paper = ghost_mapper(IasmConfig::profile(Profile::Paper));
     assert_eq!(
         paper
-            .drop_implausible(
-                &mut sources,
-                &poses,
-                &heard,
-                &paper.complete_by_length(&heard),
-                &mut left
-            )
+            .drop_implausible(&mut sources, &by_length(&paper, &poses, &heard), &mut left)
             .len(),
         0
     );
@@ -177,12 +150,9 @@ fn each_removed_source_carries_the_rule_that_removed_it() {
         .map(|(&c, &cut)| c && !cut)
         .collect();
     let mut left = vec![Vec::new(); poses.len()];
-    let refused = mapper.drop_implausible_cut(
+    let refused = mapper.drop_implausible(
         &mut sources,
-        &poses,
-        &heard,
-        &complete,
-        &said_cut,
+        &stops_with(&poses, &heard, &complete, &said_cut),
         &mut left,
     );
     assert_eq!(sources.len(), 1);
@@ -277,7 +247,12 @@ fn a_source_is_judged_again_on_the_doas_reassociation_leaves_it() {
     let reach = 5.2;
     let others = [talker];
     assert_eq!(
-        mapper.absences(ghost, reach, &poses, &heard, &complete, &others),
+        mapper.absences(
+            ghost,
+            reach,
+            &stops_with(&poses, &heard, &complete, &vec![false; poses.len()]),
+            &others
+        ),
         vec![2, 3, 4]
     );
     let mut sources = vec![heard_from(talker, &poses, &[0, 1, 2, 3]), ghost_source];
@@ -285,10 +260,7 @@ fn a_source_is_judged_again_on_the_doas_reassociation_leaves_it() {
     let said_cut = vec![false; poses.len()];
     let refused = mapper.settle(
         &mut sources,
-        &poses,
-        &heard,
-        &complete,
-        &said_cut,
+        &stops_with(&poses, &heard, &complete, &said_cut),
         &mut left,
     );
     // Reassociated, the ghost keeps stops 0, 1 and 5 (where the two bearings are one):
@@ -371,12 +343,9 @@ fn a_talkers_stops_split_between_two_thin_sources_are_joined() {
     let mapper = ghost_mapper(IasmConfig::default());
     let run = |mut sources: Vec<Source>| {
         let mut left = vec![Vec::new(); poses.len()];
-        let refused = mapper.drop_implausible_cut(
+        let refused = mapper.drop_implausible(
             &mut sources,
-            &poses,
-            &heard,
-            &complete,
-            &said_cut,
+            &stops_with(&poses, &heard, &complete, &said_cut),
             &mut left,
         );
         (sources, refused)
@@ -428,12 +397,9 @@ fn a_thinly_heard_source_takes_the_remaining_doas_that_fit_it() {
     let run = |mut left: Vec<Vec<f64>>| {
         // Where the round left it: 0.54 m short of the talker, on its rays from 0-3.
         let mut sources = vec![holding([1.8, 2.5], talker, &poses, &[0, 1, 2, 3])];
-        let refused = mapper.drop_implausible_cut(
+        let refused = mapper.drop_implausible(
             &mut sources,
-            &poses,
-            &heard,
-            &complete,
-            &said_cut,
+            &stops_with(&poses, &heard, &complete, &said_cut),
             &mut left,
         );
         (sources, refused, left)
@@ -477,13 +443,7 @@ fn stops_that_heard_nothing_at_all_speak_against_nothing() {
     let mut left = vec![Vec::new(); poses.len()];
     assert_eq!(
         mapper
-            .drop_implausible(
-                &mut sources,
-                &poses,
-                &heard,
-                &mapper.complete_by_length(&heard),
-                &mut left
-            )
+            .drop_implausible(&mut sources, &by_length(&mapper, &poses, &heard), &mut left)
             .len(),
         0
     );
@@ -504,13 +464,7 @@ fn a_much_nearer_source_masks_a_miss() {
     let mut left = vec![Vec::new(); poses.len()];
     assert_eq!(
         mapper
-            .drop_implausible(
-                &mut sources,
-                &poses,
-                &heard,
-                &mapper.complete_by_length(&heard),
-                &mut left
-            )
+            .drop_implausible(&mut sources, &by_length(&mapper, &poses, &heard), &mut left)
             .len(),
         0
     );
@@ -530,13 +484,7 @@ fn a_removed_ghost_masks_no_stop() {
     let mut left = vec![Vec::new(); poses.len()];
     assert_eq!(
         mapper
-            .drop_implausible(
-                &mut sources,
-                &poses,
-                &heard,
-                &mapper.complete_by_length(&heard),
-                &mut left
-            )
+            .drop_implausible(&mut sources, &by_length(&mapper, &poses, &heard), &mut left)
             .len(),
         2
     );
@@ -573,9 +521,7 @@ fn a_mirror_image_beyond_the_map_is_no_source() {
     assert_eq!(
         kept.drop_implausible(
             &mut sources.clone(),
-            &poses,
-            &heard,
-            &kept.complete_by_length(&heard),
+            &by_length(&kept, &poses, &heard),
             &mut left
         )
         .len(),
@@ -583,13 +529,7 @@ fn a_mirror_image_beyond_the_map_is_no_source() {
     );
     assert_eq!(
         mapper
-            .drop_implausible(
-                &mut sources,
-                &poses,
-                &heard,
-                &mapper.complete_by_length(&heard),
-                &mut left
-            )
+            .drop_implausible(&mut sources, &by_length(&mapper, &poses, &heard), &mut left)
             .len(),
         1
     );
@@ -628,7 +568,11 @@ fn a_source_heard_through_a_wall_is_its_image_in_the_wall() {
         let before = sources.len();
         let mut left = vec![Vec::new(); poses.len()];
         let complete = mapper.complete_by_length(&heard);
-        mapper.drop_implausible(&mut sources, &poses, &heard, &complete, &mut left);
+        mapper.drop_implausible(
+            &mut sources,
+            &stops_with(&poses, &heard, &complete, &vec![false; poses.len()]),
+            &mut left,
+        );
         assert!(!talker || sources.iter().any(|s| (s.x, s.y) == (4.0, 1.2)));
         sources.len() < before
     };
@@ -660,13 +604,7 @@ fn no_source_stands_where_the_robot_stood() {
     let mut left = vec![Vec::new(); poses.len()];
     assert_eq!(
         mapper
-            .drop_implausible(
-                &mut sources,
-                &poses,
-                &heard,
-                &mapper.complete_by_length(&heard),
-                &mut left
-            )
+            .drop_implausible(&mut sources, &by_length(&mapper, &poses, &heard), &mut left)
             .len(),
         1
     );
@@ -697,11 +635,10 @@ fn a_doa_that_two_sources_lie_on_is_evidence_for_both() {
     let mut complete = vec![true; poses.len()];
     complete[11] = false;
     let vote = |config: IasmConfig, heard: &[Vec<f64>], complete: &[bool]| {
+        let said_cut = vec![false; poses.len()];
         Mapper::new(&map, &config).unwrap().vote(
-            &poses,
+            &stops_with(&poses, heard, complete, &said_cut),
             &mut bearings.clone(),
-            heard,
-            complete,
             &[a],
             2,
         )

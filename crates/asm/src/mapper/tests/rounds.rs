@@ -246,10 +246,10 @@ fn a_round_finds_one_source_and_removes_the_doas_it_explains() {
     let truth = [[1.5, 1.5], [4.0, -1.2]];
     let (map, poses, doas) = scene(&truth, 12);
     let mapper = Mapper::new(&map, &IasmConfig::default()).unwrap();
-    let mut bearings = mapper.world_bearings(&poses, &doas).unwrap();
+    let stops = mapper.stops(&poses, &doas, None).unwrap();
+    let mut bearings = stops.pool();
     let mut rng = StdRng::seed_from_u64(SEED);
-    let heard = bearings.clone();
-    let Round::Found(s) = mapper.round(&poses, &mut bearings, &heard, 1, &mut rng) else {
+    let Round::Found(s) = mapper.round(&stops, &mut bearings, 1, &mut rng) else {
         panic!("seed {SEED}: the first round found nothing");
     };
     // One source, within a cloud's width of a true one, explaining one DoA per stop.

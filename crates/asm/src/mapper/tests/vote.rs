@@ -35,11 +35,17 @@ fn the_vote_finds_a_source_that_enough_stops_agree_on_and_nothing_else() {
     // (complete); and the same stops had they reported N DoAs each, cut at N (a table
     // of N columns).
     let heard = bearings.clone();
+    let no_cut = vec![false; poses.len()];
     let thresholded = vec![true; poses.len()];
     let full = vec![false; poses.len()];
     let before: usize = bearings.iter().map(Vec::len).sum();
     let s = mapper
-        .vote(&poses, &mut bearings, &heard, &full, &[], 1)
+        .vote(
+            &stops_with(&poses, &heard, &full, &no_cut),
+            &mut bearings,
+            &[],
+            1,
+        )
         .expect("A has 7 agreeing stops");
     assert!(
         (s.x - 1.5).abs() < 0.05 && (s.y - 1.5).abs() < 0.05,
@@ -53,7 +59,12 @@ fn the_vote_finds_a_source_that_enough_stops_agree_on_and_nothing_else() {
     let left = bearings.clone();
     assert!(
         mapper
-            .vote(&poses, &mut bearings, &heard, &full, &[], 2)
+            .vote(
+                &stops_with(&poses, &heard, &full, &no_cut),
+                &mut bearings,
+                &[],
+                2
+            )
             .is_none()
     );
     assert_eq!(bearings, left);
@@ -64,7 +75,12 @@ fn the_vote_finds_a_source_that_enough_stops_agree_on_and_nothing_else() {
     one[7] = true;
     assert!(
         mapper
-            .vote(&poses, &mut bearings, &heard, &one, &[], 2)
+            .vote(
+                &stops_with(&poses, &heard, &one, &no_cut),
+                &mut bearings,
+                &[],
+                2
+            )
             .is_none()
     );
     assert_eq!(bearings, left);
@@ -75,12 +91,22 @@ fn the_vote_finds_a_source_that_enough_stops_agree_on_and_nothing_else() {
     let mut two = one.clone();
     two[8] = true;
     let b = mapper
-        .vote(&poses, &mut bearings.clone(), &heard, &two, &[], 2)
+        .vote(
+            &stops_with(&poses, &heard, &two, &no_cut),
+            &mut bearings.clone(),
+            &[],
+            2,
+        )
         .expect("B has 2 thresholded and 2 cut agreeing stops");
     assert!(is_b(&b), "{b:?}");
     // But four thresholded stops agreeing on B are a source.
     let b = mapper
-        .vote(&poses, &mut bearings, &heard, &thresholded, &[], 2)
+        .vote(
+            &stops_with(&poses, &heard, &thresholded, &no_cut),
+            &mut bearings,
+            &[],
+            2,
+        )
         .expect("B has 4 agreeing thresholded stops");
     assert!(is_b(&b), "{b:?}");
     // With the second quorum off, B is not found.
@@ -94,14 +120,24 @@ fn the_vote_finds_a_source_that_enough_stops_agree_on_and_nothing_else() {
     .unwrap();
     assert!(
         strict
-            .vote(&poses, &mut left.clone(), &heard, &thresholded, &[], 2)
+            .vote(
+                &stops_with(&poses, &heard, &thresholded, &no_cut),
+                &mut left.clone(),
+                &[],
+                2
+            )
             .is_none()
     );
     // The paper profile does not vote.
     let paper = Mapper::new(&map, &IasmConfig::profile(Profile::Paper)).unwrap();
     assert!(
         paper
-            .vote(&poses, &mut left.clone(), &heard, &thresholded, &[], 2)
+            .vote(
+                &stops_with(&poses, &heard, &thresholded, &no_cut),
+                &mut left.clone(),
+                &[],
+                2
+            )
             .is_none()
     );
 }
@@ -134,8 +170,14 @@ fn the_vote_takes_where_rays_meet_over_where_most_rays_pass_near() {
         .collect();
     let full = vec![false; poses.len()];
     let heard = bearings.clone();
+    let no_cut = vec![false; poses.len()];
     let s = mapper
-        .vote(&poses, &mut bearings, &heard, &full, &[], 1)
+        .vote(
+            &stops_with(&poses, &heard, &full, &no_cut),
+            &mut bearings,
+            &[],
+            1,
+        )
         .expect("A has 5 agreeing stops");
     assert!(
         (s.x - a[0]).abs() < 0.02 && (s.y - a[1]).abs() < 0.02,
