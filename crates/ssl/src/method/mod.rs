@@ -86,10 +86,12 @@ pub(crate) fn estimator(
                 c,
                 bins.clone(),
                 frame_len,
-                config.music_sources,
-                config.num_peaks,
-                config.music_freq_smoothing,
-                normalise,
+                music::Subspace {
+                    sources: config.music_sources,
+                    max_sources: config.num_peaks,
+                    smoothing: config.music_freq_smoothing,
+                    normalise,
+                },
             )
             .coarse_search(grid, config.music_coarse),
         )

@@ -209,9 +209,20 @@ pub(crate) struct SubspaceScratch {
     part_count: usize,
 }
 
+/// MUSIC's own settings: the signal subspace's dimension (`sources`; `None`: estimated
+/// per group of bins, at most `max_sources`), the bins each side of a group's centre whose
+/// covariances are pooled (`smoothing`), and whether each group's pseudo-spectrum is
+/// normalised to a peak of one (NormMUSIC).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Subspace {
+    pub sources: Option<usize>,
+    pub max_sources: usize,
+    pub smoothing: usize,
+    pub normalise: bool,
+}
+
 impl Music {
     /// Plans the estimator. `bins` are the band's bins of a `frame_len`-point FFT at `fs`.
-    #[allow(clippy::too_many_arguments)]
     pub(crate) fn new(
         array: &MicArray,
         grid: &DirectionGrid,
@@ -219,11 +230,14 @@ impl Music {
         c: f64,
         bins: Range<usize>,
         frame_len: usize,
-        sources: Option<usize>,
-        max_sources: usize,
-        smoothing: usize,
-        normalise: bool,
+        subspace: Subspace,
     ) -> Self {
+        let Subspace {
+            sources,
+            max_sources,
+            smoothing,
+            normalise,
+        } = subspace;
         let estimate = sources.is_none();
         let sources = sources.unwrap_or(max_sources);
         let mics = array.len();

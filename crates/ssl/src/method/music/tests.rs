@@ -12,7 +12,17 @@ fn plan(
     frame_len: usize,
     sources: Option<usize>,
 ) -> Music {
-    Music::new(array, grid, fs, c, bins, frame_len, sources, 4, 2, true)
+    Music::new(array, grid, fs, c, bins, frame_len, subspace(sources))
+}
+
+/// NormMUSIC's subspace of `sources` (`None`: estimated, at most 4), groups of 5 bins.
+fn subspace(sources: Option<usize>) -> Subspace {
+    Subspace {
+        sources,
+        max_sources: 4,
+        smoothing: 2,
+        normalise: true,
+    }
 }
 
 /// Uniform numbers in `[-0.5, 0.5)` from a linear congruential generator (24-bit
@@ -425,23 +435,9 @@ fn the_subspace_is_capped_below_the_number_of_microphones() {
         343.0,
         7..256,
         512,
-        Some(9),
-        4,
-        2,
-        true,
+        subspace(Some(9)),
     );
     assert_eq!(m.sources(), Some(3));
-    let m = Music::new(
-        &array,
-        &grid,
-        16_000.0,
-        343.0,
-        7..256,
-        512,
-        None,
-        4,
-        2,
-        true,
-    );
+    let m = Music::new(&array, &grid, 16_000.0, 343.0, 7..256, 512, subspace(None));
     assert_eq!(m.sources(), None);
 }
