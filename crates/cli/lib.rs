@@ -1,7 +1,8 @@
 //! The `iasm` application: the pipeline that joins the libraries, and the commands behind
 //! the binary, callable from tests.
 //!
-//! The library modules, which the commands use and never the other way round:
+//! The library modules a researcher calls from Rust, which the commands use and never the
+//! other way round:
 //!
 //! - [`pipeline`]: the one place where recordings become DoAs and DoAs become a map
 //!   ([`pipeline::Survey`], [`pipeline::Simulated`], [`pipeline::evaluate`]).
@@ -13,16 +14,15 @@
 //! - [`rules`]: which SSL rule left each missed near source out, and let each false DoA in.
 //! - [`explain`]: which DoAs each source of a map explains, which none does, and where a
 //!   missed true source's DoAs went.
-//! - [`compare`]: every SSL method side by side on one data set, DoAs to maps.
-//! - [`figure`]: every figure (the map picture, the comparison's plots), PNG or SVG.
-//! - [`online`]: mapping while the robot records (a session, a folder follower).
-//! - [`robot_noise`]: the recording of the robot alone that the SSL subtracts, and a note
-//!   when the DoAs show the robot's own noise.
-//! - [`output`]: files and folders written whole (temporary name, then rename).
-//! - [`args`]: the command line, and its conversion into settings and inputs.
+//! - [`live`]: the live mapper behind `iasm ros2`, a robot's messages in, a map out.
 //!
-//! The commands ([`cmd`]): `ssl`, `map`, `eval`, `compare`, `simulate`, `regress`, `demo`, one module
-//! each; none imports another.
+//! Inside, for the commands only: `compare` (every SSL method side by side), `figure`
+//! (PNG and SVG), `online` (mapping while the robot records: a session, a folder
+//! follower), `robot_noise` (the recording of the robot alone), `rosmap` (a map as ROS 2
+//! messages), `bagset` (a bag as a data set), `output` (files written whole: a temporary
+//! name, then a rename), `args` (the command line), and `cmd`, the commands, one module
+//! each (`ssl`, `map`, `eval`, `compare`, `simulate`, `regress`, `demo`, `watch`, `bag`,
+//! `ros2`); none imports another. [`main`] runs the command line.
 //!
 //! The pipeline from Rust, end to end: a scene rendered by the image-source method (one
 //! talker at (3.5, 3.2) m, a robot passing it), every stop localised with MVDR and the stops
@@ -45,19 +45,19 @@
 //! # }
 //! ```
 
-pub mod args;
-pub mod bagset;
-pub mod cmd;
-pub mod compare;
+pub(crate) mod args;
+pub(crate) mod bagset;
+pub(crate) mod cmd;
+pub(crate) mod compare;
 pub mod dataset;
 pub mod explain;
-pub mod figure;
+pub(crate) mod figure;
 pub mod live;
-pub mod online;
-pub mod output;
+pub(crate) mod online;
+pub(crate) mod output;
 pub mod pipeline;
-pub mod robot_noise;
-pub mod rosmap;
+pub(crate) mod robot_noise;
+pub(crate) mod rosmap;
 pub mod rules;
 pub mod scenes;
 pub mod score;
@@ -66,18 +66,34 @@ pub mod suite;
 
 /// How a command ended when it did not fail outright.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Outcome {
+pub(crate) enum Outcome {
     /// Everything ran and every threshold held: exit 0.
     Success,
     /// Everything ran but a threshold was not met: exit 1.
     ThresholdFailed,
 }
 
+/// The `iasm` command line: parses the process's arguments, runs the command and reports
+/// the outcome as an exit status (0 success, 1 a threshold failed, 2 an error, its file
+/// and problem on stderr).
+pub fn main() -> std::process::ExitCode {
+    use clap::Parser;
+    let cli = args::Cli::parse();
+    match run(&cli) {
+        Ok(Outcome::Success) => std::process::ExitCode::SUCCESS,
+        Ok(Outcome::ThresholdFailed) => std::process::ExitCode::from(1),
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            std::process::ExitCode::from(2)
+        }
+    }
+}
+
 /// Runs a parsed command line.
 ///
 /// # Errors
 /// Any failure, with the file and the problem in its context chain (exit 2).
-pub fn run(cli: &args::Cli) -> anyhow::Result<Outcome> {
+fn run(cli: &args::Cli) -> anyhow::Result<Outcome> {
     match &cli.command {
         args::Command::Ssl(a) => {
             set_threads(a.threads);
@@ -140,7 +156,7 @@ fn set_threads(threads: Option<usize>) {
 }
 
 /// A progress bar on stderr, drawn only when stderr is a terminal.
-pub fn progress(len: u64, what: &str) -> indicatif::ProgressBar {
+pub(crate) fn progress(len: u64, what: &str) -> indicatif::ProgressBar {
     use std::io::IsTerminal;
     if !std::io::stderr().is_terminal() {
         return indicatif::ProgressBar::hidden();

@@ -5,7 +5,7 @@
 //! bytes. Messages are kept as a bag reader keeps them ([`bag::live::Recorder`]), so the
 //! topics, the stops and their audio are found by every rule `iasm bag` finds them by; each
 //! stop is localised as soon as the robot leaves it and added to the stop-by-stop mapper
-//! ([`crate::online::Session`], as `iasm watch` does); [`LiveMapper::finish`] ends with the
+//! (the session `iasm watch` maps with); [`LiveMapper::finish`] ends with the
 //! full map over every stop, which is the map `iasm bag --out D` then `iasm map --dataset
 //! D` makes of the same run with the same seed.
 //!

@@ -110,18 +110,11 @@ impl Session {
         self
     }
 
-    /// The DoAs of one recording (azimuths in degrees, strongest first).
+    /// The DoAs of one recording (azimuths in degrees, strongest first), and whether N cut
+    /// the row ([`ssl::Located::cut`]).
     ///
     /// # Errors
     /// A recording the array or the SSL settings cannot take.
-    pub fn localise(&mut self, audio: &Audio) -> Result<Vec<f64>> {
-        Ok(self.localise_row(audio)?.0)
-    }
-
-    /// [`Session::localise`], and whether N cut the row ([`ssl::Located::cut`]).
-    ///
-    /// # Errors
-    /// As [`Session::localise`].
     pub fn localise_row(&mut self, audio: &Audio) -> Result<(Vec<f64>, bool)> {
         let row = self.locate(audio)?;
         Ok((row.all().map(|d| d.azimuth_deg).collect(), row.cut))
@@ -160,7 +153,7 @@ impl Session {
     /// stop.
     ///
     /// # Errors
-    /// As [`Session::localise`], or a pose the mapper refuses; named.
+    /// As [`Session::localise_row`], or a pose the mapper refuses; named.
     pub fn add_recording(&mut self, name: &str, pose: Pose, audio: &Audio) -> Result<StopRecord> {
         let t0 = Instant::now();
         let row = self
@@ -174,19 +167,12 @@ impl Session {
         Ok(r)
     }
 
-    /// Adds a stop whose DoAs (degrees, array frame) are already known.
+    /// Adds a stop whose DoAs (degrees, array frame) are already known, told whether the
+    /// SSL cut the row at N (`None`: not known, as for a table; see
+    /// [`asm::Mapper::run_rows`]).
     ///
     /// # Errors
     /// A non-finite pose or more DoAs than N, naming the stop.
-    pub fn add_doas(&mut self, name: &str, pose: Pose, doas_deg: &[f64]) -> Result<StopRecord> {
-        self.add_row(name, pose, doas_deg, None)
-    }
-
-    /// [`Session::add_doas`], told whether the SSL cut the row at N (`None`: not known;
-    /// see [`asm::Mapper::run_rows`]).
-    ///
-    /// # Errors
-    /// As [`Session::add_doas`].
     pub fn add_row(
         &mut self,
         name: &str,

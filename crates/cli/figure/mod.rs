@@ -25,7 +25,7 @@ use anyhow::{Context, Result, bail};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-pub use comparison::{comparison, error_by_distance, maps, ospa_boxes};
+pub use comparison::comparison;
 pub use curve::{Curve, curve};
 pub use map::{MapFigure, map};
 
