@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail, ensure};
 use asm::Pose;
 use asm::map::OccupancyMap;
+use ssl::Audio;
 
 /// Compares file names the way a person counts: `sub2` before `sub10`.
 pub fn natural_cmp(a: &str, b: &str) -> Ordering {
@@ -741,6 +742,31 @@ pub fn array_file_toml(name: &str, positions: &[[f64; 3]]) -> Result<String> {
         "# The microphones that recorded audio/ (m, array frame: x the robot's heading, z up),\n# channel order. iasm reads this file when no --array or settings file names an array.\n{}",
         toml::to_string(&ArrayFile { name, positions }).context("writing array.toml")?
     ))
+}
+
+/// Reads the WAV at `path`, keeping its channels `channels` (counted from 1, in that
+/// order: [`Settings::channels`](crate::settings::Settings::channels)) when given.
+///
+/// # Errors
+/// An unreadable file, or a channel it does not have; named.
+pub fn read_recording(path: &Path, channels: Option<&[usize]>) -> Result<Audio> {
+    let audio = ssl::read_wav(path)?;
+    match channels {
+        None => Ok(audio),
+        Some(c) => pick_channels(&audio, c).with_context(|| path.display().to_string()),
+    }
+}
+
+/// The channels `channels` of `audio` (counted from 1, in that order:
+/// [`Settings::channels`](crate::settings::Settings::channels)).
+///
+/// # Errors
+/// A channel `audio` does not have.
+pub fn pick_channels(audio: &Audio, channels: &[usize]) -> Result<Audio> {
+    let from0: Vec<usize> = channels.iter().map(|&c| c.saturating_sub(1)).collect();
+    audio
+        .select(&from0)
+        .with_context(|| format!("the channels {channels:?}"))
 }
 
 #[cfg(test)]

@@ -127,7 +127,7 @@ impl Session {
         let audio = match &self.channels {
             None => audio,
             Some(c) => {
-                picked = crate::pipeline::pick_channels(audio, c)?;
+                picked = crate::dataset::pick_channels(audio, c)?;
                 &picked
             }
         };

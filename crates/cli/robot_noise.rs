@@ -17,7 +17,7 @@ use asm::Pose;
 use ssl::{Audio, wrap_deg};
 
 use crate::dataset::Table;
-use crate::pipeline::read_recording;
+use crate::dataset::read_recording;
 use crate::settings::Settings;
 
 /// A recording of the robot alone ([`Settings::noise`]), its channels picked as the
@@ -183,11 +183,12 @@ pub fn note(poses: &[Pose], doas: &Table) -> Option<String> {
 }
 
 /// Says on stderr which recording of the robot alone the SSL subtracted, or, with none,
-/// what [`note`] says of the survey's DoAs.
-pub fn tell(settings: &Settings, survey: &crate::pipeline::Survey) {
-    if !survey.doa_source.starts_with("ssl:") {
+/// what [`note`] says of a survey's DoAs (`doas_deg` at `poses`, from `doa_source`: `ssl:`
+/// and the method, or a table).
+pub fn tell(settings: &Settings, doa_source: &str, poses: &[Pose], doas_deg: &Table) {
+    if !doa_source.starts_with("ssl:") {
         // A DoA table: the SSL did not run here.
-        if let Some(n) = note(&survey.poses, &survey.doas_deg) {
+        if let Some(n) = note(poses, doas_deg) {
             eprintln!("{n}");
         }
         return;
@@ -198,7 +199,7 @@ pub fn tell(settings: &Settings, survey: &crate::pipeline::Survey) {
             p.display()
         ),
         None => {
-            if let Some(n) = note(&survey.poses, &survey.doas_deg) {
+            if let Some(n) = note(poses, doas_deg) {
                 eprintln!("{n}");
             }
         }

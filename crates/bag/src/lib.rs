@@ -27,6 +27,7 @@ pub mod ros2;
 pub mod run;
 pub mod stops;
 pub mod tf;
+pub mod track;
 
 pub use error::{Error, Result};
 pub use run::{

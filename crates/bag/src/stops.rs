@@ -23,7 +23,8 @@
 use geom::{Pose, wrap_rad};
 
 use crate::error::{Error, Result};
-use crate::run::{AudioSegment, Run, TimedPose};
+use crate::run::{AudioSegment, Run};
+use crate::track::{TimedPose, compose, pose_at};
 
 /// How stops are found (module docs).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -132,39 +133,6 @@ fn mean_pose(poses: &[TimedPose]) -> Pose {
         )
     });
     Pose::new(x / n, y / n, s.atan2(c))
-}
-
-/// `track`'s pose at `t`, linear between its poses (the heading along the shorter arc),
-/// held beyond its ends.
-pub(crate) fn pose_at(track: &[TimedPose], t: f64) -> Pose {
-    let k = track.partition_point(|p| p.t <= t);
-    if k == 0 {
-        return track[0].pose;
-    }
-    if k == track.len() {
-        return track[k - 1].pose;
-    }
-    let (a, b) = (track[k - 1], track[k]);
-    let u = if b.t > a.t {
-        (t - a.t) / (b.t - a.t)
-    } else {
-        0.0
-    };
-    Pose::new(
-        a.pose.x + u * (b.pose.x - a.pose.x),
-        a.pose.y + u * (b.pose.y - a.pose.y),
-        wrap_rad(a.pose.theta + u * wrap_rad(b.pose.theta - a.pose.theta)),
-    )
-}
-
-/// `a ⊕ b`: `b`, given in `a`'s frame, in the frame `a` is given in.
-pub(crate) fn compose(a: Pose, b: Pose) -> Pose {
-    let (s, c) = a.theta.sin_cos();
-    Pose::new(
-        a.x + c * b.x - s * b.y,
-        a.y + s * b.x + c * b.y,
-        wrap_rad(a.theta + b.theta),
-    )
 }
 
 /// `a⁻¹ ⊕ b`: `b` in `a`'s frame.

@@ -16,8 +16,7 @@ use std::collections::HashMap;
 use geom::Pose;
 
 use crate::msg::Transform;
-use crate::run::TimedPose;
-use crate::stops::{compose, pose_at};
+use crate::track::{TimedPose, compose, pose_at};
 
 /// The base frames tried, in order, when none is named.
 pub const BASE_FRAMES: [&str; 2] = ["base_footprint", "base_link"];

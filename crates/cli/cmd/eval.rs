@@ -36,7 +36,12 @@ pub fn run(a: &EvalArgs) -> Result<Outcome> {
     if let Some(note) = survey.map_note() {
         eprintln!("{note}");
     }
-    crate::robot_noise::tell(&settings, &survey);
+    crate::robot_noise::tell(
+        &settings,
+        &survey.doa_source,
+        &survey.poses,
+        &survey.doas_deg,
+    );
     let base = settings.iasm;
     let t0 = std::time::Instant::now();
     let stats = evaluate(

@@ -101,7 +101,12 @@ fn gather(a: &MapArgs) -> Result<(crate::settings::Settings, Survey)> {
     if let Some(note) = survey.map_note() {
         eprintln!("{note}");
     }
-    crate::robot_noise::tell(&settings, &survey);
+    crate::robot_noise::tell(
+        &settings,
+        &survey.doa_source,
+        &survey.poses,
+        &survey.doas_deg,
+    );
     if a.input.doas.is_none()
         && let Some(note) = crate::pipeline::linear_array_note(&settings.mic_array()?)
     {

@@ -206,31 +206,6 @@ pub fn warn_recordings(rows: &[FileDoas]) {
     }
 }
 
-/// Reads the WAV at `path`, keeping its channels `channels` (counted from 1, in that
-/// order: [`Settings::channels`]) when given.
-///
-/// # Errors
-/// An unreadable file, or a channel it does not have; named.
-pub fn read_recording(path: &Path, channels: Option<&[usize]>) -> Result<Audio> {
-    let audio = ssl::read_wav(path)?;
-    match channels {
-        None => Ok(audio),
-        Some(c) => pick_channels(&audio, c).with_context(|| path.display().to_string()),
-    }
-}
-
-/// The channels `channels` of `audio` (counted from 1, in that order:
-/// [`Settings::channels`]).
-///
-/// # Errors
-/// A channel `audio` does not have.
-pub fn pick_channels(audio: &Audio, channels: &[usize]) -> Result<Audio> {
-    let from0: Vec<usize> = channels.iter().map(|&c| c.saturating_sub(1)).collect();
-    audio
-        .select(&from0)
-        .with_context(|| format!("the channels {channels:?}"))
-}
-
 /// `e`, with a hint when the file holds more channels than the array has microphones and
 /// no channels were picked (`--channels`).
 pub(crate) fn with_channel_hint(e: ssl::Error, channels: Option<&[usize]>) -> anyhow::Error {

@@ -17,7 +17,7 @@
 
 use crate::dataset::read_timed_poses;
 use crate::dataset::{Dataset, Table, first_with_ext, list_files, load_map, read_poses};
-use crate::dataset::{read_sources, read_table};
+use crate::dataset::{read_recording, read_sources, read_table};
 use crate::explain::MissedTally;
 use crate::score::{DoaScore, score_doas};
 use crate::settings::Settings;
@@ -31,7 +31,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 use sim::scene::PreparedScene;
 use ssl::{Audio, Doa, Localizer, Located, MicArray, Scratch, SslConfig};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
 mod evaluate;

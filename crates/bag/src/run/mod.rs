@@ -37,6 +37,7 @@ use geom::Pose;
 use crate::error::{Error, Result};
 use crate::format::{self, Summary};
 use crate::msg::{self, AudioInfo, Encoding, Grid, Kind};
+pub use crate::track::TimedPose;
 
 mod time;
 mod topics;
@@ -158,15 +159,6 @@ pub struct TopicInfo {
     pub messages: usize,
     /// Its first and last receipt time (s from the run's start).
     pub span_s: (f64, f64),
-}
-
-/// A pose at a time (s from the run's start).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct TimedPose {
-    /// Time (s).
-    pub t: f64,
-    /// Pose.
-    pub pose: Pose,
 }
 
 /// Continuous audio from one time on: a stretch of [`Run`]'s audio bytes.
