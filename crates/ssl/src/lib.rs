@@ -44,6 +44,11 @@
 //! - Audio is channel-major (`channels[mic][sample]`), channel `i` is microphone `i`.
 //! - The forward FFT is unnormalised; every statistic is normalised per bin, so the
 //!   scale of the audio does not matter.
+//!
+//! Where these docs say why a default is what it is, "the journal, session N" names the
+//! section of the development journal that measured it; git keeps the journal
+//! (`git show 7ee1616:BENCHMARKS.md`), `BENCHMARKS.md` today's figures and
+//! `docs/decisions/` the decisions.
 
 pub mod array;
 pub mod audio;

@@ -20,7 +20,7 @@
 //! wholly beyond it is passed over, and only the rest is searched point by point. The
 //! boxes of a settled cloud's cells are much smaller than the cells, so most are settled
 //! whole (a whole map of arrangement II: 19-20 s -> 18 s for 150 maps, the same maps;
-//! `BENCHMARKS.md`, session 35).
+//! the journal, session 35).
 //!
 //! A particle cloud that has converged is the worst case of plain DBSCAN (every point
 //! neighbours every other: quadratic); here it is the best case, a few dense cells.

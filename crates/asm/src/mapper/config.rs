@@ -115,7 +115,7 @@ pub struct IasmConfig {
     /// and least squares lets that one ray pull the source by 5-10 cm:
     /// `speech_two_rt08`'s far talker (MVDR) took a DoA 8 degrees off its bearing from
     /// 4.1 m, beside eight rays within 2 degrees, and moved 6 cm away from the truth.
-    /// Measured (`BENCHMARKS.md`, session 20; the suite and `fixtures/heldout`, 3
+    /// Measured (the journal, session 20; the suite and `fixtures/heldout`, 3
     /// renderings x 3 maps, both methods): summed mean OSPA 2.046 -> 2.004 m (suite; 5
     /// rows better by more than 2 mm, 1 worse) and 2.535 -> 2.467 m (held-out; 10 better,
     /// 4 worse), no source count changed; `speech_one_rt08` 0.034 / 0.024 -> 0.015 /
@@ -219,7 +219,7 @@ pub struct IasmConfig {
     /// scenes' rows (see [`IasmConfig::rank_gain`]). Why: with three stops one cut row
     /// made any source thinly heard (2.6 stops' worth): `speech_one_rt08` rendered with
     /// its stops 1.6 m apart lost its talker, heard by all three within 4 degrees, in
-    /// every seed. Measured (`BENCHMARKS.md`, session 34; CA, N = 3 or 4): the
+    /// every seed. Measured (the journal, session 34; CA, N = 3 or 4): the
     /// sparse-stop set 0.353 -> 0.338 m (5 rows better, none worse; that talker found in
     /// every seed, 1.000 -> 0.115 m); the pyroomacoustics surveys 0.339 -> 0.328 (RT60
     /// 0.8 s and SNR 10 dB, N = 4, GCC-PHAT: 0.47 / 0.48 -> 0.29 / 0.30 m, five sources in
@@ -337,7 +337,7 @@ pub struct IasmConfig {
     /// already has an explanation, so a second one must fit it more closely than an
     /// unexplained DoA must; at 0.75 and 1 sigma, `reverberant_low_snr` gains a ghost
     /// (GCC-PHAT 0.312 -> 0.352 m, MVDR 0.193 -> 0.241) next to its louder talker, made of
-    /// that talker's own DoAs. Measured at 0.5 (`BENCHMARKS.md`, session 18; the suite and
+    /// that talker's own DoAs. Measured at 0.5 (the journal, session 18; the suite and
     /// `fixtures/heldout`, 3 renderings x 3 maps): `sparse_ten` GCC-PHAT 0.200 -> 0.139 m
     /// (8-9 -> 9-10 of 10 found), `rows_ten_respeaker4` MVDR 0.160 -> 0.151 (worst 0.312 ->
     /// 0.231), `sparse_eight_speech` GCC-PHAT 0.282 -> 0.266 (worst 0.443 -> 0.305); every
@@ -372,7 +372,7 @@ pub struct IasmConfig {
     /// removals: a ghost about to be
     /// removed would take a talker's stray DoA first and move the talker's fit
     /// (`speech_two_snr15`, GCC-PHAT, first rendering: 0.059 -> 0.103 m when it ran
-    /// before them). Measured (`BENCHMARKS.md`, session 23; the suite and
+    /// before them). Measured (the journal, session 23; the suite and
     /// `fixtures/heldout`, 3 renderings x 3 maps, N as a user sets it):
     /// `three_talkers_rt06` MVDR 0.145 -> 0.079 m (worst 0.375 -> 0.080; 3 sources in
     /// every map), `reverberant_low_snr` GCC-PHAT 0.304 -> 0.294 (worst 0.705 -> 0.677),
@@ -417,7 +417,7 @@ pub struct IasmConfig {
     /// misses are near sources' bias). As a mixture with the floor, a DoA of any rank
     /// still lifts the particles on it, which a multiplied gain did not (0.5 put the
     /// third DoA at 2.5 m under the floor and lost sources of ten-source scenes).
-    /// Measured (`BENCHMARKS.md`, session 34; CA, N = 3 or 4): the sparse-stop set (108
+    /// Measured (the journal, session 34; CA, N = 3 or 4): the sparse-stop set (108
     /// rows, 10 seeds) 0.366 -> 0.353 m (10 rows better, 4 worse; `one_source` with 3
     /// stops, GCC-PHAT, 0.747 -> 0.131, two talkers in a fan with 3 stops 0.359 ->
     /// 0.122, three talkers at RT60 0.6 s with 6 stops 0.20 -> 0.12 and the right count

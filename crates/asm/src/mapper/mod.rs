@@ -80,7 +80,7 @@
 //!   its bearing, and a source left with fewer than three stops was made of others' DoAs.
 //!
 //! What each of these changed, measured, is in `docs/decisions/0007-robust-mapper-profile.md`
-//! and in `BENCHMARKS.md`.
+//! and in the journal.
 
 use rand::Rng;
 use serde::{Deserialize, Serialize};
