@@ -699,6 +699,25 @@ struct Listener {
 }
 
 impl Listener {
+    /// A listener to the node's sources ([`rosmap::SOURCE_POSES_TOPIC`]) when `listen`,
+    /// else one that hears nothing.
+    fn new(dp: &DomainParticipant, listen: bool) -> Result<Self> {
+        let reader = if listen {
+            let sub = dp
+                .create_subscriber(&qos(true, false, 10))
+                .map_err(|e| anyhow!("a DDS subscriber: {e}"))?;
+            let names = dds_names(rosmap::SOURCE_POSES_TOPIC, "geometry_msgs/msg/PoseArray");
+            Some(reader(dp, &sub, names, qos(true, false, 10))?)
+        } else {
+            None
+        };
+        Ok(Self {
+            reader,
+            heard: Vec::new(),
+            updates: 0,
+        })
+    }
+
     /// Takes what has come.
     fn take(&mut self) {
         use iasm_ros::msg::Message;
@@ -715,6 +734,59 @@ impl Listener {
             }
         }
     }
+
+    /// Listens for `linger_s` or until Ctrl-C (say, once the node has ended), then half a
+    /// second more: what the node sent last (its final map, just before it ended) may
+    /// still be on its way from the reader's DDS thread. Writes the last sources heard to
+    /// `path` as JSON.
+    fn linger_and_write(mut self, linger_s: f64, path: &std::path::Path) -> Result<()> {
+        let stop = Arc::new(AtomicBool::new(false));
+        {
+            let stop = Arc::clone(&stop);
+            let _ = ctrlc::set_handler(move || stop.store(true, Ordering::SeqCst));
+        }
+        let until = Instant::now() + Duration::from_secs_f64(linger_s);
+        while Instant::now() < until && !stop.load(Ordering::SeqCst) {
+            self.take();
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        let drain = Instant::now() + Duration::from_millis(500);
+        while Instant::now() < drain {
+            self.take();
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        let sources: Vec<serde_json::Value> = self
+            .heard
+            .iter()
+            .map(|p| serde_json::json!({"x": p[0], "y": p[1]}))
+            .collect();
+        let json = serde_json::json!({ "frame_id": rosmap::FRAME, "sources": sources });
+        crate::output::write_atomic(path, serde_json::to_string_pretty(&json)?.as_bytes())?;
+        println!(
+            "heard {} sources on {} (the last of {} updates)",
+            self.heard.len(),
+            rosmap::SOURCE_POSES_TOPIC,
+            self.updates
+        );
+        Ok(())
+    }
+}
+
+/// One writer per topic of `msgs`, latched (transient local) for a map and `/tf_static`.
+fn play_writers(
+    dp: &DomainParticipant,
+    publisher: &rustdds::Publisher,
+    msgs: &[Recorded],
+) -> Result<BTreeMap<String, Writer>> {
+    let mut writers: BTreeMap<String, Writer> = BTreeMap::new();
+    for (topic, ty, _, _) in msgs {
+        if !writers.contains_key(topic) {
+            let kind = Kind::of(ty).expect("kept above");
+            let latched = kind == Kind::OccupancyGrid || topic.ends_with("_static");
+            writers.insert(topic.clone(), writer(dp, publisher, topic, ty, latched)?);
+        }
+    }
+    Ok(writers)
 }
 
 /// Runs `iasm ros2-play`: the bag's messages published on their topics at their pace, stamps
@@ -731,29 +803,9 @@ pub fn play(a: &Ros2PlayArgs) -> Result<Outcome> {
     let publisher = dp
         .create_publisher(&qos(true, false, 100))
         .map_err(|e| anyhow!("a DDS publisher: {e}"))?;
-    let mut writers: BTreeMap<String, Writer> = BTreeMap::new();
-    for (topic, ty, _, _) in &msgs {
-        if !writers.contains_key(topic) {
-            let kind = Kind::of(ty).expect("kept above");
-            let latched = kind == Kind::OccupancyGrid || topic.ends_with("_static");
-            writers.insert(topic.clone(), writer(&dp, &publisher, topic, ty, latched)?);
-        }
-    }
+    let writers = play_writers(&dp, &publisher, &msgs)?;
     // The node's sources, when asked.
-    let mut listener = Listener {
-        reader: match &a.listen {
-            Some(_) => {
-                let sub = dp
-                    .create_subscriber(&qos(true, false, 10))
-                    .map_err(|e| anyhow!("a DDS subscriber: {e}"))?;
-                let names = dds_names(rosmap::SOURCE_POSES_TOPIC, "geometry_msgs/msg/PoseArray");
-                Some(reader(&dp, &sub, names, qos(true, false, 10))?)
-            }
-            None => None,
-        },
-        heard: Vec::new(),
-        updates: 0,
-    };
+    let mut listener = Listener::new(&dp, a.listen.is_some())?;
     wait_for_subscribers(&dp, &writers, a.wait_s);
     let start = Instant::now();
     let shift = now_ns() - first;
@@ -778,37 +830,7 @@ pub fn play(a: &Ros2PlayArgs) -> Result<Outcome> {
         start.elapsed().as_secs_f64()
     );
     if let Some(path) = &a.listen {
-        // Listen until the linger is over or Ctrl-C (say, once the node has ended).
-        let stop = Arc::new(AtomicBool::new(false));
-        {
-            let stop = Arc::clone(&stop);
-            let _ = ctrlc::set_handler(move || stop.store(true, Ordering::SeqCst));
-        }
-        let until = Instant::now() + Duration::from_secs_f64(a.linger_s);
-        while Instant::now() < until && !stop.load(Ordering::SeqCst) {
-            listener.take();
-            std::thread::sleep(Duration::from_millis(10));
-        }
-        // After Ctrl-C, half a second more: what the node sent last (its final map, just
-        // before it ended) may still be on its way from the reader's DDS thread.
-        let drain = Instant::now() + Duration::from_millis(500);
-        while Instant::now() < drain {
-            listener.take();
-            std::thread::sleep(Duration::from_millis(10));
-        }
-        let sources: Vec<serde_json::Value> = listener
-            .heard
-            .iter()
-            .map(|p| serde_json::json!({"x": p[0], "y": p[1]}))
-            .collect();
-        let json = serde_json::json!({ "frame_id": rosmap::FRAME, "sources": sources });
-        crate::output::write_atomic(path, serde_json::to_string_pretty(&json)?.as_bytes())?;
-        println!(
-            "heard {} sources on {} (the last of {} updates)",
-            listener.heard.len(),
-            rosmap::SOURCE_POSES_TOPIC,
-            listener.updates
-        );
+        listener.linger_and_write(a.linger_s, path)?;
     }
     Ok(Outcome::Success)
 }
