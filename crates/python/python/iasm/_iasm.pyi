@@ -1,0 +1,81 @@
+"""Type stubs of the extension module `iasm._iasm` (the Rust crate `iasm-python`).
+
+Use the package's own functions (`iasm.locate`, `iasm.map_sources`, ...): they check their
+arguments and return Python objects; these take what they have checked."""
+
+from os import PathLike
+from typing import List, Optional, Sequence, Tuple, Union
+
+import numpy as np
+import numpy.typing as npt
+
+ARRAY_PRESETS: List[str]
+
+def locate(
+    signals: npt.NDArray[np.float32],
+    fs: int,
+    array: str,
+    positions: Optional[npt.NDArray[np.float64]],
+    settings_json: str,
+    spectrum: bool,
+) -> Tuple[
+    str,
+    Optional[Tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.float32]]],
+]: ...
+def map_sources(
+    poses_xyt: npt.NDArray[np.float64],
+    doas_deg: Sequence[Sequence[float]],
+    cut: Optional[Sequence[bool]],
+    map_yaml: Optional[Union[str, PathLike[str]]],
+    grid: Optional[npt.NDArray[np.int8]],
+    resolution: float,
+    origin: Sequence[float],
+    settings_json: str,
+    seed: int,
+) -> str: ...
+
+class OnlineMapper:
+    def __init__(
+        self,
+        map_yaml: Optional[Union[str, PathLike[str]]],
+        grid: Optional[npt.NDArray[np.int8]],
+        resolution: float,
+        origin: Sequence[float],
+        settings_json: str,
+        seed: int,
+    ) -> None: ...
+    def add_stop(
+        self, x: float, y: float, theta: float, doas_deg: Sequence[float], cut: Optional[bool] = None
+    ) -> str: ...
+    def map(self) -> str: ...
+    def consolidate(self) -> int: ...
+    def stops(self) -> int: ...
+
+def ospa(
+    estimate: npt.NDArray[np.float64], truth: npt.NDArray[np.float64], c: float, p: float
+) -> Tuple[float, float, float]: ...
+def simulate(
+    path: Optional[Union[str, PathLike[str]]],
+    text: Optional[str],
+    base: Union[str, PathLike[str]],
+    out: Optional[Union[str, PathLike[str]]],
+) -> Tuple[
+    int,
+    List[npt.NDArray[np.float32]],
+    npt.NDArray[np.float64],
+    npt.NDArray[np.float64],
+    npt.NDArray[np.float64],
+    Tuple[npt.NDArray[np.int8], float, Tuple[float, float]],
+    str,
+]: ...
+def read_wav(path: Union[str, PathLike[str]]) -> Tuple[npt.NDArray[np.float32], int]: ...
+def read_dataset(
+    root: Union[str, PathLike[str]], theta_degrees: bool
+) -> Tuple[
+    List[str],
+    Optional[npt.NDArray[np.float64]],
+    Optional[npt.NDArray[np.float64]],
+    Optional[str],
+    List[str],
+]: ...
+def wrap_deg(x: npt.NDArray[np.float64]) -> List[float]: ...

@@ -1,0 +1,526 @@
+//! `iasm._iasm`: the extension module behind the Python package `iasm`.
+//!
+//! It calls the same library code as the `iasm` command line, never the binary: the SSL's
+//! localizer as `iasm ssl` builds it (`iasm::pipeline::localizer`), the settings through
+//! the settings file's own parser and checks (`iasm::settings::Settings::from_toml`, so a
+//! keyword argument has a setting's name, type and range, and a wrong one the same
+//! message), the mapper as `iasm map` runs it (`asm::Mapper::run_rows`, seeded the same),
+//! scenes as `iasm simulate` renders them. The Python layer (`python/iasm/__init__.py`)
+//! checks shapes and dtypes, and turns what this module returns into Python objects.
+//!
+//! What crosses the boundary: numpy arrays in (read in place; a recording's channels are
+//! copied once into the `f32` rows the SSL takes), numpy arrays out for bulk data (a
+//! spectrum, a rendered scene's audio), and JSON text for the reports, which is exactly
+//! the CLI's JSON (`serde` on the same structs) and which Python's `json` turns into dicts.
+//! The GIL is released while the work runs.
+
+use std::io::ErrorKind;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, anyhow};
+use asm::map::{Cell, OccupancyMap};
+use asm::{MapRng, Pose};
+use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::exceptions::{PyFileNotFoundError, PyValueError};
+use pyo3::prelude::*;
+use rand::SeedableRng;
+
+use iasm::settings::Settings;
+
+/// An error as Python expects it: `FileNotFoundError` when a file is missing, else
+/// `ValueError`; the message is the CLI's (every cause, outermost first).
+fn py_err(e: anyhow::Error) -> PyErr {
+    let msg = format!("{e:#}");
+    let missing = e.chain().any(|c| {
+        c.downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == ErrorKind::NotFound)
+    });
+    if missing {
+        PyFileNotFoundError::new_err(msg)
+    } else {
+        PyValueError::new_err(msg)
+    }
+}
+
+/// The settings file's tables from JSON (`{"ssl": {...}, "iasm": {...}, "array": ...}`),
+/// through the settings file's own parser and checks.
+fn settings(json: &str) -> Result<Settings> {
+    let value: serde_json::Value = serde_json::from_str(json).context("settings")?;
+    let table = toml::Value::try_from(value).map_err(|e| anyhow!("settings: {e}"))?;
+    let text = toml::to_string(&table).map_err(|e| anyhow!("settings: {e}"))?;
+    let s = Settings::from_toml(&text)?;
+    s.validate()?;
+    Ok(s)
+}
+
+/// The array: `positions` (`(M, 3)`, m) when given, else the preset or file `spec`.
+fn mic_array(spec: &str, positions: Option<PyReadonlyArray2<'_, f64>>) -> Result<ssl::MicArray> {
+    match positions {
+        Some(p) => {
+            let p = p.as_array();
+            let rows: Vec<[f64; 3]> = p.rows().into_iter().map(|r| [r[0], r[1], r[2]]).collect();
+            Ok(ssl::MicArray::new("array", rows)?)
+        }
+        None => Ok(ssl::MicArray::from_spec(spec)?),
+    }
+}
+
+/// A recording from an `(M, samples)` array (validated by the Python layer).
+fn audio(signals: &PyReadonlyArray2<'_, f32>, fs: u32) -> Result<ssl::Audio> {
+    let channels: Vec<Vec<f32>> = signals
+        .as_array()
+        .rows()
+        .into_iter()
+        .map(|r| r.to_vec())
+        .collect();
+    Ok(ssl::Audio::new(fs, channels)?)
+}
+
+/// Localises one recording (see `iasm.locate`); returns the CLI's JSON of its row and, when
+/// asked, the pooled spectrum: azimuths and elevations (degrees) and the values
+/// (`(elevations, azimuths)`).
+#[pyfunction]
+#[pyo3(signature = (signals, fs, array, positions, settings_json, spectrum))]
+#[allow(clippy::type_complexity)]
+fn locate<'py>(
+    py: Python<'py>,
+    signals: PyReadonlyArray2<'py, f32>,
+    fs: u32,
+    array: &str,
+    positions: Option<PyReadonlyArray2<'py, f64>>,
+    settings_json: &str,
+    spectrum: bool,
+) -> PyResult<(
+    String,
+    Option<(
+        Bound<'py, PyArray1<f64>>,
+        Bound<'py, PyArray1<f64>>,
+        Bound<'py, PyArray2<f32>>,
+    )>,
+)> {
+    let array = mic_array(array, positions).map_err(py_err)?;
+    let audio = audio(&signals, fs).map_err(py_err)?;
+    let s = settings(settings_json).map_err(py_err)?;
+    let (json, spec) = py
+        .detach(|| -> Result<_> {
+            let loc = iasm::pipeline::localizer(&array, fs, &s.ssl, None)?;
+            let row = loc.locate_row_with_scratch(&audio, &mut ssl::Scratch::default())?;
+            let spec = if spectrum {
+                let sp = loc.spectrum(&audio)?;
+                let g = sp.grid();
+                Some((
+                    g.azimuths().to_vec(),
+                    g.elevations().to_vec(),
+                    sp.values().to_vec(),
+                ))
+            } else {
+                None
+            };
+            let report = serde_json::json!({
+                "doas": row.doas,
+                "extra": row.extra,
+                "cut": row.cut,
+                "pooling": row.pooling,
+                "faulty_channels": iasm::pipeline::FaultyChannel::of(&row, array.len()),
+            });
+            Ok((report.to_string(), spec))
+        })
+        .map_err(py_err)?;
+    let spec = match spec {
+        None => None,
+        Some((az, el, values)) => {
+            let (ne, na) = (el.len(), az.len());
+            let values = PyArray1::from_vec(py, values).reshape([ne, na])?;
+            Some((
+                PyArray1::from_vec(py, az),
+                PyArray1::from_vec(py, el),
+                values,
+            ))
+        }
+    };
+    Ok((json, spec))
+}
+
+/// The occupancy map: a map file (YAML), an `(H, W)` grid of ROS occupancy values (0 free,
+/// 100 occupied, -1 unknown; row 0 at `origin`'s y), or with neither, the region within
+/// the CLI's margin of the stops (`iasm map` without `--map`).
+fn occupancy(
+    yaml: Option<PathBuf>,
+    grid: Option<PyReadonlyArray2<'_, i8>>,
+    resolution: f64,
+    origin: [f64; 2],
+    poses: &[Pose],
+) -> Result<OccupancyMap> {
+    if let Some(path) = yaml {
+        return iasm::dataset::load_map(&path);
+    }
+    if let Some(g) = grid {
+        let g = g.as_array();
+        let (h, w) = g.dim();
+        anyhow::ensure!(
+            resolution.is_finite() && resolution > 0.0,
+            "the grid's resolution must be a positive number of metres (got {resolution})"
+        );
+        let cells: Vec<Cell> = g
+            .iter()
+            .map(|&v| match v {
+                0..=49 => Cell::Free,
+                50..=100 => Cell::Occupied,
+                _ => Cell::Unknown,
+            })
+            .collect();
+        return Ok(OccupancyMap::new(w, h, resolution, origin, cells));
+    }
+    let stops: Vec<[f64; 2]> = poses.iter().map(|p| [p.x, p.y]).collect();
+    Ok(OccupancyMap::open_around(
+        &stops,
+        iasm::pipeline::OPEN_MARGIN_M,
+        iasm::pipeline::OPEN_RESOLUTION_M,
+    )?)
+}
+
+/// `(K, 3)` poses (x, y in m, heading in rad).
+fn poses(p: &PyReadonlyArray2<'_, f64>) -> Vec<Pose> {
+    p.as_array()
+        .rows()
+        .into_iter()
+        .map(|r| Pose::new(r[0], r[1], r[2]))
+        .collect()
+}
+
+/// The map JSON of a mapper's result, as `iasm map` writes its sources, refusals and counts.
+fn map_json(r: &asm::MapResult, seed: u64) -> String {
+    serde_json::json!({
+        "seed": seed,
+        "rounds": r.rounds,
+        "particles": r.particles,
+        "unexplained_doas": r.unexplained,
+        "removed_sources": r.removed,
+        "refused": r.refused,
+        "sources": r.sources,
+    })
+    .to_string()
+}
+
+/// Maps the sources of a survey (see `iasm.map_sources`); returns the map as JSON.
+#[pyfunction]
+#[pyo3(signature = (poses_xyt, doas_deg, cut, map_yaml, grid, resolution, origin, settings_json, seed))]
+#[allow(clippy::too_many_arguments)]
+fn map_sources(
+    py: Python<'_>,
+    poses_xyt: PyReadonlyArray2<'_, f64>,
+    doas_deg: Vec<Vec<f64>>,
+    cut: Option<Vec<bool>>,
+    map_yaml: Option<PathBuf>,
+    grid: Option<PyReadonlyArray2<'_, i8>>,
+    resolution: f64,
+    origin: [f64; 2],
+    settings_json: &str,
+    seed: u64,
+) -> PyResult<String> {
+    let poses = poses(&poses_xyt);
+    let s = settings(settings_json).map_err(py_err)?;
+    let map = occupancy(map_yaml, grid, resolution, origin, &poses).map_err(py_err)?;
+    py.detach(|| -> Result<String> {
+        let mapper = asm::Mapper::new(&map, &s.iasm)?;
+        let rad: Vec<Vec<f64>> = doas_deg
+            .iter()
+            .map(|r| r.iter().map(|a| a.to_radians()).collect())
+            .collect();
+        let r = mapper.run_rows(
+            &poses,
+            &rad,
+            cut.as_deref(),
+            &mut MapRng::seed_from_u64(seed),
+        )?;
+        Ok(map_json(&r, seed))
+    })
+    .map_err(py_err)
+}
+
+/// The stop-by-stop mapper (see `iasm.OnlineMapper`).
+#[pyclass(module = "iasm._iasm")]
+struct OnlineMapper {
+    inner: asm::OnlineMapper,
+    seed: u64,
+}
+
+#[pymethods]
+impl OnlineMapper {
+    #[new]
+    #[pyo3(signature = (map_yaml, grid, resolution, origin, settings_json, seed))]
+    fn new(
+        map_yaml: Option<PathBuf>,
+        grid: Option<PyReadonlyArray2<'_, i8>>,
+        resolution: f64,
+        origin: [f64; 2],
+        settings_json: &str,
+        seed: u64,
+    ) -> PyResult<Self> {
+        let s = settings(settings_json).map_err(py_err)?;
+        if map_yaml.is_none() && grid.is_none() {
+            return Err(PyValueError::new_err(
+                "the online mapper needs an occupancy map (a map file or a grid): its stops are not known in advance",
+            ));
+        }
+        let map = occupancy(map_yaml, grid, resolution, origin, &[]).map_err(py_err)?;
+        let mapper = asm::Mapper::new(&map, &s.iasm)
+            .map_err(anyhow::Error::from)
+            .map_err(py_err)?;
+        Ok(Self {
+            inner: asm::OnlineMapper::new(mapper, seed),
+            seed,
+        })
+    }
+
+    /// Adds one stop; returns what it changed, as JSON.
+    #[pyo3(signature = (x, y, theta, doas_deg, cut=None))]
+    fn add_stop(
+        &mut self,
+        py: Python<'_>,
+        x: f64,
+        y: f64,
+        theta: f64,
+        doas_deg: Vec<f64>,
+        cut: Option<bool>,
+    ) -> PyResult<String> {
+        let rad: Vec<f64> = doas_deg.iter().map(|a| a.to_radians()).collect();
+        let inner = &mut self.inner;
+        let u = py
+            .detach(|| inner.add_row(Pose::new(x, y, theta), &rad, cut))
+            .map_err(anyhow::Error::from)
+            .map_err(py_err)?;
+        Ok(serde_json::json!({
+            "stop": u.stop,
+            "associated": u.associated,
+            "found": u.found,
+            "rounds": u.rounds,
+            "sources": u.sources,
+            "full": u.full,
+        })
+        .to_string())
+    }
+
+    /// The map after the stops so far, as JSON.
+    fn map(&self) -> String {
+        map_json(&self.inner.map(), self.seed)
+    }
+
+    /// Replaces the map with the batch map over every stop so far; returns its rounds.
+    fn consolidate(&mut self, py: Python<'_>) -> usize {
+        let inner = &mut self.inner;
+        py.detach(|| inner.consolidate())
+    }
+
+    /// Stops taken so far.
+    fn stops(&self) -> usize {
+        self.inner.stops()
+    }
+}
+
+/// OSPA (Schuhmacher et al. 2008) between `estimate` and `truth` (`(n, 2)`, m), cutoff
+/// `c` (m), order `p`: total, localisation and cardinality parts.
+#[pyfunction]
+fn ospa(
+    estimate: PyReadonlyArray2<'_, f64>,
+    truth: PyReadonlyArray2<'_, f64>,
+    c: f64,
+    p: f64,
+) -> PyResult<(f64, f64, f64)> {
+    let pts = |a: &PyReadonlyArray2<'_, f64>| -> Vec<[f64; 2]> {
+        a.as_array()
+            .rows()
+            .into_iter()
+            .map(|r| [r[0], r[1]])
+            .collect()
+    };
+    if !(c.is_finite() && c > 0.0 && p.is_finite() && p >= 1.0) {
+        return Err(PyValueError::new_err(format!(
+            "OSPA needs a cutoff c > 0 and an order p >= 1 (got c = {c}, p = {p})"
+        )));
+    }
+    let o = asm::ospa::ospa(&pts(&estimate), &pts(&truth), c, p);
+    Ok((o.total, o.localization, o.cardinality))
+}
+
+/// A rendered scene: per stop the audio (`(M, samples)`, float32), and the scene's poses,
+/// truth, array, sample rate and occupancy grid.
+type Rendered<'py> = (
+    u32,
+    Vec<Bound<'py, PyArray2<f32>>>,
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray2<f64>>,
+    (Bound<'py, PyArray2<i8>>, f64, [f64; 2]),
+    String,
+);
+
+/// Renders a scene (see `iasm.simulate`): a scene file, or a scene's TOML text with `base`
+/// the folder its relative paths are read from; writes it as a data set folder to `out`
+/// when given.
+#[pyfunction]
+#[pyo3(signature = (path, text, base, out))]
+fn simulate<'py>(
+    py: Python<'py>,
+    path: Option<PathBuf>,
+    text: Option<String>,
+    base: PathBuf,
+    out: Option<PathBuf>,
+) -> PyResult<Rendered<'py>> {
+    let sim = py
+        .detach(|| -> Result<iasm::pipeline::Simulated> {
+            let (prepared, name) = match (&path, &text) {
+                (Some(p), _) => (
+                    iasm::scenes::load_scene(p)?.0,
+                    p.file_stem()
+                        .map(|s| s.to_string_lossy().into_owned())
+                        .unwrap_or_default(),
+                ),
+                (None, Some(t)) => {
+                    let (mut scene, _) = iasm::scenes::parse_scene(t)?;
+                    scene.resolve_paths(&base);
+                    (iasm::scenes::prepare(scene)?, "scene".to_owned())
+                }
+                (None, None) => anyhow::bail!("a scene file or a scene's text"),
+            };
+            if let Some(out) = &out {
+                iasm::scenes::write_dataset(&prepared, out)
+                    .with_context(|| format!("writing {}", out.display()))?;
+            }
+            iasm::pipeline::Simulated::render(prepared, name)
+        })
+        .map_err(py_err)?;
+    let fs = sim.audio.first().map_or(0, ssl::Audio::sample_rate);
+    let audio = sim
+        .audio
+        .iter()
+        .map(|a| {
+            let rows: Vec<Vec<f32>> = a.channels().to_vec();
+            PyArray2::from_vec2(py, &rows).map_err(|e| PyValueError::new_err(e.to_string()))
+        })
+        .collect::<PyResult<Vec<_>>>()?;
+    let poses: Vec<Vec<f64>> = sim
+        .poses()
+        .iter()
+        .map(|p| vec![p.x, p.y, p.theta])
+        .collect();
+    let truth: Vec<Vec<f64>> = sim.truth.iter().map(|t| t.to_vec()).collect();
+    let mics: Vec<Vec<f64>> = sim.array.positions().iter().map(|p| p.to_vec()).collect();
+    let m = &sim.map;
+    let cells: Vec<i8> = (0..m.height())
+        .flat_map(|j| (0..m.width()).map(move |i| (i, j)))
+        .map(|(i, j)| match m.cell(i, j) {
+            Cell::Free => 0,
+            Cell::Occupied => 100,
+            Cell::Unknown => -1,
+        })
+        .collect();
+    let grid = PyArray1::from_vec(py, cells).reshape([m.height(), m.width()])?;
+    let v2 = |v: &[Vec<f64>], cols: usize| -> PyResult<Bound<'py, PyArray2<f64>>> {
+        if v.is_empty() {
+            return PyArray1::from_vec(py, Vec::new()).reshape([0, cols]);
+        }
+        PyArray2::from_vec2(py, v).map_err(|e| PyValueError::new_err(e.to_string()))
+    };
+    Ok((
+        fs,
+        audio,
+        v2(&poses, 3)?,
+        v2(&truth, 2)?,
+        v2(&mics, 3)?,
+        (grid, m.resolution(), m.origin()),
+        sim.name.clone(),
+    ))
+}
+
+/// Reads a WAV file as the CLI does: `(M, samples)` float32 and the sample rate.
+#[pyfunction]
+fn read_wav<'py>(py: Python<'py>, path: PathBuf) -> PyResult<(Bound<'py, PyArray2<f32>>, u32)> {
+    if !path.exists() {
+        return Err(PyFileNotFoundError::new_err(format!(
+            "{}: no such file",
+            path.display()
+        )));
+    }
+    let a = ssl::read_wav(Path::new(&path))
+        .map_err(anyhow::Error::from)
+        .map_err(py_err)?;
+    let rows: Vec<Vec<f32>> = a.channels().to_vec();
+    let arr = PyArray2::from_vec2(py, &rows).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    Ok((arr, a.sample_rate()))
+}
+
+/// A data set folder as `iasm map --dataset` reads it: its recordings (natural order), its
+/// poses (`(K, 3)`; theta in radians, or in degrees when `theta_degrees`), its ground
+/// truth (`(S, 2)`) and occupancy map file when it has them, and its DoA tables.
+#[pyfunction]
+#[allow(clippy::type_complexity)]
+fn read_dataset<'py>(
+    py: Python<'py>,
+    root: PathBuf,
+    theta_degrees: bool,
+) -> PyResult<(
+    Vec<PathBuf>,
+    Option<Bound<'py, PyArray2<f64>>>,
+    Option<Bound<'py, PyArray2<f64>>>,
+    Option<PathBuf>,
+    Vec<PathBuf>,
+)> {
+    if !root.is_dir() {
+        return Err(PyFileNotFoundError::new_err(format!(
+            "{}: no such folder",
+            root.display()
+        )));
+    }
+    let (ds, poses, truth, map) = (|| -> Result<_> {
+        let ds = iasm::dataset::Dataset::open(&root)?;
+        let poses = ds
+            .poses
+            .as_deref()
+            .map(|p| iasm::dataset::read_poses(p, !theta_degrees))
+            .transpose()?;
+        let truth = ds
+            .sources
+            .as_deref()
+            .map(iasm::dataset::read_sources)
+            .transpose()?;
+        let map = if ds.root.join("map").is_dir() {
+            Some(iasm::dataset::first_with_ext(&ds.root.join("map"), "yaml")?)
+        } else {
+            None
+        };
+        Ok((ds, poses, truth, map))
+    })()
+    .map_err(py_err)?;
+    let to2 = |rows: Vec<Vec<f64>>| -> PyResult<Bound<'py, PyArray2<f64>>> {
+        PyArray2::from_vec2(py, &rows).map_err(|e| PyValueError::new_err(e.to_string()))
+    };
+    let poses = poses
+        .map(|p| to2(p.iter().map(|p| vec![p.x, p.y, p.theta]).collect()))
+        .transpose()?;
+    let truth = truth
+        .map(|t| to2(t.iter().map(|t| t.to_vec()).collect()))
+        .transpose()?;
+    Ok((ds.audio, poses, truth, map, ds.doa_tables))
+}
+
+/// The wrapped angles of `x` (degrees) in `[-180, 180)`, as the SSL reports azimuths.
+#[pyfunction]
+fn wrap_deg(x: PyReadonlyArray1<'_, f64>) -> Vec<f64> {
+    x.as_array().iter().map(|&a| ssl::wrap_deg(a)).collect()
+}
+
+/// The extension module.
+#[pymodule]
+fn _iasm(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(locate, m)?)?;
+    m.add_function(wrap_pyfunction!(map_sources, m)?)?;
+    m.add_function(wrap_pyfunction!(ospa, m)?)?;
+    m.add_function(wrap_pyfunction!(simulate, m)?)?;
+    m.add_function(wrap_pyfunction!(read_wav, m)?)?;
+    m.add_function(wrap_pyfunction!(read_dataset, m)?)?;
+    m.add_function(wrap_pyfunction!(wrap_deg, m)?)?;
+    m.add_class::<OnlineMapper>()?;
+    m.add("ARRAY_PRESETS", ssl::array::PRESETS.to_vec())?;
+    Ok(())
+}
