@@ -20,7 +20,10 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, anyhow};
 use asm::map::{Cell, OccupancyMap};
 use asm::{MapRng, Pose};
-use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
+use numpy::{
+    Complex32, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2,
+    PyReadonlyArray3, PyUntypedArrayMethods,
+};
 use pyo3::exceptions::{PyFileNotFoundError, PyValueError};
 use pyo3::prelude::*;
 use rand::SeedableRng;
@@ -76,69 +79,122 @@ fn audio(signals: &PyReadonlyArray2<'_, f32>, fs: u32) -> Result<ssl::Audio> {
     Ok(ssl::Audio::new(fs, channels)?)
 }
 
-/// Localises one recording (see `iasm.locate`); returns the CLI's JSON of its row and, when
-/// asked, the pooled spectrum: azimuths and elevations (degrees) and the values
-/// (`(elevations, azimuths)`).
-#[pyfunction]
-#[pyo3(signature = (signals, fs, array, positions, settings_json, spectrum))]
-#[allow(clippy::type_complexity)]
-fn locate<'py>(
-    py: Python<'py>,
-    signals: PyReadonlyArray2<'py, f32>,
-    fs: u32,
-    array: &str,
-    positions: Option<PyReadonlyArray2<'py, f64>>,
-    settings_json: &str,
-    spectrum: bool,
-) -> PyResult<(
+/// One recording's JSON row and, when asked, its pooled spectrum (azimuths and
+/// elevations in degrees, values `(elevations, azimuths)`).
+type Row<'py> = (
     String,
     Option<(
         Bound<'py, PyArray1<f64>>,
         Bound<'py, PyArray1<f64>>,
         Bound<'py, PyArray2<f32>>,
     )>,
-)> {
-    let array = mic_array(array, positions).map_err(py_err)?;
-    let audio = audio(&signals, fs).map_err(py_err)?;
-    let s = settings(settings_json).map_err(py_err)?;
-    let (json, spec) = py
-        .detach(|| -> Result<_> {
-            let loc = iasm::pipeline::localizer(&array, fs, &s.ssl, None)?;
-            let row = loc.locate_row_with_scratch(&audio, &mut ssl::Scratch::default())?;
-            let spec = if spectrum {
-                let sp = loc.spectrum(&audio)?;
+);
+
+/// A localizer planned once for a sample rate, an array and the `[ssl]` settings (the
+/// STFT, the grid, the steering and lag tables), as `iasm ssl` plans one per sample rate
+/// and keeps it for every recording; `iasm.locate` keeps the last few it used.
+#[pyclass(module = "iasm._iasm")]
+struct Localizer {
+    loc: ssl::Localizer,
+    scratch: ssl::Scratch,
+}
+
+impl Localizer {
+    /// The row's JSON (the CLI's fields) and the spectrum as numpy arrays.
+    fn answer<'py>(
+        py: Python<'py>,
+        row: &ssl::Located,
+        microphones: usize,
+        spectrum: Option<ssl::AngularSpectrum>,
+    ) -> PyResult<Row<'py>> {
+        let report = serde_json::json!({
+            "doas": row.doas,
+            "extra": row.extra,
+            "cut": row.cut,
+            "pooling": row.pooling,
+            "faulty_channels": iasm::pipeline::FaultyChannel::of(row, microphones),
+        });
+        let spec = match spectrum {
+            None => None,
+            Some(sp) => {
                 let g = sp.grid();
+                let (ne, na) = (g.elevations().len(), g.azimuths().len());
+                let values = PyArray1::from_vec(py, sp.values().to_vec()).reshape([ne, na])?;
                 Some((
-                    g.azimuths().to_vec(),
-                    g.elevations().to_vec(),
-                    sp.values().to_vec(),
+                    PyArray1::from_vec(py, g.azimuths().to_vec()),
+                    PyArray1::from_vec(py, g.elevations().to_vec()),
+                    values,
                 ))
-            } else {
-                None
-            };
-            let report = serde_json::json!({
-                "doas": row.doas,
-                "extra": row.extra,
-                "cut": row.cut,
-                "pooling": row.pooling,
-                "faulty_channels": iasm::pipeline::FaultyChannel::of(&row, array.len()),
-            });
-            Ok((report.to_string(), spec))
+            }
+        };
+        Ok((report.to_string(), spec))
+    }
+}
+
+#[pymethods]
+impl Localizer {
+    #[new]
+    #[pyo3(signature = (fs, array, positions, settings_json))]
+    fn new(
+        fs: u32,
+        array: &str,
+        positions: Option<PyReadonlyArray2<'_, f64>>,
+        settings_json: &str,
+    ) -> PyResult<Self> {
+        let array = mic_array(array, positions).map_err(py_err)?;
+        let s = settings(settings_json).map_err(py_err)?;
+        let loc = iasm::pipeline::localizer(&array, fs, &s.ssl, None).map_err(py_err)?;
+        Ok(Self {
+            loc,
+            scratch: ssl::Scratch::default(),
         })
-        .map_err(py_err)?;
-    let spec = match spec {
-        None => None,
-        Some((az, el, values)) => {
-            let (ne, na) = (el.len(), az.len());
-            let values = PyArray1::from_vec(py, values).reshape([ne, na])?;
-            Some((
-                PyArray1::from_vec(py, az),
-                PyArray1::from_vec(py, el),
-                values,
-            ))
-        }
-    };
-    Ok((json, spec))
+    }
+
+    /// Localises one recording (`(M, samples)` float32), as `iasm ssl` does: its row as
+    /// the CLI's JSON, and the pooled spectrum when `spectrum`.
+    fn locate<'py>(
+        &mut self,
+        py: Python<'py>,
+        signals: PyReadonlyArray2<'py, f32>,
+        spectrum: bool,
+    ) -> PyResult<Row<'py>> {
+        let fs = self.loc.sample_rate();
+        let audio = audio(&signals, fs).map_err(py_err)?;
+        let (loc, scratch) = (&self.loc, &mut self.scratch);
+        let (row, sp) = py
+            .detach(|| -> Result<_> {
+                let row = loc.locate_row_with_scratch(&audio, scratch)?;
+                let sp = spectrum
+                    .then(|| loc.spectrum_with_scratch(&audio, scratch))
+                    .transpose()?;
+                Ok((row, sp))
+            })
+            .map_err(py_err)?;
+        Self::answer(py, &row, self.loc.array().len(), sp)
+    }
+
+    /// Localises an STFT computed elsewhere (pyroomacoustics' `X`, as `iasm.doa` takes
+    /// it): `frames` is `(frames, M, nfft / 2 + 1)`, complex64, and the settings'
+    /// `frame_len` is the FFT's length. The row's JSON and the pooled spectrum.
+    fn locate_stft<'py>(
+        &mut self,
+        py: Python<'py>,
+        frames: PyReadonlyArray3<'py, Complex32>,
+    ) -> PyResult<Row<'py>> {
+        let [nt, nm, nb] = [frames.shape()[0], frames.shape()[1], frames.shape()[2]];
+        let data: Vec<Complex32> = match frames.as_slice() {
+            Ok(d) => d.to_vec(),
+            Err(_) => frames.as_array().iter().copied().collect(),
+        };
+        let (loc, scratch) = (&self.loc, &mut self.scratch);
+        let (row, sp) = py
+            .detach(|| -> Result<_> {
+                let spec = ssl::Spectrogram::from_frames(nt, nm, 0..nb, data)?;
+                Ok(loc.locate_spectrogram(&spec, scratch)?)
+            })
+            .map_err(py_err)?;
+        Self::answer(py, &row, self.loc.array().len(), Some(sp))
+    }
 }
 
 /// The occupancy map: a map file (YAML), an `(H, W)` grid of ROS occupancy values (0 free,
@@ -513,7 +569,6 @@ fn wrap_deg(x: PyReadonlyArray1<'_, f64>) -> Vec<f64> {
 /// The extension module.
 #[pymodule]
 fn _iasm(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    m.add_function(wrap_pyfunction!(locate, m)?)?;
     m.add_function(wrap_pyfunction!(map_sources, m)?)?;
     m.add_function(wrap_pyfunction!(ospa, m)?)?;
     m.add_function(wrap_pyfunction!(simulate, m)?)?;
@@ -521,6 +576,7 @@ fn _iasm(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(read_dataset, m)?)?;
     m.add_function(wrap_pyfunction!(wrap_deg, m)?)?;
     m.add_class::<OnlineMapper>()?;
+    m.add_class::<Localizer>()?;
     m.add("ARRAY_PRESETS", ssl::array::PRESETS.to_vec())?;
     Ok(())
 }

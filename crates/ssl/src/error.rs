@@ -283,6 +283,34 @@ pub enum Error {
         /// Channels in the audio.
         got: usize,
     },
+    /// An STFT given as frames ([`crate::Spectrogram::from_frames`]) whose values do not
+    /// fill its shape, or are not finite.
+    #[error(
+        "an STFT of {frames} frames x {channels} channels x {bins} bins needs that many finite values, got {got} values or a non-finite one"
+    )]
+    SpectrogramShape {
+        /// Frames.
+        frames: usize,
+        /// Channels.
+        channels: usize,
+        /// Bins.
+        bins: usize,
+        /// Values given.
+        got: usize,
+    },
+    /// An STFT given as frames that does not hold the localizer's band.
+    #[error(
+        "the STFT holds bins {}..{} over {frames} frames; the band needs bins {}..{} (fmin_hz and fmax_hz at frame_len, the STFT's FFT length) and at least one frame",
+        have.0, have.1, band.0, band.1
+    )]
+    BandNotInSpectrogram {
+        /// The band's bins, `[start, end)`.
+        band: (usize, usize),
+        /// The STFT's bins, `[start, end)`.
+        have: (usize, usize),
+        /// The STFT's frames.
+        frames: usize,
+    },
     /// A channel asked for ([`crate::Audio::select`]) that the audio does not have.
     #[error("channel {channel} asked for, but the audio has {channels} channels")]
     NoSuchChannel {

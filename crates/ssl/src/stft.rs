@@ -185,6 +185,38 @@ impl Spectrogram {
         self.bins.clone()
     }
 
+    /// A spectrogram computed elsewhere (pyroomacoustics' `X`, say): `data` holds the
+    /// bins `bins` of each channel of each frame, frame-major, then channel, then bin, from
+    /// a forward FFT of the length the localizer's `frame_len` is, unnormalised or scaled
+    /// alike in every bin (every statistic is normalised per bin).
+    ///
+    /// # Errors
+    /// [`crate::Error::SpectrogramShape`] when `data` does not hold that many values, or a
+    /// value is not finite.
+    pub fn from_frames(
+        num_frames: usize,
+        num_channels: usize,
+        bins: Range<usize>,
+        data: Vec<Complex32>,
+    ) -> crate::Result<Self> {
+        let want = num_frames * num_channels * bins.len();
+        if data.len() != want || data.iter().any(|c| !(c.re.is_finite() && c.im.is_finite())) {
+            return Err(crate::Error::SpectrogramShape {
+                frames: num_frames,
+                channels: num_channels,
+                bins: bins.len(),
+                got: data.len(),
+            });
+        }
+        Ok(Self {
+            num_frames,
+            num_channels,
+            bins,
+            data,
+            noise: None,
+        })
+    }
+
     /// A spectrogram of the given values (frame-major, then channel, then bin), for tests
     /// of the estimators.
     #[cfg(test)]

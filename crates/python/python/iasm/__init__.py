@@ -21,6 +21,8 @@ from __future__ import annotations
 
 import json
 import os
+import threading
+from collections import OrderedDict
 from dataclasses import dataclass, field
 from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
@@ -45,6 +47,7 @@ __all__ = [
     "read_wav",
     "read_dataset",
     "Dataset",
+    "doa",
 ]
 
 #: The array presets ``array=`` takes by name (``iasm6``: the paper's six microphones).
@@ -235,11 +238,48 @@ def locate_row(
     return row
 
 
+class _Planned:
+    """A planned localizer and the lock of its working memory."""
+
+    def __init__(self, obj: Any) -> None:
+        self.obj = obj
+        self._lock = threading.Lock()
+
+
+# The localizers planned most recently, by sample rate, array and settings: planning (the
+# STFT, the grid, the steering tables) costs as much as localising a short recording, and
+# `iasm ssl` plans once per sample rate too.
+_PLANNED: "OrderedDict[tuple, Any]" = OrderedDict()
+_PLANNED_KEEP = 8
+_PLANNED_LOCK = threading.Lock()
+
+
+def _localizer(fs: int, spec: str, positions: Optional[np.ndarray], settings_json: str):
+    key = (fs, spec, None if positions is None else positions.tobytes(), settings_json)
+    with _PLANNED_LOCK:
+        loc = _PLANNED.pop(key, None)
+    if loc is None:
+        loc = _Planned(_iasm.Localizer(fs, spec, positions, settings_json))
+    with _PLANNED_LOCK:
+        _PLANNED[key] = loc
+        while len(_PLANNED) > _PLANNED_KEEP:
+            _PLANNED.popitem(last=False)
+    return loc
+
+
 def _locate(signals, fs, array, method, num, settings, kw, spectrum):
     spec, positions = _array(array)
-    text, sp = _iasm.locate(
-        _signals(signals), _fs(fs), spec, positions, _ssl_settings(method, num, settings, kw), spectrum
-    )
+    fs = _fs(fs)
+    x = _signals(signals)
+    loc = _localizer(fs, spec, positions, _ssl_settings(method, num, settings, kw))
+    # A localizer keeps working memory: one thread at a time uses it, others plan their own.
+    if loc._lock.acquire(blocking=False):
+        try:
+            text, sp = loc.obj.locate(x, spectrum)
+        finally:
+            loc._lock.release()
+    else:
+        text, sp = _iasm.Localizer(fs, spec, positions, _ssl_settings(method, num, settings, kw)).locate(x, spectrum)
     r = json.loads(text)
     row = Located(
         doas=[Doa._of(d) for d in r["doas"]],
@@ -270,7 +310,7 @@ def locate(
     ``x`` the robot's heading, ``z`` up). ``method``: ``gcc-phat``, ``mvdr``, ``srp-phat``,
     ``music`` or ``normmusic``. ``num``: N, the most DoAs returned. Any ``[ssl]`` setting
     of the settings file by its name, as a keyword or in ``settings`` (``fmin_hz=300``,
-    ``elevation="plane"``, ...).
+    ``pooling="mean"``, ...).
 
     Returns a list of :class:`Doa`, strongest first; with ``spectrum=True``, a pair
     ``(doas, Spectrum)`` whose spectrum is the pooled angular spectrum on its grid.
@@ -512,3 +552,6 @@ def read_dataset(root: Union[str, os.PathLike], *, theta_degrees: bool = False) 
         map=None if map_yaml is None else os.fspath(map_yaml),
         doa_tables=[os.fspath(p) for p in tables],
     )
+
+
+from . import doa  # noqa: E402  (it builds on the names above)

@@ -11,17 +11,21 @@ import numpy.typing as npt
 
 ARRAY_PRESETS: List[str]
 
-def locate(
-    signals: npt.NDArray[np.float32],
-    fs: int,
-    array: str,
-    positions: Optional[npt.NDArray[np.float64]],
-    settings_json: str,
-    spectrum: bool,
-) -> Tuple[
-    str,
-    Optional[Tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.float32]]],
-]: ...
+_Spectrum = Tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.float32]]
+
+class Localizer:
+    def __init__(
+        self,
+        fs: int,
+        array: str,
+        positions: Optional[npt.NDArray[np.float64]],
+        settings_json: str,
+    ) -> None: ...
+    def locate(
+        self, signals: npt.NDArray[np.float32], spectrum: bool
+    ) -> Tuple[str, Optional[_Spectrum]]: ...
+    def locate_stft(self, frames: npt.NDArray[np.complex64]) -> Tuple[str, _Spectrum]: ...
+
 def map_sources(
     poses_xyt: npt.NDArray[np.float64],
     doas_deg: Sequence[Sequence[float]],

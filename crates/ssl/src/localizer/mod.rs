@@ -608,6 +608,45 @@ impl Localizer {
         Ok(())
     }
 
+    /// [`Localizer::locate_row_with_scratch`] on an STFT computed elsewhere
+    /// ([`Spectrogram::from_frames`], of this localizer's `frame_len`), whose bins must
+    /// hold the localizer's band: its channels are taken as they are (no screen of faulty
+    /// channels: that needs the recording), the robot's noise subtracted when known.
+    /// Returns the row and the pooled spectrum whose peaks its DoAs are.
+    ///
+    /// # Errors
+    /// [`Error::ChannelMismatch`], or [`Error::BandNotInSpectrogram`] when the band's bins
+    /// are not all in `spec`.
+    pub fn locate_spectrogram(
+        &self,
+        spec: &Spectrogram,
+        scratch: &mut Scratch,
+    ) -> Result<(Located, AngularSpectrum)> {
+        self.take_spectrogram(spec, scratch)?;
+        self.located_with_spectrum(scratch)
+    }
+
+    /// Writes the localizer's band of `spec` into `scratch.spec`.
+    fn take_spectrogram(&self, spec: &Spectrogram, scratch: &mut Scratch) -> Result<()> {
+        if spec.num_channels() != self.array.len() {
+            return Err(Error::ChannelMismatch {
+                expected: self.array.len(),
+                got: spec.num_channels(),
+            });
+        }
+        let have = spec.bins();
+        if !(have.start <= self.bins.start && self.bins.end <= have.end) || spec.num_frames() == 0 {
+            return Err(Error::BandNotInSpectrogram {
+                band: (self.bins.start, self.bins.end),
+                have: (have.start, have.end),
+                frames: spec.num_frames(),
+            });
+        }
+        spec.band_into(self.bins.clone(), &mut scratch.spec);
+        scratch.spec.noise = self.noise.clone();
+        Ok(())
+    }
+
     /// The ranked DoAs of `audio`: at most `num_peaks`, strongest first.
     ///
     /// # Errors

@@ -7,6 +7,14 @@ impl Localizer {
     /// The row of the recording whose STFT is in `scratch.spec` ([`Localizer::analyse`]),
     /// localised with every channel.
     pub(super) fn located(&self, scratch: &mut Scratch) -> Result<Located> {
+        Ok(self.located_with_spectrum(scratch)?.0)
+    }
+
+    /// [`Localizer::located`], and the pooled spectrum whose peaks the row's DoAs are.
+    pub(super) fn located_with_spectrum(
+        &self,
+        scratch: &mut Scratch,
+    ) -> Result<(Located, AngularSpectrum)> {
         let n = self.config.num_peaks;
         // The N strongest resolved peaks, and the next one: the row is cut when that one
         // passes the thresholds too (the peaks are taken strongest first, so the first N
@@ -77,14 +85,17 @@ impl Localizer {
         } else {
             doas
         };
-        Ok(Located {
-            doas,
-            cut,
-            extra,
-            pooling,
-            faulty_channels: Vec::new(),
-            microphones: self.array.len(),
-        })
+        Ok((
+            Located {
+                doas,
+                cut,
+                extra,
+                pooling,
+                faulty_channels: Vec::new(),
+                microphones: self.array.len(),
+            },
+            spectrum,
+        ))
     }
 
     /// `doas` (a row, strongest first) with each DoA but the first refined with the

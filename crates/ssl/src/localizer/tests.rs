@@ -101,3 +101,72 @@ fn wrong_channel_count_is_refused() {
         "{e}"
     );
 }
+
+/// An STFT computed elsewhere and handed over as frames gives the DoAs the recording gives
+/// (same frames, same band), and a plane wave's direction; a wrong shape or a band the STFT
+/// does not hold is refused.
+#[test]
+fn an_stft_given_as_frames_is_located_as_its_recording() {
+    let array = MicArray::default();
+    let fs = 16_000u32;
+    let az = 120f64.to_radians();
+    let u = [az.cos(), az.sin(), 0.0];
+    let mut state = 9u64;
+    let src: Vec<f32> = (0..24_000)
+        .map(|_| {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((state >> 33) as f64 / (1u64 << 31) as f64 - 1.0) as f32 * 0.3
+        })
+        .collect();
+    // Each microphone hears the source `p . u / c` before the array's centre: whole
+    // samples of delay, from 20 samples of margin.
+    let channels: Vec<Vec<f32>> = array
+        .positions()
+        .iter()
+        .map(|p| {
+            let lead = (p[0] * u[0] + p[1] * u[1]) / 343.0 * f64::from(fs);
+            let start = (20.0 + lead).round() as usize;
+            src[start..start + 20_000].to_vec()
+        })
+        .collect();
+    let audio = Audio::new(fs, channels).unwrap();
+    let config = SslConfig {
+        method: crate::Method::Mvdr,
+        num_peaks: 1,
+        ..SslConfig::default()
+    };
+    let loc = Localizer::new(&array, fs, &config).unwrap();
+    let want = loc
+        .locate_row_with_scratch(&audio, &mut Scratch::default())
+        .unwrap();
+    let n = loc.stft().frame_len() / 2 + 1;
+    let full = loc.stft().analyze(&audio, 0..n).unwrap();
+    let mut data = Vec::new();
+    for f in 0..full.num_frames() {
+        for ch in 0..full.num_channels() {
+            data.extend_from_slice(full.frame(f, ch));
+        }
+    }
+    let given = Spectrogram::from_frames(full.num_frames(), array.len(), 0..n, data).unwrap();
+    let (got, spectrum) = loc
+        .locate_spectrogram(&given, &mut Scratch::default())
+        .unwrap();
+    assert_eq!(spectrum, loc.spectrum(&audio).unwrap());
+    assert_eq!(got.doas, want.doas);
+    assert!(
+        (got.doas[0].azimuth_deg - 120.0).abs() < 3.0,
+        "{:?}",
+        got.doas
+    );
+    assert!(matches!(
+        Spectrogram::from_frames(2, 6, 0..n, vec![Complex32::default(); 5]),
+        Err(Error::SpectrogramShape { got: 5, .. })
+    ));
+    let narrow = Spectrogram::from_frames(1, 6, 0..4, vec![Complex32::default(); 24]).unwrap();
+    assert!(matches!(
+        loc.locate_spectrogram(&narrow, &mut Scratch::default()),
+        Err(Error::BandNotInSpectrogram { .. })
+    ));
+}
