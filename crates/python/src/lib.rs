@@ -235,6 +235,15 @@ fn occupancy(
     )?)
 }
 
+/// An occupancy map as the Python layer passes it: a map file, or a grid with its
+/// resolution (m) and origin (m), or neither (see [`occupancy`]).
+type MapSpec<'py> = (
+    Option<PathBuf>,
+    Option<PyReadonlyArray2<'py, i8>>,
+    f64,
+    [f64; 2],
+);
+
 /// `(K, 3)` poses (x, y in m, heading in rad).
 fn poses(p: &PyReadonlyArray2<'_, f64>) -> Vec<Pose> {
     p.as_array()
@@ -260,22 +269,19 @@ fn map_json(r: &asm::MapResult, seed: u64) -> String {
 
 /// Maps the sources of a survey (see `iasm.map_sources`); returns the map as JSON.
 #[pyfunction]
-#[pyo3(signature = (poses_xyt, doas_deg, cut, map_yaml, grid, resolution, origin, settings_json, seed))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (poses_xyt, doas_deg, cut, map, settings_json, seed))]
 fn map_sources(
     py: Python<'_>,
     poses_xyt: PyReadonlyArray2<'_, f64>,
     doas_deg: Vec<Vec<f64>>,
     cut: Option<Vec<bool>>,
-    map_yaml: Option<PathBuf>,
-    grid: Option<PyReadonlyArray2<'_, i8>>,
-    resolution: f64,
-    origin: [f64; 2],
+    map: MapSpec<'_>,
     settings_json: &str,
     seed: u64,
 ) -> PyResult<String> {
     let poses = poses(&poses_xyt);
     let s = settings(settings_json).map_err(py_err)?;
+    let (map_yaml, grid, resolution, origin) = map;
     let map = occupancy(map_yaml, grid, resolution, origin, &poses).map_err(py_err)?;
     py.detach(|| -> Result<String> {
         let mapper = asm::Mapper::new(&map, &s.iasm)?;
@@ -304,16 +310,10 @@ struct OnlineMapper {
 #[pymethods]
 impl OnlineMapper {
     #[new]
-    #[pyo3(signature = (map_yaml, grid, resolution, origin, settings_json, seed))]
-    fn new(
-        map_yaml: Option<PathBuf>,
-        grid: Option<PyReadonlyArray2<'_, i8>>,
-        resolution: f64,
-        origin: [f64; 2],
-        settings_json: &str,
-        seed: u64,
-    ) -> PyResult<Self> {
+    #[pyo3(signature = (map, settings_json, seed))]
+    fn new(map: MapSpec<'_>, settings_json: &str, seed: u64) -> PyResult<Self> {
         let s = settings(settings_json).map_err(py_err)?;
+        let (map_yaml, grid, resolution, origin) = map;
         if map_yaml.is_none() && grid.is_none() {
             return Err(PyValueError::new_err(
                 "the online mapper needs an occupancy map (a map file or a grid): its stops are not known in advance",

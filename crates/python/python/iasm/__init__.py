@@ -355,7 +355,7 @@ def _rows(doas: Union[ArrayLike, Sequence[ArrayLike]], stops: int) -> List[List[
 
 
 def _map_args(map: Any, resolution: Optional[float], origin: Optional[Sequence[float]]):
-    """(yaml path, grid, resolution, origin) for the extension."""
+    """The map as the extension takes it: (yaml path, grid, resolution, origin)."""
     if map is None:
         return None, None, 0.05, [0.0, 0.0]
     if isinstance(map, (str, os.PathLike)):
@@ -400,9 +400,8 @@ def map_sources(
     table = _table(settings, iasm_settings)
     if num is not None:
         table["num_doas"] = num
-    yaml, grid, res, org = _map_args(map, resolution, origin)
     text = _iasm.map_sources(
-        p, rows, None if cut is None else [bool(c) for c in cut], yaml, grid, res, org,
+        p, rows, None if cut is None else [bool(c) for c in cut], _map_args(map, resolution, origin),
         _json({"iasm": table}), int(seed),
     )
     return json.loads(text)
@@ -432,8 +431,7 @@ class OnlineMapper:
         table = _table(settings, iasm_settings)
         if num is not None:
             table["num_doas"] = num
-        yaml, grid, res, org = _map_args(map, resolution, origin)
-        self._inner = _iasm.OnlineMapper(yaml, grid, res, org, _json({"iasm": table}), int(seed))
+        self._inner = _iasm.OnlineMapper(_map_args(map, resolution, origin), _json({"iasm": table}), int(seed))
 
     def add_stop(self, pose: ArrayLike, doas: ArrayLike, cut: Optional[bool] = None) -> Dict[str, Any]:
         """Adds one stop: its pose ``(x, y, theta)`` and DoAs (degrees, strongest first).

@@ -26,28 +26,22 @@ class Localizer:
     ) -> Tuple[str, Optional[_Spectrum]]: ...
     def locate_stft(self, frames: npt.NDArray[np.complex64]) -> Tuple[str, _Spectrum]: ...
 
+# A map file, or a grid of ROS values with its resolution and origin (m), or neither.
+_MapSpec = Tuple[
+    Optional[Union[str, PathLike[str]]], Optional[npt.NDArray[np.int8]], float, Sequence[float]
+]
+
 def map_sources(
     poses_xyt: npt.NDArray[np.float64],
     doas_deg: Sequence[Sequence[float]],
     cut: Optional[Sequence[bool]],
-    map_yaml: Optional[Union[str, PathLike[str]]],
-    grid: Optional[npt.NDArray[np.int8]],
-    resolution: float,
-    origin: Sequence[float],
+    map: _MapSpec,
     settings_json: str,
     seed: int,
 ) -> str: ...
 
 class OnlineMapper:
-    def __init__(
-        self,
-        map_yaml: Optional[Union[str, PathLike[str]]],
-        grid: Optional[npt.NDArray[np.int8]],
-        resolution: float,
-        origin: Sequence[float],
-        settings_json: str,
-        seed: int,
-    ) -> None: ...
+    def __init__(self, map: _MapSpec, settings_json: str, seed: int) -> None: ...
     def add_stop(
         self, x: float, y: float, theta: float, doas_deg: Sequence[float], cut: Optional[bool] = None
     ) -> str: ...
