@@ -21,8 +21,8 @@ use anyhow::{Context, Result, anyhow};
 use asm::map::{Cell, OccupancyMap};
 use asm::{MapRng, Pose};
 use numpy::{
-    Complex32, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2,
-    PyReadonlyArray3, PyUntypedArrayMethods,
+    Complex32, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyReadonlyArray3,
+    PyUntypedArrayMethods,
 };
 use pyo3::exceptions::{PyFileNotFoundError, PyValueError};
 use pyo3::prelude::*;
@@ -560,12 +560,6 @@ fn read_dataset<'py>(
     Ok((ds.audio, poses, truth, map, ds.doa_tables))
 }
 
-/// The wrapped angles of `x` (degrees) in `[-180, 180)`, as the SSL reports azimuths.
-#[pyfunction]
-fn wrap_deg(x: PyReadonlyArray1<'_, f64>) -> Vec<f64> {
-    x.as_array().iter().map(|&a| ssl::wrap_deg(a)).collect()
-}
-
 /// The extension module.
 #[pymodule]
 fn _iasm(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -574,7 +568,6 @@ fn _iasm(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(simulate, m)?)?;
     m.add_function(wrap_pyfunction!(read_wav, m)?)?;
     m.add_function(wrap_pyfunction!(read_dataset, m)?)?;
-    m.add_function(wrap_pyfunction!(wrap_deg, m)?)?;
     m.add_class::<OnlineMapper>()?;
     m.add_class::<Localizer>()?;
     m.add("ARRAY_PRESETS", ssl::array::PRESETS.to_vec())?;

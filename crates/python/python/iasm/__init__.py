@@ -271,7 +271,8 @@ def _locate(signals, fs, array, method, num, settings, kw, spectrum):
     spec, positions = _array(array)
     fs = _fs(fs)
     x = _signals(signals)
-    loc = _localizer(fs, spec, positions, _ssl_settings(method, num, settings, kw))
+    settings_json = _ssl_settings(method, num, settings, kw)
+    loc = _localizer(fs, spec, positions, settings_json)
     # A localizer keeps working memory: one thread at a time uses it, others plan their own.
     if loc._lock.acquire(blocking=False):
         try:
@@ -279,7 +280,7 @@ def _locate(signals, fs, array, method, num, settings, kw, spectrum):
         finally:
             loc._lock.release()
     else:
-        text, sp = _iasm.Localizer(fs, spec, positions, _ssl_settings(method, num, settings, kw)).locate(x, spectrum)
+        text, sp = _iasm.Localizer(fs, spec, positions, settings_json).locate(x, spectrum)
     r = json.loads(text)
     row = Located(
         doas=[Doa._of(d) for d in r["doas"]],
