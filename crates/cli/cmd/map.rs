@@ -283,7 +283,7 @@ fn print_map(a: &MapArgs, survey: &Survey, report: &MapReport<'_>, result: &MapR
     );
     if result.removed > 0 {
         println!(
-            "  {} more found and removed: on the robot's path, beyond the map or behind a wall, contradicted by stops that heard nothing there, or left with too few DoAs by sources that fit them better (--explain says which; see asm::IasmConfig::min_range_m, wall_clearance_m, absence_ratio, reassociate)",
+            "  {} more found and removed: on the robot's path, beyond the map, outside the room or behind a wall, contradicted by stops that heard nothing there, or left with too few DoAs by sources that fit them better (--explain says which; see asm::IasmConfig::min_range_m, room_margin_m, wall_clearance_m, absence_ratio, reassociate)",
             result.removed
         );
     }
@@ -416,6 +416,10 @@ fn refusal(rule: &asm::Refusal) -> String {
         ),
         asm::Refusal::Reassigned => {
             "its other DoAs fit mapped sources better and went to them, leaving fewer than min_observations stops (reassociate)"
+                .to_owned()
+        }
+        asm::Refusal::OutsideRoom => {
+            "outside the room: where the map holds a wall or unknown space, and its DoAs fit no free place near it (room_margin_m)"
                 .to_owned()
         }
     }

@@ -366,6 +366,47 @@ impl OccupancyMap {
             && self.cell(cell[0] as usize, self.height - 1 - cell[1] as usize) == Cell::Occupied
     }
 
+    /// Whether any cell is occupied: a surveyed map has walls; an open region around the
+    /// stops ([`OccupancyMap::open_around`]) has none.
+    pub fn has_occupied(&self) -> bool {
+        self.cells.contains(&Cell::Occupied)
+    }
+
+    /// Centres of the free cells whose centres lie within `radius` (m) of `p`, nearest
+    /// first.
+    pub fn free_within(&self, p: [f64; 2], radius: f64) -> Vec<[f64; 2]> {
+        if !(p[0].is_finite() && p[1].is_finite() && radius.is_finite() && radius >= 0.0) {
+            return Vec::new();
+        }
+        let r = self.resolution;
+        let span = |v: f64, o: f64, n: usize| {
+            let lo = ((v - radius - o) / r).floor().max(0.0);
+            let hi = ((v + radius - o) / r).ceil().min(n as f64 - 1.0);
+            (lo, hi)
+        };
+        let (i0, i1) = span(p[0], self.origin[0], self.width);
+        let (f0, f1) = span(p[1], self.origin[1], self.height);
+        if i0 > i1 || f0 > f1 {
+            return Vec::new();
+        }
+        let mut out: Vec<(f64, [f64; 2])> = Vec::new();
+        for fr in f0 as usize..=f1 as usize {
+            let j = self.height - 1 - fr;
+            for i in i0 as usize..=i1 as usize {
+                if self.cell(i, j) != Cell::Free {
+                    continue;
+                }
+                let c = self.cell_center(i, j);
+                let d = (c[0] - p[0]).hypot(c[1] - p[1]);
+                if d <= radius {
+                    out.push((d, c));
+                }
+            }
+        }
+        out.sort_by(|a, b| a.0.total_cmp(&b.0));
+        out.into_iter().map(|(_, c)| c).collect()
+    }
+
     /// Centres of every known (free or occupied) cell, in image order.
     pub fn known_cells(&self) -> impl Iterator<Item = [f64; 2]> + '_ {
         (0..self.height).flat_map(move |j| {

@@ -316,6 +316,27 @@ pub struct IasmConfig {
     /// talker's or a loudspeaker's own size, as [`IasmConfig::min_range_m`]) (the paper
     /// profile: 0). Measured: see the module docs.
     pub wall_clearance_m: f64,
+    /// The map is the room: a source must lie in a cell the map marks free, or within this
+    /// distance (m) of one (a source may stand at a wall, on a table, in a vent's grille).
+    /// One that does not, whichever step made it, moves to the free place nearest it
+    /// where its own DoAs still fit (as many of its stops within the vote's gate, 2
+    /// `sigma`, as before, less one, and never fewer than
+    /// [`IasmConfig::min_observations`]), or is refused ([`Refusal::OutsideRoom`]). Only
+    /// on a surveyed map (one with occupied cells): around the stops of an open region the
+    /// unknown is merely unsurveyed ([`IasmConfig::beyond_map_m`] still holds there). 0
+    /// turns it off. Not in the paper.
+    ///
+    /// Why: an occupancy map's unknown cells beyond a wall are space the robot's range
+    /// sensor never reached, because the wall stopped it, and a sound heard in the room
+    /// comes from the room (or through an opening into free space). Where DoAs meet beyond
+    /// a wall they meet at a mirror image, or they fit a source at the wall within their
+    /// error (a vent high on a wall, whose bearings a far-field array bends by its
+    /// elevation), and the vote's place, made of crossings with a 2-sigma of a metre, may
+    /// fall anywhere along them. Default: 0.3 m, as [`IasmConfig::wall_clearance_m`]
+    /// (a talker's or a loudspeaker's own size; a wall in a map is 0.1-0.3 m thick, so
+    /// that the cells just behind a wall's face are the wall, not the space beyond it)
+    /// (the paper profile: 0).
+    pub room_margin_m: f64,
     /// The vote lets a DoA that a source already explains support a second source too,
     /// where the DoA lies within this many `sigma` of the bearing to it and its stop's row
     /// is thresholded (the rows of [`IasmConfig::vote_min_thresholded_stops`]: every peak
@@ -505,6 +526,7 @@ impl Default for IasmConfig {
             min_range_m: 0.3,
             beyond_map_m: 0.5,
             wall_clearance_m: 0.3,
+            room_margin_m: 0.3,
             share_gate_sigmas: 0.5,
             reassociate: true,
             rank_gain: 0.5,
@@ -528,6 +550,7 @@ impl IasmConfig {
                 min_range_m: 0.0,
                 beyond_map_m: 0.0,
                 wall_clearance_m: 0.0,
+                room_margin_m: 0.0,
                 share_gate_sigmas: 0.0,
                 reassociate: false,
                 rank_gain: 1.0,
@@ -561,6 +584,7 @@ impl IasmConfig {
             ("min_range_m", self.min_range_m),
             ("beyond_map_m", self.beyond_map_m),
             ("wall_clearance_m", self.wall_clearance_m),
+            ("room_margin_m", self.room_margin_m),
             ("share_gate_sigmas", self.share_gate_sigmas),
             ("trim_mads", self.trim_mads),
             ("trim_floor_deg", self.trim_floor_deg),
@@ -606,7 +630,7 @@ impl IasmConfig {
         // Each setting, the range it is held to, and that range in words: a table, one
         // setting a row.
         #[rustfmt::skip]
-        let reals: [(&'static str, f64, f64, f64, &'static str); 15] = [
+        let reals: [(&'static str, f64, f64, f64, &'static str); 16] = [
             ("density_d", self.density_d, 1.0, 1e6, "1 to 1e6 known cells per particle (a particle is drawn from a cell; fewer than one cell each leaves particles without a place)"),
             ("sigma_p_m", self.sigma_p_m, 1e-6, 1.0, "1e-6 to 1 m per step (a random walk of more than a metre never settles)"),
             ("sigma_deg", self.sigma_deg, 0.01, 90.0, "0.01 to 90 degrees"),
@@ -618,6 +642,7 @@ impl IasmConfig {
             ("min_range_m", self.min_range_m, 0.0, 1e4, "0 to 10000 m"),
             ("beyond_map_m", self.beyond_map_m, 0.0, 1e4, "0 to 10000 m"),
             ("wall_clearance_m", self.wall_clearance_m, 0.0, 1e4, "0 to 10000 m"),
+            ("room_margin_m", self.room_margin_m, 0.0, 100.0, "0 to 100 m"),
             ("absence_ratio", self.absence_ratio, 0.0, 1e4, "0 to 10000"),
             ("share_gate_sigmas", self.share_gate_sigmas, 0.0, 100.0, "0 to 100 sigma"),
             ("trim_mads", self.trim_mads, 0.0, 1e4, "0 to 10000"),

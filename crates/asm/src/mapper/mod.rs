@@ -96,6 +96,7 @@ use crate::wrap_rad;
 mod config;
 mod reassociation;
 mod refine;
+mod room;
 mod rounds;
 mod rules;
 mod stops;
@@ -177,6 +178,10 @@ pub enum Refusal {
     /// Its DoAs fit other mapped sources better and went to them, leaving it fewer than
     /// [`IasmConfig::min_observations`] stops ([`IasmConfig::reassociate`]).
     Reassigned,
+    /// Outside the room: in a cell the map marks occupied or unknown, further than
+    /// [`IasmConfig::room_margin_m`] from a free one, and no free place near it fits its
+    /// DoAs.
+    OutsideRoom,
 }
 
 /// The result of one I-ASM run.
@@ -220,8 +225,11 @@ impl MapResult {
 #[derive(Clone, Debug)]
 pub struct Mapper {
     config: IasmConfig,
-    /// The map: its walls for [`IasmConfig::wall_clearance_m`].
+    /// The map: its walls for [`IasmConfig::wall_clearance_m`], its free cells for
+    /// [`IasmConfig::room_margin_m`].
     map: OccupancyMap,
+    /// Whether the map was surveyed (has occupied cells): where the room rule applies.
+    surveyed: bool,
     cells: Vec<[f64; 2]>,
     /// The known cells' bounding box `(x0, x1, y0, y1)` (m): where the vote looks.
     bounds: (f64, f64, f64, f64),
@@ -294,6 +302,7 @@ impl Mapper {
         Ok(Self {
             config: config.clone(),
             map: map.clone(),
+            surveyed: map.has_occupied(),
             cells,
             bounds,
             m,

@@ -40,6 +40,8 @@ impl Mapper {
             removed.extend(self.drop_implausible(sources, stops, pool));
         }
         self.merge(sources);
+        // A merged source stands at its sources' refitted crossing: into the room again.
+        removed.extend(self.keep_in_room(sources, pool));
         removed
     }
 
@@ -102,6 +104,7 @@ impl Mapper {
         let poses = stops.poses();
         self.join_thin(sources, stops, bearings);
         self.feed_thin(sources, stops, bearings);
+        let mut refused = self.keep_in_room(sources, bearings);
         let at: Vec<[f64; 2]> = sources.iter().map(|s| [s.x, s.y]).collect();
         // What does not depend on the other sources, once: where the robot stood, and
         // where the source's own rays meet.
@@ -138,7 +141,6 @@ impl Mapper {
             }
             why = next;
         }
-        let mut refused = Vec::new();
         let mut why = why.into_iter();
         sources.retain_mut(|s| {
             let Some(rule) = why.next().expect("one reason or none per source") else {

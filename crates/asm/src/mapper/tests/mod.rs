@@ -222,5 +222,6 @@ pub(super) fn ray_towards(stop: usize, from: [f64; 2], to: [f64; 2], off_deg: f6
 }
 
 mod plausibility;
+mod room;
 mod rounds;
 mod vote;

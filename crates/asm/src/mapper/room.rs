@@ -1,0 +1,103 @@
+//! The map is the room ([`IasmConfig::room_margin_m`]): no source is reported where the
+//! map holds a wall or space the robot never saw behind one.
+//!
+//! A source outside the room moves to the free place nearest it where its DoAs still fit,
+//! or is refused. Which free places are looked at: the free cells within the vote's reach
+//! of it, `merge_dist_m` + 2 `sigma` of its nearest stop's range (a DoA error of 2 `sigma`
+//! moves a crossing by that much along it), nearest first; the first that keeps as many
+//! of its stops within the gate as the source had, less one, is taken. Looking further
+//! would let any source beyond a wall slide along its rays into the room.
+
+use super::*;
+
+/// What the room rule did with a source.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum InRoom {
+    /// It lies in the room (or the rule is off, or the map is an open region).
+    Inside,
+    /// It fits its DoAs at this free place, in the room.
+    MovedTo([f64; 2]),
+    /// Its DoAs fit nowhere in the room near it.
+    Outside,
+}
+
+impl Mapper {
+    /// Whether the rule applies: it is on and the map was surveyed (has walls).
+    fn room_rule(&self) -> bool {
+        self.config.room_margin_m > 0.0 && self.surveyed
+    }
+
+    /// Whether `p` lies in the room: a free cell within [`IasmConfig::room_margin_m`]
+    /// (always, where the rule does not apply).
+    pub(super) fn in_room(&self, p: [f64; 2]) -> bool {
+        !self.room_rule()
+            || matches!(self.map.cell_at(p), Some(Cell::Free))
+            || !self
+                .map
+                .free_within(p, self.config.room_margin_m)
+                .is_empty()
+    }
+
+    /// Where a source at `p` explaining `rays` may stand in the room (see the module docs).
+    pub(super) fn place_in_room(&self, p: [f64; 2], rays: &[Ray]) -> InRoom {
+        if self.in_room(p) {
+            return InRoom::Inside;
+        }
+        let gate = 2.0 * self.sigma;
+        let fitting = |q: [f64; 2]| {
+            let mut stops: Vec<usize> = rays
+                .iter()
+                .filter(|r| r.miss(q) <= gate)
+                .map(|r| r.stop)
+                .collect();
+            stops.dedup();
+            stops.len()
+        };
+        let need = fitting(p)
+            .saturating_sub(1)
+            .max(self.config.min_observations);
+        let range = rays
+            .iter()
+            .map(|r| (r.from[0] - p[0]).hypot(r.from[1] - p[1]))
+            .fold(f64::INFINITY, f64::min);
+        if !range.is_finite() {
+            return InRoom::Outside;
+        }
+        let reach = self.config.merge_dist_m + range * gate.tan();
+        self.map
+            .free_within(p, reach)
+            .into_iter()
+            .find(|&q| fitting(q) >= need)
+            .map_or(InRoom::Outside, InRoom::MovedTo)
+    }
+
+    /// Every source in the room: moved into it where its DoAs fit (see [`Mapper::place_in_room`]),
+    /// refused otherwise, its DoAs given back to `pool`.
+    pub(super) fn keep_in_room(
+        &self,
+        sources: &mut Vec<Source>,
+        pool: &mut [Vec<f64>],
+    ) -> Vec<Refused> {
+        let mut refused = Vec::new();
+        sources.retain_mut(|s| match self.place_in_room([s.x, s.y], &s.rays) {
+            InRoom::Inside => true,
+            InRoom::MovedTo(q) => {
+                (s.x, s.y) = (q[0], q[1]);
+                true
+            }
+            InRoom::Outside => {
+                refused.push(Refused {
+                    x: s.x,
+                    y: s.y,
+                    stops: stops_of(&s.rays),
+                    rule: Refusal::OutsideRoom,
+                });
+                for r in s.rays.drain(..) {
+                    r.give_back(pool);
+                }
+                false
+            }
+        });
+        refused
+    }
+}
