@@ -10,6 +10,10 @@
 //!   method (Allen & Berkley, 1979), with fractional-delay arrivals and Schroeder's
 //!   reverberation-time estimate.
 //!
+//! - [`plan`]: rooms whose floor plan is any simple polygon (an L, a corridor with
+//!   alcoves), extruded: image sources checked for visibility per microphone for the
+//!   early reflections, a diffuse late field after them.
+//!
 //! - [`render`]: what each microphone hears of sources in a room (FFT convolution with the
 //!   image-source responses).
 //!
@@ -35,10 +39,12 @@
 pub mod error;
 pub mod farfield;
 pub mod ism;
+pub mod plan;
 pub mod render;
 pub mod room;
 pub mod scene;
 pub mod signal;
 
 pub use error::SimError;
+pub use plan::PlanRoom;
 pub use room::Room;

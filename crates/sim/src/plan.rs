@@ -1,0 +1,837 @@
+//! Rooms that are not boxes: a floor plan (a simple polygon) extruded to a height, each
+//! wall with its own absorption, and their impulse responses.
+//!
+//! ## Why not the shoebox's lattice
+//!
+//! A shoebox's images tile space, each visible from everywhere in the room, so every
+//! image within reach sounds. In a room whose plan is not convex (an L, a corridor with
+//! alcoves) an image sounds only where its path stays in the room: a talker around a
+//! corner has no direct path, and the reflection off the far wing's wall reaches the hall
+//! only through the opening. So images are built by reflecting in the walls one at a time
+//! (Borish, 1984), and each is checked per microphone by tracing its path back: every leg
+//! must meet its wall within the wall's extent, from the room's side, and no leg may
+//! cross another wall.
+//!
+//! ## Floor and ceiling apart
+//!
+//! The walls are vertical and the floor and ceiling horizontal, so an unfolded path's
+//! plan view is the plan's own unfolded path: floor and ceiling reflections change
+//! neither where a leg meets a wall nor whether it stays in the room. The images are
+//! then pairs of a plan image (built and checked in 2-D) and a vertical image (the 1-D
+//! lattice of the floor and the ceiling), which costs the walls' recursion in the plane
+//! only.
+//!
+//! ## Early reflections exact, the late field diffuse
+//!
+//! Plan images multiply as `(walls - 1)^order`, and a reverberant room's tail needs
+//! dozens of reflections. The response is therefore exact (every image, checked) for the
+//! first [`EXACT_S`] after the direct sound, the part whose distinct reflections make
+//! ghosts in a map, and beyond it the late field of statistical room acoustics: images of
+//! all orders arrive at a rate of `4 pi c^3 t^2 / V` each with `1 / (4 pi c t)` of
+//! pressure, so the response's mean square per sample is `c / (4 pi V fs)` decaying at
+//! Sabine's rate, whatever the room's shape. (Sabine's rather than Eyring's: the specular
+//! models this one is checked against decay more slowly than either, pyroomacoustics'
+//! ray tracing of an L-shaped room at T20 = 0.55 s where Sabine says 0.54 and Eyring
+//! 0.48, and a shoebox's full image lattice slower still; `fixtures/pra/rir_lshape.json`.) It is rendered as a diffuse field: plane
+//! waves from [`TAIL_DIRECTIONS`] directions spread over the sphere, each an independent
+//! noise, so that the microphones hear it with the coherence a real late field has. The
+//! two are cross-faded over [`FADE_S`]. pyroomacoustics does the same with ray tracing
+//! for the tail (`scripts/pra_plan_fixture.py` compares the two).
+
+use crate::error::SimError;
+
+/// How long after the direct sound the response is exact (s): the early reflections
+/// (the first 50 ms, in room acoustics' definition of early sound: what the ear and an
+/// array hear as distinct arrivals).
+pub const EXACT_S: f64 = 0.05;
+/// The cross-fade from the exact images to the diffuse tail (s).
+pub const FADE_S: f64 = 0.005;
+/// Plane waves that make the diffuse tail.
+pub const TAIL_DIRECTIONS: usize = 32;
+/// The most plan images built per source: a bound on work in a plan with many walls.
+pub const MAX_PLAN_IMAGES: usize = 400_000;
+
+/// A room whose floor plan is a simple polygon, extruded from the floor (`z = 0`) to
+/// `height`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlanRoom {
+    /// Corners, counter-clockwise.
+    corners: Vec<[f64; 2]>,
+    height: f64,
+    /// Energy absorption of wall `i` (corner `i` to corner `i + 1`), then floor, ceiling.
+    absorption: Vec<f64>,
+}
+
+fn invalid(field: &str, message: String) -> SimError {
+    SimError::Invalid {
+        field: field.into(),
+        message,
+    }
+}
+
+/// Whether segments `a-b` and `c-d` cross (touching at an end counts).
+fn segments_cross(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> bool {
+    let o = |p: [f64; 2], q: [f64; 2], r: [f64; 2]| {
+        (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0])
+    };
+    let (d1, d2, d3, d4) = (o(c, d, a), o(c, d, b), o(a, b, c), o(a, b, d));
+    d1 * d2 <= 0.0 && d3 * d4 <= 0.0
+}
+
+impl PlanRoom {
+    /// A room with the given corners (either orientation; stored counter-clockwise),
+    /// height, and absorption per wall (corner `i` to `i + 1`) followed by the floor's and
+    /// the ceiling's.
+    ///
+    /// # Errors
+    /// [`SimError::Invalid`] for fewer than three corners, a corner not finite, a plan that
+    /// crosses itself or has no area, a height not positive, or absorptions that are not
+    /// one per wall plus two or lie outside `[0, 1]`.
+    pub fn new(corners: &[[f64; 2]], height: f64, absorption: &[f64]) -> Result<Self, SimError> {
+        let n = corners.len();
+        if n < 3 {
+            return Err(invalid(
+                "room.plan",
+                format!("{n} corners do not make a floor plan (at least 3)"),
+            ));
+        }
+        if let Some(c) = corners
+            .iter()
+            .find(|c| !(c[0].is_finite() && c[1].is_finite()))
+        {
+            return Err(invalid("room.plan", format!("corner {c:?} is not finite")));
+        }
+        if !(height.is_finite() && height > 0.0) {
+            return Err(invalid(
+                "room.height",
+                format!("{height} m is not a positive height"),
+            ));
+        }
+        for i in 0..n {
+            for j in i + 1..n {
+                // Neighbouring walls share a corner; any other pair must not meet.
+                if j == i + 1 || (i == 0 && j == n - 1) {
+                    continue;
+                }
+                let (a, b) = (corners[i], corners[(i + 1) % n]);
+                let (c, d) = (corners[j], corners[(j + 1) % n]);
+                if segments_cross(a, b, c, d) {
+                    return Err(invalid(
+                        "room.plan",
+                        format!("walls {i} and {j} cross: the plan must be a simple polygon"),
+                    ));
+                }
+            }
+        }
+        let signed: f64 = (0..n)
+            .map(|i| {
+                let (a, b) = (corners[i], corners[(i + 1) % n]);
+                a[0] * b[1] - b[0] * a[1]
+            })
+            .sum::<f64>()
+            / 2.0;
+        if signed.abs() < 1e-9 {
+            return Err(invalid("room.plan", "the plan has no area".into()));
+        }
+        if absorption.len() != n + 2 {
+            return Err(invalid(
+                "room.absorption",
+                format!(
+                    "{} values for {n} walls, a floor and a ceiling (give {})",
+                    absorption.len(),
+                    n + 2
+                ),
+            ));
+        }
+        if let Some((i, a)) = absorption
+            .iter()
+            .enumerate()
+            .find(|(_, a)| !(0.0..=1.0).contains(*a))
+        {
+            return Err(invalid(
+                &format!("room.absorption[{i}]"),
+                format!("{a} is outside [0, 1]"),
+            ));
+        }
+        let (mut corners, mut absorption) = (corners.to_vec(), absorption.to_vec());
+        if signed < 0.0 {
+            // Clockwise: reverse the corners, and the walls with them (wall i ran from
+            // corner i to i + 1; reversed, it runs from n - 1 - i - 1 to n - 1 - i).
+            corners.reverse();
+            absorption[..n].reverse();
+            absorption[..n].rotate_left(1);
+        }
+        Ok(Self {
+            corners,
+            height,
+            absorption,
+        })
+    }
+
+    /// A room whose surfaces all absorb alike, with Sabine's reverberation time `rt60` (s),
+    /// the rate of the statistical tail ([`PlanRoom::sabine_rt60`]).
+    ///
+    /// # Errors
+    /// As [`PlanRoom::new`], and for an `rt60` not positive or shorter than the room can
+    /// have.
+    pub fn with_rt60(corners: &[[f64; 2]], height: f64, rt60: f64) -> Result<Self, SimError> {
+        let open = Self::new(corners, height, &vec![1.0; corners.len() + 2])?;
+        if !(rt60.is_finite() && rt60 > 0.0) {
+            return Err(invalid(
+                "room.rt60",
+                format!("{rt60} s is not a positive time"),
+            ));
+        }
+        // Sabine: rt60 = 0.161 V / (S a).
+        let a = 0.161 * open.volume() / (open.surface() * rt60);
+        if !(a > 0.0 && a < 1.0) {
+            return Err(invalid(
+                "room.rt60",
+                format!("{rt60} s is not a reverberation time this room can have"),
+            ));
+        }
+        Self::new(corners, height, &vec![a; corners.len() + 2])
+    }
+
+    /// Corners, counter-clockwise.
+    pub fn corners(&self) -> &[[f64; 2]] {
+        &self.corners
+    }
+
+    /// Height (m).
+    pub fn height(&self) -> f64 {
+        self.height
+    }
+
+    /// Energy absorption per wall (corner `i` to `i + 1`, counter-clockwise), then the
+    /// floor's and the ceiling's.
+    pub fn absorption(&self) -> &[f64] {
+        &self.absorption
+    }
+
+    /// The plan's wall `i`: its two corners.
+    pub fn wall(&self, i: usize) -> ([f64; 2], [f64; 2]) {
+        let n = self.corners.len();
+        (self.corners[i], self.corners[(i + 1) % n])
+    }
+
+    /// Floor area (m^2).
+    pub fn area(&self) -> f64 {
+        let n = self.corners.len();
+        (0..n)
+            .map(|i| {
+                let (a, b) = self.wall(i);
+                a[0] * b[1] - b[0] * a[1]
+            })
+            .sum::<f64>()
+            / 2.0
+    }
+
+    /// Volume (m^3).
+    pub fn volume(&self) -> f64 {
+        self.area() * self.height
+    }
+
+    /// Surface of walls, floor and ceiling (m^2).
+    pub fn surface(&self) -> f64 {
+        2.0 * self.area() + self.perimeter() * self.height
+    }
+
+    fn perimeter(&self) -> f64 {
+        (0..self.corners.len())
+            .map(|i| {
+                let (a, b) = self.wall(i);
+                (b[0] - a[0]).hypot(b[1] - a[1])
+            })
+            .sum()
+    }
+
+    /// The area-weighted mean absorption.
+    pub fn mean_absorption(&self) -> f64 {
+        let n = self.corners.len();
+        let walls: f64 = (0..n)
+            .map(|i| {
+                let (a, b) = self.wall(i);
+                (b[0] - a[0]).hypot(b[1] - a[1]) * self.height * self.absorption[i]
+            })
+            .sum();
+        (walls + self.area() * (self.absorption[n] + self.absorption[n + 1])) / self.surface()
+    }
+
+    /// Sabine's reverberation time (s).
+    pub fn sabine_rt60(&self) -> f64 {
+        0.161 * self.volume() / (self.surface() * self.mean_absorption())
+    }
+
+    /// Eyring's reverberation time (s): the decay of the late field, whose every sound
+    /// path loses `-ln(1 - a)` of its energy per reflection, `c S / (4 V)` reflections a
+    /// second.
+    pub fn eyring_rt60(&self) -> f64 {
+        let a = self.mean_absorption().min(1.0 - 1e-12);
+        0.161 * self.volume() / (-self.surface() * (1.0 - a).ln())
+    }
+
+    /// The plan's bounding box: `(min, max)` corners (m).
+    pub fn bounds(&self) -> ([f64; 2], [f64; 2]) {
+        let mut lo = [f64::INFINITY; 2];
+        let mut hi = [f64::NEG_INFINITY; 2];
+        for c in &self.corners {
+            for k in 0..2 {
+                lo[k] = lo[k].min(c[k]);
+                hi[k] = hi[k].max(c[k]);
+            }
+        }
+        (lo, hi)
+    }
+
+    /// Whether the plan point `p` lies strictly inside the plan (further than 1 um from
+    /// every wall).
+    pub fn contains_plan(&self, p: [f64; 2]) -> bool {
+        let n = self.corners.len();
+        let mut inside = false;
+        for i in 0..n {
+            let (a, b) = self.wall(i);
+            if distance_to_segment(p, a, b) < 1e-6 {
+                return false;
+            }
+            if (a[1] > p[1]) != (b[1] > p[1]) {
+                let x = a[0] + (p[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0]);
+                if p[0] < x {
+                    inside = !inside;
+                }
+            }
+        }
+        inside
+    }
+
+    /// Whether `p` lies strictly inside the room.
+    pub fn contains(&self, p: [f64; 3]) -> bool {
+        p[2] > 0.0 && p[2] < self.height && self.contains_plan([p[0], p[1]])
+    }
+
+    /// The distance (m) from the plan point `p` to the nearest wall.
+    pub fn distance_to_walls(&self, p: [f64; 2]) -> f64 {
+        (0..self.corners.len())
+            .map(|i| {
+                let (a, b) = self.wall(i);
+                distance_to_segment(p, a, b)
+            })
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// Pressure reflection coefficient of wall `i` (`n` the floor, `n + 1` the ceiling).
+    fn beta(&self, i: usize) -> f64 {
+        (1.0 - self.absorption[i]).sqrt()
+    }
+
+    /// Whether the plan segment `a-b` crosses a wall other than `skip` (ends on a wall
+    /// listed in `skip` do not count).
+    fn blocked(&self, a: [f64; 2], b: [f64; 2], skip: [Option<usize>; 2]) -> bool {
+        (0..self.corners.len())
+            .filter(|w| !skip.contains(&Some(*w)))
+            .any(|w| {
+                let (c, d) = self.wall(w);
+                segments_cross(a, b, c, d)
+            })
+    }
+}
+
+/// Distance from `p` to segment `a-b`.
+fn distance_to_segment(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+    let len2 = dx * dx + dy * dy;
+    let t = if len2 > 0.0 {
+        (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (p[0] - a[0] - t * dx).hypot(p[1] - a[1] - t * dy)
+}
+
+/// Signed side of `p` against the wall `a-b`: positive on the room's side (the left of a
+/// counter-clockwise wall).
+fn side(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+    (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0])
+}
+
+/// `p` mirrored in the line through `a` and `b`.
+fn mirror(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
+    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+    let t = ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / (dx * dx + dy * dy);
+    let foot = [a[0] + t * dx, a[1] + t * dy];
+    [2.0 * foot[0] - p[0], 2.0 * foot[1] - p[1]]
+}
+
+/// One plan image: its position, the image it was mirrored from and the wall it was
+/// mirrored in (none for the source itself, index 0), its reflections and their gain.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlanImage {
+    /// Position in the plan (m).
+    pub pos: [f64; 2],
+    /// The image it is a reflection of (`0` for the source and its first images).
+    pub parent: usize,
+    /// The wall it was mirrored in (`usize::MAX` for the source).
+    pub wall: usize,
+    /// Wall reflections.
+    pub order: u32,
+    /// Product of the walls' pressure reflection coefficients.
+    pub gain: f64,
+}
+
+/// One image in height: its `z`, its floor and ceiling reflections and their gain.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HeightImage {
+    /// Height (m).
+    pub z: f64,
+    /// Floor and ceiling reflections.
+    pub order: u32,
+    /// Product of their pressure reflection coefficients.
+    pub gain: f64,
+}
+
+/// Every image of a source in a [`PlanRoom`] that a response may need: the plan's
+/// images (each still to be checked per microphone) and the heights'.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlanImages {
+    /// The source (m).
+    pub src: [f64; 3],
+    /// Plan images, the source first, each after its parent.
+    pub plan: Vec<PlanImage>,
+    /// Images in height, the source's own height first.
+    pub heights: Vec<HeightImage>,
+    /// At most this many reflections in all (plan and height), when given.
+    pub max_order: Option<u32>,
+}
+
+impl PlanRoom {
+    /// The images of `src` whose paths are no longer than `reach` (m) from anywhere in
+    /// the room, with at most `max_order` reflections in all when given.
+    ///
+    /// An image is mirrored only in the walls it lies in front of (a path reflected by a
+    /// wall arrives from the room's side), and an image further than `reach` from the
+    /// plan's bounding box is not mirrored again: a path through it is at least that long.
+    /// At most [`MAX_PLAN_IMAGES`] are built.
+    pub fn images(&self, src: [f64; 3], reach: f64, max_order: Option<u32>) -> PlanImages {
+        let n = self.corners.len();
+        let (lo, hi) = self.bounds();
+        let far = |p: [f64; 2]| {
+            let dx = (lo[0] - p[0]).max(p[0] - hi[0]).max(0.0);
+            let dy = (lo[1] - p[1]).max(p[1] - hi[1]).max(0.0);
+            dx.hypot(dy)
+        };
+        let mut plan = vec![PlanImage {
+            pos: [src[0], src[1]],
+            parent: 0,
+            wall: usize::MAX,
+            order: 0,
+            gain: 1.0,
+        }];
+        let mut next = 0;
+        while next < plan.len() && plan.len() < MAX_PLAN_IMAGES {
+            let im = plan[next];
+            let id = next;
+            next += 1;
+            if max_order.is_some_and(|m| im.order >= m) || far(im.pos) > reach {
+                continue;
+            }
+            for w in (0..n).filter(|&w| w != im.wall) {
+                let (a, b) = self.wall(w);
+                if side(im.pos, a, b) <= 0.0 {
+                    continue;
+                }
+                plan.push(PlanImage {
+                    pos: mirror(im.pos, a, b),
+                    parent: id,
+                    wall: w,
+                    order: im.order + 1,
+                    gain: im.gain * self.beta(w),
+                });
+            }
+        }
+        plan.truncate(MAX_PLAN_IMAGES);
+        let h = self.height;
+        let (bf, bc) = (self.beta(n), self.beta(n + 1));
+        let n_max = ((reach + h) / (2.0 * h)).ceil() as i64 + 1;
+        let mut heights = Vec::new();
+        for k in -n_max..=n_max {
+            for q in 0..2i64 {
+                let z = (1 - 2 * q) as f64 * src[2] + 2.0 * k as f64 * h;
+                if (z - h / 2.0).abs() > reach + h / 2.0 {
+                    continue;
+                }
+                let (floor, ceiling) = ((k - q).unsigned_abs() as i32, k.unsigned_abs() as i32);
+                heights.push(HeightImage {
+                    z,
+                    order: (floor + ceiling) as u32,
+                    gain: bf.powi(floor) * bc.powi(ceiling),
+                });
+            }
+        }
+        heights.sort_by_key(|i| i.order);
+        PlanImages {
+            src,
+            plan,
+            heights,
+            max_order,
+        }
+    }
+
+    /// Whether plan image `id` of `images` sounds at the plan point `mic`: its path, traced
+    /// back from `mic`, meets each of its walls within the wall, from the room's side, and
+    /// no leg crosses another wall.
+    pub fn visible(&self, images: &[PlanImage], id: usize, mic: [f64; 2]) -> bool {
+        let src = images[0].pos;
+        let mut from = mic;
+        let mut last: Option<usize> = None;
+        let mut k = id;
+        while k != 0 {
+            let im = images[k];
+            let (a, b) = self.wall(im.wall);
+            if side(from, a, b) <= 0.0 {
+                return false;
+            }
+            // Where the leg towards the image meets the wall's line.
+            let (s0, s1) = (side(from, a, b), side(im.pos, a, b));
+            let t = s0 / (s0 - s1);
+            let p = [
+                from[0] + t * (im.pos[0] - from[0]),
+                from[1] + t * (im.pos[1] - from[1]),
+            ];
+            let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+            let u = ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / (dx * dx + dy * dy);
+            if !(0.0..=1.0).contains(&u) || self.blocked(from, p, [last, Some(im.wall)]) {
+                return false;
+            }
+            from = p;
+            last = Some(im.wall);
+            k = im.parent;
+        }
+        !self.blocked(from, src, [last, None])
+    }
+}
+
+/// The weight of the diffuse tail at time `t` (s): 0 before `start`, 1 from
+/// `start + FADE_S`, a raised cosine between; the exact images are weighted by one minus
+/// it.
+pub fn tail_weight(t: f64, start: f64) -> f64 {
+    let x = ((t - start) / FADE_S).clamp(0.0, 1.0);
+    0.5 - 0.5 * (std::f64::consts::PI * x).cos()
+}
+
+/// When the diffuse tail takes over (s from emission) for a source heard from `d` m:
+/// [`EXACT_S`] after the direct sound.
+pub fn tail_start(d: f64, c: f64) -> f64 {
+    d / c + EXACT_S
+}
+
+/// The images of `images` that sound at `mic` (3-D, with their gains and reflections in
+/// all) arriving within `reach` m of travel.
+pub fn sounding(
+    room: &PlanRoom,
+    images: &PlanImages,
+    mic: [f64; 3],
+    reach: f64,
+) -> Vec<crate::ism::ImageSource> {
+    let m2 = [mic[0], mic[1]];
+    let mut out = Vec::new();
+    for (id, im) in images.plan.iter().enumerate() {
+        let dxy2 = (im.pos[0] - m2[0]).powi(2) + (im.pos[1] - m2[1]).powi(2);
+        if dxy2 > reach * reach || !room.visible(&images.plan, id, m2) {
+            continue;
+        }
+        for z in &images.heights {
+            let order = im.order + z.order;
+            if images.max_order.is_some_and(|m| order > m)
+                || dxy2 + (z.z - mic[2]).powi(2) > reach * reach
+            {
+                continue;
+            }
+            out.push(crate::ism::ImageSource {
+                pos: [im.pos[0], im.pos[1], z.z],
+                gain: im.gain * z.gain,
+                order,
+            });
+        }
+    }
+    out
+}
+
+/// Adds to `h` (samples at `fs`, from emission) the images of `images` that sound at
+/// `mic` and arrive within `h`, each weighted by one minus [`tail_weight`] when
+/// `tail_from` (s) is given (and none after the fade).
+pub fn add_plan_images(
+    room: &PlanRoom,
+    images: &PlanImages,
+    mic: [f64; 3],
+    fs: f64,
+    c: f64,
+    h: &mut [f64],
+    tail_from: Option<f64>,
+) {
+    // As the shoebox's images: those that arrive within `h`.
+    let mut reach = h.len() as f64 / fs * c;
+    if let Some(s) = tail_from {
+        reach = reach.min((s + FADE_S) * c);
+    }
+    for im in sounding(room, images, mic, reach) {
+        let d = (0..3)
+            .map(|k| (im.pos[k] - mic[k]).powi(2))
+            .sum::<f64>()
+            .sqrt()
+            .max(1e-3);
+        let t = d / c;
+        let fade = tail_from.map_or(1.0, |s| 1.0 - tail_weight(t, s));
+        let amp = im.gain * fade / (4.0 * std::f64::consts::PI * d);
+        crate::ism::add_impulse(h, t * fs, amp);
+    }
+}
+
+/// [`TAIL_DIRECTIONS`] directions spread evenly over the sphere (a Fibonacci lattice):
+/// unit vectors pointing towards where each plane wave comes from.
+pub fn tail_directions() -> Vec<[f64; 3]> {
+    let n = TAIL_DIRECTIONS as f64;
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    (0..TAIL_DIRECTIONS)
+        .map(|i| {
+            let z = 1.0 - (2.0 * i as f64 + 1.0) / n;
+            let r = (1.0 - z * z).sqrt();
+            let a = golden * i as f64;
+            [r * a.cos(), r * a.sin(), z]
+        })
+        .collect()
+}
+
+/// The diffuse tail's plane waves at the array's centre: [`TAIL_DIRECTIONS`] independent
+/// Gaussian noises of `len` samples, each `1 / sqrt(TAIL_DIRECTIONS)` of the late field's
+/// pressure, which has a mean square of `c / (4 pi V fs)` per sample at emission, decays
+/// at the room's Sabine rate and fades in from `tail_from` (s).
+pub fn tail_waves(
+    room: &PlanRoom,
+    fs: f64,
+    c: f64,
+    len: usize,
+    tail_from: f64,
+    seed: u64,
+) -> Vec<Vec<f64>> {
+    use rand::{SeedableRng, rngs::StdRng};
+    use rand_distr::{Distribution, StandardNormal};
+    let mut rng = StdRng::seed_from_u64(seed);
+    let level = (c / (4.0 * std::f64::consts::PI * room.volume() * fs)).sqrt()
+        / (TAIL_DIRECTIONS as f64).sqrt();
+    // Amplitude decays 60 dB in rt60: exp(-ln(1000) t / rt60).
+    let rate = 1000f64.ln() / room.sabine_rt60();
+    let first = (tail_from * fs).floor().max(0.0) as usize;
+    (0..TAIL_DIRECTIONS)
+        .map(|_| {
+            let mut x = vec![0.0; len];
+            for (k, v) in x.iter_mut().enumerate().skip(first) {
+                let t = k as f64 / fs;
+                let g: f64 = StandardNormal.sample(&mut rng);
+                *v = g * level * (-rate * t).exp() * tail_weight(t, tail_from);
+            }
+            x
+        })
+        .collect()
+}
+
+/// The impulse response (`cfg.rir_len` samples at `cfg.fs`, not high-passed) from `src`
+/// to `mic` in `room`: the exact images with at most `cfg.max_order` reflections when
+/// given, and with
+/// `tail_seed` the diffuse tail (heard at the array's centre: the waves undelayed) from
+/// [`EXACT_S`] after the direct sound.
+pub fn plan_rir(
+    room: &PlanRoom,
+    src: [f64; 3],
+    mic: [f64; 3],
+    cfg: &crate::render::RenderConfig,
+    tail_seed: Option<u64>,
+) -> Vec<f64> {
+    let (fs, c, len, max_order) = (cfg.fs, cfg.speed_of_sound, cfg.rir_len, cfg.max_order);
+    let d = (0..3)
+        .map(|k| (src[k] - mic[k]).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    let tail_from = tail_seed.map(|_| tail_start(d, c));
+    let reach = tail_from.map_or(len as f64 / fs, |s| s + FADE_S) * c;
+    let images = room.images(src, reach, max_order);
+    let mut h = vec![0.0; len];
+    add_plan_images(room, &images, mic, fs, c, &mut h, tail_from);
+    if let (Some(seed), Some(from)) = (tail_seed, tail_from) {
+        for wave in tail_waves(room, fs, c, len, from, seed) {
+            h.iter_mut().zip(&wave).for_each(|(h, w)| *h += w);
+        }
+    }
+    h
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::room::Room;
+
+    const FS: f64 = 16_000.0;
+    const C: f64 = 343.0;
+
+    fn cfg(rir_len: usize, max_order: Option<u32>) -> crate::render::RenderConfig {
+        crate::render::RenderConfig {
+            fs: FS,
+            speed_of_sound: C,
+            rir_len,
+            max_order,
+        }
+    }
+    /// An L: a hall 8 x 3 m along y = 0, a wing 3 m wide up to y = 7 at its east end.
+    const L: [[f64; 2]; 6] = [
+        [0.0, 0.0],
+        [8.0, 0.0],
+        [8.0, 7.0],
+        [5.0, 7.0],
+        [5.0, 3.0],
+        [0.0, 3.0],
+    ];
+
+    #[test]
+    fn a_rectangular_plan_is_the_shoebox() {
+        // The same room as a plan of four corners, clockwise (turned counter-clockwise
+        // with its walls): the visibility checks keep exactly the shoebox's lattice.
+        let corners = [[0.0, 0.0], [0.0, 4.0], [6.0, 4.0], [6.0, 0.0]];
+        // Clockwise walls: x = 0, y = 4, x = 6, y = 0; then floor, ceiling.
+        let plan = PlanRoom::new(&corners, 3.0, &[0.1, 0.15, 0.2, 0.3, 0.4, 0.25]).unwrap();
+        let room = Room::new([6.0, 4.0, 3.0], [0.1, 0.2, 0.3, 0.15, 0.4, 0.25]).unwrap();
+        let (src, mic) = ([1.3, 1.1, 1.4], [3.5, 1.9, 2.3]);
+        let len = 1600;
+        let ours = plan_rir(&plan, src, mic, &cfg(len, Some(8)), None);
+        let boxed = crate::ism::rir_unfiltered(&room, src, mic, FS, C, len, Some(8));
+        let peak = boxed.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let worst = ours
+            .iter()
+            .zip(&boxed)
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        assert!(
+            worst < 1e-9 * peak,
+            "worst difference {worst:e} of {peak:e}"
+        );
+        approx::assert_relative_eq!(plan.volume(), room.volume(), max_relative = 1e-12);
+        approx::assert_relative_eq!(plan.surface(), room.surface(), max_relative = 1e-12);
+    }
+
+    #[test]
+    fn a_talker_around_the_corner_has_no_direct_path() {
+        let plan = PlanRoom::with_rt60(&L, 3.0, 0.6).unwrap();
+        let (talker, mic) = ([6.5, 6.0, 1.5], [4.0, 1.5, 1.0]);
+        assert!(plan.contains(talker) && plan.contains(mic));
+        assert!(!plan.contains([2.0, 5.0, 1.0]), "the corner outside the L");
+        let images = plan.images(talker, 40.0, Some(2));
+        let direct = (0..3)
+            .map(|k| (talker[k] - mic[k]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        assert!(!plan.visible(&images.plan, 0, [mic[0], mic[1]]));
+        // The direct path passes west of the inner corner (5, 3): at y = 3 it is at
+        // x = 4.83. The hall's south wall (y = 0, wall 0) mirrors the talker to y = -6:
+        // the path meets the wall at x = 4.5 and rises through the opening (x = 5.5 at
+        // y = 3), visible; the wing's east wall (x = 8, wall 1) mirrors it to x = 9.5,
+        // met at y = 4.77 by a leg that crosses y = 3 at x = 5.83, visible. The hall's
+        // west wall (x = 0, wall 5) mirrors it to x = -6.5, which the leg would meet at
+        // y = 3.21, beyond the wall's end: no reflection.
+        let by_wall = |w: usize| {
+            images
+                .plan
+                .iter()
+                .position(|i| i.order == 1 && i.wall == w)
+                .unwrap()
+        };
+        assert!(plan.visible(&images.plan, by_wall(0), [mic[0], mic[1]]));
+        assert!(plan.visible(&images.plan, by_wall(1), [mic[0], mic[1]]));
+        assert!(!plan.visible(&images.plan, by_wall(5), [mic[0], mic[1]]));
+        // So the response holds nothing at the direct path's time, and the south wall's
+        // reflection where it should be, with its gain.
+        let h = plan_rir(&plan, talker, mic, &cfg(2000, Some(1)), None);
+        let at = |d: f64| h[(d / C * FS).round() as usize];
+        assert!(at(direct).abs() < 1e-6, "{}", at(direct));
+        let image = [6.5, -6.0, 1.5];
+        let d = (0..3)
+            .map(|k| (image[k] - mic[k]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        let beta = (1.0 - plan.absorption()[0]).sqrt();
+        // The band-limited impulse at the sample nearest its arrival.
+        let t = d / C * FS;
+        let want =
+            beta / (4.0 * std::f64::consts::PI * d) * crate::ism::windowed_sinc(t.round() - t);
+        assert!(
+            (at(d) - want).abs() < 0.03 * want,
+            "{} against {want}",
+            at(d)
+        );
+    }
+
+    #[test]
+    fn the_diffuse_tail_takes_over_at_the_full_lattices_level_and_decays_at_sabines_rate() {
+        // A 6 x 4 x 3 m box rendered both ways, alpha = 0.25, high-passed as rendered:
+        // the shoebox's full image lattice, and the plan's early images with the
+        // statistical tail. Just after the fade (60-100 ms) the energies agree within
+        // 2.5 dB (+1.9: the lattice's early decay is nearer Eyring's, 1.6 dB less by 80
+        // ms than Sabine's from emission); the tail then decays as Sabine's 0.161 V / (S alpha) says (a
+        // shoebox's own specular lattice decays more slowly, its late paths running along
+        // the long axis; a room with any diffusion does not).
+        let corners = [[0.0, 0.0], [6.0, 0.0], [6.0, 4.0], [0.0, 4.0]];
+        let plan = PlanRoom::new(&corners, 3.0, &[0.25; 6]).unwrap();
+        let room = Room::new([6.0, 4.0, 3.0], [0.25; 6]).unwrap();
+        let (src, mic) = ([1.3, 1.1, 1.4], [3.5, 1.9, 1.1]);
+        let len = (0.3 * FS) as usize;
+        let energy = |h: &[f64], a: f64, b: f64| {
+            h[(a * FS) as usize..(b * FS) as usize]
+                .iter()
+                .map(|v| v * v)
+                .sum::<f64>()
+        };
+        let boxed = crate::ism::rir(&room, src, mic, FS, C, len, None);
+        let (mut level, mut decay) = (0.0, 0.0);
+        let seeds = 8;
+        for seed in 0..seeds {
+            let mut ours = plan_rir(&plan, src, mic, &cfg(len, None), Some(seed));
+            crate::ism::high_pass(&mut ours, crate::ism::HIGH_PASS_HZ, FS);
+            level += energy(&ours, 0.06, 0.1) / energy(&boxed, 0.06, 0.1) / seeds as f64;
+            decay += energy(&ours, 0.1, 0.15) / energy(&ours, 0.2, 0.25) / seeds as f64;
+            if seed == 0 {
+                // Before the tail, the two are the same images.
+                let early = energy(&ours, 0.0, 0.05) / energy(&boxed, 0.0, 0.05);
+                assert!(
+                    (10.0 * early.log10()).abs() < 0.01,
+                    "early energy ratio {early}"
+                );
+            }
+        }
+        let db = |x: f64| 10.0 * x.log10();
+        assert!(
+            db(level).abs() < 2.5,
+            "tail {:+.2} dB against the lattice",
+            db(level)
+        );
+        let sabine = 0.161 * 72.0 / (108.0 * 0.25);
+        let want = 60.0 * 0.1 / sabine;
+        assert!(
+            (db(decay) - want).abs() < 1.0,
+            "{:.2} dB in 100 ms against Sabine's {want:.2}",
+            db(decay)
+        );
+    }
+
+    #[test]
+    fn plans_that_are_not_rooms_are_refused_by_name() {
+        let e = |c: &[[f64; 2]], a: &[f64]| PlanRoom::new(c, 3.0, a).unwrap_err().to_string();
+        let bow = [[0.0, 0.0], [4.0, 4.0], [4.0, 0.0], [0.0, 4.0]];
+        assert!(
+            e(&bow, &[0.2; 6]).contains("cross"),
+            "{}",
+            e(&bow, &[0.2; 6])
+        );
+        assert!(e(&L, &[0.2; 6]).contains("8"), "{}", e(&L, &[0.2; 6]));
+        assert!(e(&L[..2], &[0.2; 4]).contains("at least 3"));
+        let mut a = [0.2; 8];
+        a[3] = 1.5;
+        assert!(e(&L, &a).contains("absorption[3]"));
+        assert!(PlanRoom::new(&L, -1.0, &[0.2; 8]).is_err());
+    }
+}
