@@ -305,3 +305,85 @@ poses = [{}]
 /// A Kinect's microphones (m, array frame): a line along the heading.
 const KINECT: &str =
     "[[-0.113, 0.0, 0.0], [0.036, 0.0, 0.0], [0.076, 0.0, 0.0], [0.113, 0.0, 0.0]]";
+
+/// A room that is not a box: an L-shaped plan (a hall 8 x 3 m, a wing 3 x 4 m at its east
+/// end). `iasm simulate` renders it and writes the plan's occupancy map (the corner outside
+/// the L unknown, as a robot's range sensor leaves it behind the walls), and the map made
+/// from its audio has every source in the room.
+#[test]
+fn a_floor_plan_is_rendered_and_mapped_inside_its_walls() {
+    let dir = tempdir();
+    let (file, out) = (path(&dir, "l.toml"), path(&dir, "l"));
+    let scene = r#"
+seed = 3
+fs = 16000
+clip_s = 0.5
+snr_db = 30.0
+[room]
+plan = [[0.0, 0.0], [8.0, 0.0], [8.0, 7.0], [5.0, 7.0], [5.0, 3.0], [0.0, 3.0]]
+height = 3.0
+rt60 = 0.5
+[array]
+preset = "iasm6"
+height = 0.8
+[[sources]]
+pos = [7.2, 6.0, 1.2]
+signal = "speech_shaped"
+[[sources]]
+pos = [2.0, 0.6, 1.1]
+signal = "speech_shaped"
+[trajectory]
+waypoints = [[0.8, 1.5], [6.0, 1.5], [6.0, 5.0]]
+spacing = 0.5
+"#;
+    std::fs::write(&file, scene).unwrap();
+    let o = iasm(&["simulate", arg(&file), "--out", arg(&out)]);
+    assert!(o.status.success(), "{}", show(&o));
+    let pgm = std::fs::read(out.join("map/map.pgm")).unwrap();
+    // P5, width, height, 255, then the cells, row 0 at the top; 0.05 m cells from
+    // (-0.5, -0.5).
+    let text = String::from_utf8_lossy(&pgm[..14]).into_owned();
+    let header: Vec<&str> = text.split_whitespace().take(4).collect();
+    let (w, h): (usize, usize) = (header[1].parse().unwrap(), header[2].parse().unwrap());
+    let body = &pgm[pgm.len() - w * h..];
+    let cell = |x: f64, y: f64| {
+        let i = ((x + 0.5) / 0.05) as usize;
+        let j = h - 1 - ((y + 0.5) / 0.05) as usize;
+        body[j * w + i]
+    };
+    assert_eq!((w, h), (180, 160));
+    assert_eq!(cell(2.0, 1.5), 254, "the hall is free");
+    assert_eq!(cell(6.5, 5.0), 254, "the wing is free");
+    assert_eq!(cell(2.0, 5.0), 205, "the corner outside the L is unknown");
+    assert_eq!(cell(2.5, 3.0), 0, "the hall's north wall is occupied");
+    assert_eq!(cell(5.0, 5.0), 0, "the wing's west wall is occupied");
+    let o = iasm(&["map", "--dataset", arg(&out), "--num", "3", "--json"]);
+    assert!(o.status.success(), "{}", show(&o));
+    let v = json(&o);
+    let sources = v["sources"].as_array().unwrap();
+    assert!(!sources.is_empty(), "{v}");
+    for s in sources {
+        let (x, y) = (s["x"].as_f64().unwrap(), s["y"].as_f64().unwrap());
+        // In the L, or within the room rule's 0.3 m of it.
+        let in_l = |x: f64, y: f64| {
+            (0.0..=8.0).contains(&x) && (0.0..=3.0).contains(&y)
+                || (5.0..=8.0).contains(&x) && (0.0..=7.0).contains(&y)
+        };
+        let near = (0..16).any(|k| {
+            let a = k as f64 * std::f64::consts::TAU / 16.0;
+            in_l(x + 0.3 * a.cos(), y + 0.3 * a.sin())
+        });
+        assert!(
+            in_l(x, y) || near,
+            "a source at ({x:.2}, {y:.2}) outside the room: {v}"
+        );
+    }
+    // The hall's talker is found (the wing's is heard only by reflection from the first
+    // stops).
+    assert!(
+        sources.iter().any(|s| {
+            (s["x"].as_f64().unwrap() - 2.0).hypot(s["y"].as_f64().unwrap() - 0.6) < 0.3
+        }),
+        "{v}"
+    );
+}

@@ -221,7 +221,9 @@ impl MissedTally {
             match refused_near(result, q, c).map(|r| &r.rule) {
                 Some(asm::Refusal::SpokenAgainst { .. }) => t.spoken_against += 1.0,
                 Some(asm::Refusal::ThinlyHeard) => t.thinly_heard += 1.0,
-                Some(asm::Refusal::Misplaced | asm::Refusal::OutsideRoom) => t.misplaced += 1.0,
+                Some(
+                    asm::Refusal::Misplaced | asm::Refusal::OutsideRoom | asm::Refusal::ArrayMirror,
+                ) => t.misplaced += 1.0,
                 Some(asm::Refusal::Reassigned) => t.reassigned += 1.0,
                 None => {}
             }

@@ -167,7 +167,9 @@ fn write(path: &Path, bytes: &[u8]) -> Result<()> {
 }
 
 /// The occupancy map of a scene: walls a cell thick and obstacles occupied, the room free,
-/// a margin unknown; origin at (-margin, -margin).
+/// a margin unknown; origin at (-margin, -margin). A floor plan's map is its polygon: the
+/// cells inside it free, those within a cell of a wall occupied, the rest (beyond the
+/// walls, the corner outside an L) unknown, as a robot's range sensor leaves them.
 pub fn scene_map(scene: &PreparedScene) -> asm::map::OccupancyMap {
     use asm::map::{Cell, OccupancyMap};
     let [lx, ly, _] = scene.room.dims();
@@ -177,9 +179,19 @@ pub fn scene_map(scene: &PreparedScene) -> asm::map::OccupancyMap {
         for i in 0..w {
             let x = -MAP_MARGIN + (i as f64 + 0.5) * MAP_RES;
             let y = -MAP_MARGIN + ((h - 1 - j) as f64 + 0.5) * MAP_RES;
-            let inside = (0.0..=lx).contains(&x) && (0.0..=ly).contains(&y);
-            let wall =
-                inside && (x < MAP_RES || y < MAP_RES || lx - x < MAP_RES || ly - y < MAP_RES);
+            let (inside, wall) = match &scene.room {
+                sim::Space::Shoebox(_) => {
+                    let inside = (0.0..=lx).contains(&x) && (0.0..=ly).contains(&y);
+                    let wall = inside
+                        && (x < MAP_RES || y < MAP_RES || lx - x < MAP_RES || ly - y < MAP_RES);
+                    (inside, wall)
+                }
+                sim::Space::Plan(plan) => {
+                    let d = plan.distance_to_walls([x, y]);
+                    let inside = plan.contains_plan([x, y]);
+                    (inside || d < MAP_RES, d < MAP_RES)
+                }
+            };
             let obstacle =
                 scene.scene.obstacles.iter().any(|o| {
                     (o.min[0]..=o.max[0]).contains(&x) && (o.min[1]..=o.max[1]).contains(&y)

@@ -418,6 +418,10 @@ fn refusal(rule: &asm::Refusal) -> String {
             "its other DoAs fit mapped sources better and went to them, leaving fewer than min_observations stops (reassociate)"
                 .to_owned()
         }
+        asm::Refusal::ArrayMirror => {
+            "the mirror image, about the array's axis, of a source heard from more stops and after the robot turned (array_mirror)"
+                .to_owned()
+        }
         asm::Refusal::OutsideRoom => {
             "outside the room: where the map holds a wall or unknown space, and its DoAs fit no free place near it (room_margin_m)"
                 .to_owned()

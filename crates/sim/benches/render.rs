@@ -44,7 +44,10 @@ fn benches(c: &mut Criterion) {
     });
     let fs = f64::from(sc.scene.fs);
     let mic = mic_world(sc.stops[35], sc.scene.array.height, sc.mics[0]);
-    let images = image_sources(&sc.room, sc.scene.sources[0].pos, mic, 0.5 * 343.0, None);
+    let iasm_sim::Space::Shoebox(room) = &sc.room else {
+        panic!("the bench scene is a shoebox")
+    };
+    let images = image_sources(room, sc.scene.sources[0].pos, mic, 0.5 * 343.0, None);
     g.bench_function("arrangement_i/one_response", |b| {
         let mut h = vec![0.0; (0.5 * fs) as usize];
         b.iter(|| {

@@ -47,4 +47,4 @@ pub mod signal;
 
 pub use error::SimError;
 pub use plan::PlanRoom;
-pub use room::Room;
+pub use room::{Room, Space};

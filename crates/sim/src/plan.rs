@@ -75,6 +75,13 @@ fn segments_cross(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> bool {
         (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0])
     };
     let (d1, d2, d3, d4) = (o(c, d, a), o(c, d, b), o(a, b, c), o(a, b, d));
+    if d1 == 0.0 && d2 == 0.0 {
+        // On one line: they meet where their extents along it overlap.
+        let k = usize::from((b[0] - a[0]).abs() < (b[1] - a[1]).abs());
+        let (lo1, hi1) = (a[k].min(b[k]), a[k].max(b[k]));
+        let (lo2, hi2) = (c[k].min(d[k]), c[k].max(d[k]));
+        return lo1 <= hi2 && lo2 <= hi1;
+    }
     d1 * d2 <= 0.0 && d3 * d4 <= 0.0
 }
 
@@ -833,5 +840,31 @@ mod tests {
         a[3] = 1.5;
         assert!(e(&L, &a).contains("absorption[3]"));
         assert!(PlanRoom::new(&L, -1.0, &[0.2; 8]).is_err());
+        // Walls on one line that do not meet (a corridor's side between two alcoves)
+        // are a plan; a wall doubling back on its line is not.
+        let alcoves = [
+            [0.0, 0.0],
+            [6.0, 0.0],
+            [6.0, 2.0],
+            [5.0, 2.0],
+            [5.0, 3.0],
+            [4.0, 3.0],
+            [4.0, 2.0],
+            [2.0, 2.0],
+            [2.0, 3.0],
+            [1.0, 3.0],
+            [1.0, 2.0],
+            [0.0, 2.0],
+        ];
+        assert!(PlanRoom::new(&alcoves, 3.0, &[0.2; 14]).is_ok());
+        let back = [
+            [0.0, 0.0],
+            [4.0, 0.0],
+            [4.0, 2.0],
+            [1.0, 2.0],
+            [3.0, 2.0],
+            [0.0, 2.0],
+        ];
+        assert!(e(&back, &[0.2; 8]).contains("cross"));
     }
 }

@@ -18,7 +18,8 @@ use std::sync::Arc;
 use realfft::{ComplexToReal, RealFftPlanner, RealToComplex, num_complex::Complex64};
 
 use crate::ism::{HIGH_PASS_HZ, ImageSource, add_images, high_pass, image_sources};
-use crate::room::Room;
+use crate::plan::{self, PlanImages, PlanRoom};
+use crate::room::{Room, Space};
 
 /// One source in a room: position (m) and the signal it emits (at the sample rate given to
 /// [`render`], pressure at 1 m).
@@ -59,6 +60,23 @@ pub fn render(
     Renderer::new(room, sources, n, cfg).render(mics)
 }
 
+/// Each source's images: a shoebox's sound everywhere; a plan's are checked per
+/// microphone, and a diffuse tail follows them.
+#[derive(Clone)]
+enum Images {
+    Shoebox(Vec<Vec<ImageSource>>),
+    Plan(PlanRoom, Vec<PlanImages>),
+}
+
+impl Images {
+    fn len(&self) -> usize {
+        match self {
+            Images::Shoebox(v) => v.len(),
+            Images::Plan(_, v) => v.len(),
+        }
+    }
+}
+
 /// Sources in a room, ready to be heard from anywhere: see the module documentation.
 #[derive(Clone)]
 pub struct Renderer {
@@ -66,7 +84,7 @@ pub struct Renderer {
     /// Samples rendered per microphone.
     n: usize,
     /// Per source: its images within reach of any point of the room.
-    images: Vec<Vec<ImageSource>>,
+    images: Images,
     /// Transform size `N` and block length `B`.
     fft_len: usize,
     block: usize,
@@ -82,10 +100,7 @@ impl std::fmt::Debug for Renderer {
             .field("cfg", &self.cfg)
             .field("n", &self.n)
             .field("sources", &self.images.len())
-            .field(
-                "images",
-                &self.images.iter().map(Vec::len).collect::<Vec<_>>(),
-            )
+            .field("images", &self.image_counts())
             .field("fft_len", &self.fft_len)
             .field("block", &self.block)
             .finish_non_exhaustive()
@@ -96,19 +111,47 @@ impl Renderer {
     /// Prepares `sources` in `room` for rendering `n` samples (signals shorter than `n`
     /// are padded with silence).
     pub fn new(room: &Room, sources: &[RoomSource], n: usize, cfg: &RenderConfig) -> Self {
+        Self::new_in(&Space::Shoebox(room.clone()), sources, n, cfg)
+    }
+
+    /// [`Renderer::new`] in a room of either kind. In a plan ([`crate::plan`]) each
+    /// source's images are those within [`plan::EXACT_S`] after the direct sound from
+    /// anywhere in the room; a stop checks them at each microphone and adds the diffuse
+    /// tail, a fresh draw for each source and stop.
+    pub fn new_in(space: &Space, sources: &[RoomSource], n: usize, cfg: &RenderConfig) -> Self {
         let l = cfg.rir_len.max(1);
         let (fft_len, block) = plan_blocks(n.max(1), l, sources.len());
         let mut planner = RealFftPlanner::<f64>::new();
         let fwd = planner.plan_fft_forward(fft_len);
         let inv = planner.plan_fft_inverse(fft_len);
-        // Reach of the response from the farthest point of the room.
-        let half_diag = room.dims().iter().map(|d| d * d).sum::<f64>().sqrt() / 2.0;
-        let centre = room.dims().map(|d| d / 2.0);
-        let reach = l as f64 / cfg.fs * cfg.speed_of_sound + half_diag;
-        let images = sources
-            .iter()
-            .map(|s| image_sources(room, s.pos, centre, reach, cfg.max_order))
-            .collect();
+        let images = match space {
+            Space::Shoebox(room) => {
+                // Reach of the response from the farthest point of the room.
+                let half_diag = room.dims().iter().map(|d| d * d).sum::<f64>().sqrt() / 2.0;
+                let centre = room.dims().map(|d| d / 2.0);
+                let reach = l as f64 / cfg.fs * cfg.speed_of_sound + half_diag;
+                Images::Shoebox(
+                    sources
+                        .iter()
+                        .map(|s| image_sources(room, s.pos, centre, reach, cfg.max_order))
+                        .collect(),
+                )
+            }
+            Space::Plan(room) => {
+                // The farthest a microphone can be from a source, then the exact part.
+                let (lo, hi) = room.bounds();
+                let diag = (hi[0] - lo[0]).hypot(hi[1] - lo[1]).hypot(room.height());
+                let exact = (plan::EXACT_S + plan::FADE_S) * cfg.speed_of_sound + diag;
+                let reach = exact.min(l as f64 / cfg.fs * cfg.speed_of_sound);
+                Images::Plan(
+                    room.clone(),
+                    sources
+                        .iter()
+                        .map(|s| room.images(s.pos, reach, cfg.max_order))
+                        .collect(),
+                )
+            }
+        };
         let mut buf = fwd.make_input_vec();
         let spectra = sources
             .iter()
@@ -141,9 +184,13 @@ impl Renderer {
         }
     }
 
-    /// Number of image sources kept per source.
+    /// Number of image sources kept per source (in a plan, the plan's images, before
+    /// each microphone's check).
     pub fn image_counts(&self) -> Vec<usize> {
-        self.images.iter().map(Vec::len).collect()
+        match &self.images {
+            Images::Shoebox(v) => v.iter().map(Vec::len).collect(),
+            Images::Plan(_, v) => v.iter().map(|i| i.plan.len()).collect(),
+        }
     }
 
     /// What each microphone (world positions, m) hears: `n` samples per microphone.
@@ -171,22 +218,35 @@ impl Renderer {
         let mut hs = self.fwd.make_output_vec();
         let mut y = self.inv.make_output_vec();
         let mut acc = vec![vec![Complex64::default(); bins]; blocks];
+        let centre = centroid(mics);
+        let tails = self.tails(centre, playing);
         mics.iter()
             .map(|&m| {
                 acc.iter_mut().for_each(|a| a.fill(Complex64::default()));
-                for ((images, spectra), _) in self
-                    .images
-                    .iter()
-                    .zip(&self.spectra)
-                    .zip(playing)
-                    .filter(|x| *x.1)
-                {
+                for (i, spectra) in self.spectra.iter().enumerate().filter(|(i, _)| playing[*i]) {
                     h.fill(0.0);
-                    add_images(&mut h[..l], images, m, fs, c);
+                    match &self.images {
+                        Images::Shoebox(images) => add_images(&mut h[..l], &images[i], m, fs, c),
+                        Images::Plan(room, images) => {
+                            let from = plan::tail_start(distance(images[i].src, centre), c);
+                            plan::add_plan_images(
+                                room,
+                                &images[i],
+                                m,
+                                fs,
+                                c,
+                                &mut h[..l],
+                                Some(from),
+                            );
+                        }
+                    }
                     high_pass(&mut h[..l], HIGH_PASS_HZ, fs);
                     self.fwd
                         .process(&mut h, &mut hs)
                         .expect("buffers sized by the plan");
+                    if let Some(waves) = &tails[i] {
+                        add_tail(&mut hs, waves, m, centre, c / fs, self.fft_len);
+                    }
                     for (a, x) in acc.iter_mut().zip(spectra) {
                         for ((a, x), h) in a.iter_mut().zip(x).zip(&hs) {
                             *a += x * h;
@@ -211,6 +271,100 @@ impl Renderer {
             })
             .collect()
     }
+}
+
+impl Renderer {
+    /// In a plan, each playing source's diffuse tail heard at `centre`: its plane waves'
+    /// spectra, high-passed as the images are, with where each comes from. A fresh draw
+    /// per source and stop (seeded by both), so that sources and stops do not share it.
+    #[allow(clippy::type_complexity)]
+    fn tails(
+        &self,
+        centre: [f64; 3],
+        playing: &[bool],
+    ) -> Vec<Option<Vec<([f64; 3], Vec<Complex64>)>>> {
+        let Images::Plan(room, images) = &self.images else {
+            return vec![None; playing.len()];
+        };
+        let RenderConfig {
+            fs,
+            speed_of_sound: c,
+            rir_len,
+            ..
+        } = self.cfg;
+        let l = rir_len.max(1);
+        let dirs = plan::tail_directions();
+        images
+            .iter()
+            .zip(playing)
+            .enumerate()
+            .map(|(i, (im, &on))| {
+                on.then(|| {
+                    let from = plan::tail_start(distance(im.src, centre), c);
+                    let seed = (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+                        ^ centre[0].to_bits().rotate_left(17)
+                        ^ centre[1].to_bits().rotate_left(31)
+                        ^ centre[2].to_bits().rotate_left(47);
+                    let mut buf = self.fwd.make_input_vec();
+                    plan::tail_waves(room, fs, c, l, from, seed)
+                        .into_iter()
+                        .zip(&dirs)
+                        .map(|(mut w, d)| {
+                            high_pass(&mut w, HIGH_PASS_HZ, fs);
+                            buf.fill(0.0);
+                            buf[..l].copy_from_slice(&w);
+                            let mut spec = self.fwd.make_output_vec();
+                            self.fwd
+                                .process(&mut buf, &mut spec)
+                                .expect("buffers sized by the plan");
+                            (*d, spec)
+                        })
+                        .collect()
+                })
+            })
+            .collect()
+    }
+}
+
+/// Adds to the response spectrum `hs` (an `n`-point real FFT) the tail's plane waves as
+/// the microphone at `mic` hears them: each arrives `u . (mic - centre) / c` earlier there
+/// than at the centre (`u` the direction it comes from; `per_sample` = `c / fs`, metres per
+/// sample), a phase ramp over the bins.
+fn add_tail(
+    hs: &mut [Complex64],
+    waves: &[([f64; 3], Vec<Complex64>)],
+    mic: [f64; 3],
+    centre: [f64; 3],
+    per_sample: f64,
+    n: usize,
+) {
+    let r = [mic[0] - centre[0], mic[1] - centre[1], mic[2] - centre[2]];
+    for (u, spec) in waves {
+        // Delay in samples (negative: earlier).
+        let delay = -(u[0] * r[0] + u[1] * r[1] + u[2] * r[2]) / per_sample;
+        let step = Complex64::from_polar(1.0, -std::f64::consts::TAU * delay / n as f64);
+        let mut turn = Complex64::new(1.0, 0.0);
+        for (h, x) in hs.iter_mut().zip(spec) {
+            *h += x * turn;
+            turn *= step;
+        }
+    }
+}
+
+/// The mean of `points`.
+fn centroid(points: &[[f64; 3]]) -> [f64; 3] {
+    let n = points.len().max(1) as f64;
+    let mut c = [0.0; 3];
+    for p in points {
+        for k in 0..3 {
+            c[k] += p[k] / n;
+        }
+    }
+    c
+}
+
+fn distance(a: [f64; 3], b: [f64; 3]) -> f64 {
+    (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt()
 }
 
 /// The transform size `N` (a power of two) and block length `N - L + 1` for `n` samples

@@ -1,6 +1,48 @@
-//! Shoebox rooms: dimensions and the absorption of their six walls.
+//! Shoebox rooms: dimensions and the absorption of their six walls; and [`Space`], a room
+//! of either kind.
 
 use crate::error::SimError;
+use crate::plan::PlanRoom;
+
+/// A room of either kind: a shoebox (the image lattice, every image sounds) or a floor
+/// plan ([`PlanRoom`]: images checked per microphone, a diffuse tail).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Space {
+    /// `[0, Lx] x [0, Ly] x [0, Lz]`.
+    Shoebox(Room),
+    /// A polygon extruded from the floor.
+    Plan(PlanRoom),
+}
+
+impl Space {
+    /// Whether `p` lies strictly inside the room.
+    pub fn contains(&self, p: [f64; 3]) -> bool {
+        match self {
+            Space::Shoebox(r) => r.contains(p),
+            Space::Plan(r) => r.contains(p),
+        }
+    }
+
+    /// The far corner of the room's bounding box from the origin (m): a shoebox's
+    /// dimensions, a plan's largest x and y and its height.
+    pub fn dims(&self) -> [f64; 3] {
+        match self {
+            Space::Shoebox(r) => r.dims(),
+            Space::Plan(r) => {
+                let (_, hi) = r.bounds();
+                [hi[0], hi[1], r.height()]
+            }
+        }
+    }
+
+    /// Volume (m^3).
+    pub fn volume(&self) -> f64 {
+        match self {
+            Space::Shoebox(r) => r.volume(),
+            Space::Plan(r) => r.volume(),
+        }
+    }
+}
 
 /// Wall order used everywhere: `x = 0`, `x = Lx`, `y = 0`, `y = Ly`, `z = 0` (floor),
 /// `z = Lz` (ceiling).

@@ -403,6 +403,24 @@ pub struct IasmConfig {
     /// (MVDR) and 0.170 -> 0.167 (GCC-PHAT); five-talker surveys rendered by
     /// pyroomacoustics within 0.004 m either way. Every other scene unchanged.
     pub reassociate: bool,
+    /// A source whose DoAs, each mirrored about its stop's array axis (azimuth `a` to
+    /// `-a`), all but one fit another source within the vote's gate (2 `sigma`) and meet
+    /// within [`IasmConfig::merge_dist_m`] of it, which is
+    /// heard from more stops, two of them at headings 20 degrees or more from every
+    /// heading the first was heard at, is that source's mirror image in the array, and is
+    /// removed ([`Refusal::ArrayMirror`]). Not in the paper. Default: on (the paper
+    /// profile: off).
+    ///
+    /// Why: an array that is nearly symmetric about its axis hears a source off the axis
+    /// and high above it also at the mirrored azimuth, as strongly at some stops (the
+    /// paper's array: its lower triangle is symmetric about x, and its small upper one is
+    /// what tells the two sides apart; a vent 2.3 m high, 1.5 m away, is heard at +149
+    /// and -147 degrees). While the robot drives straight the mirrored DoAs cross at the
+    /// source's mirror image across its path as consistently as the true ones; once it
+    /// turns, the true place keeps being heard and the mirror moves. Two real sources
+    /// mirrored across a straight path are kept: no turn tells them apart, and neither
+    /// is removed.
+    pub array_mirror: bool,
     /// For DoAs from a linear array: the azimuth of its line (degrees, array frame; the
     /// `ssl` crate's `MicArray::mirror_axis_deg`). Such an array hears the angle to its
     /// line only, so each DoA `a` is as much `2 * axis - a`, its mirror image, and the
@@ -529,6 +547,7 @@ impl Default for IasmConfig {
             room_margin_m: 0.3,
             share_gate_sigmas: 0.5,
             reassociate: true,
+            array_mirror: true,
             rank_gain: 0.5,
             mirror_axis_deg: None,
         }
@@ -553,6 +572,7 @@ impl IasmConfig {
                 room_margin_m: 0.0,
                 share_gate_sigmas: 0.0,
                 reassociate: false,
+                array_mirror: false,
                 rank_gain: 1.0,
                 ..Self::default()
             },

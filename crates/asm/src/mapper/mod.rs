@@ -182,6 +182,9 @@ pub enum Refusal {
     /// [`IasmConfig::room_margin_m`] from a free one, and no free place near it fits its
     /// DoAs.
     OutsideRoom,
+    /// The mirror image, about the array's axis, of a source heard from more stops and
+    /// from headings it was not ([`IasmConfig::array_mirror`]).
+    ArrayMirror,
 }
 
 /// The result of one I-ASM run.

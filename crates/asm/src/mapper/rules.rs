@@ -116,6 +116,8 @@ impl Mapper {
                     Some(Refusal::Misplaced)
                 } else if self.thinly_heard(&sources[i].rays, stops) {
                     Some(Refusal::ThinlyHeard)
+                } else if self.array_mirror(i, sources, stops) {
+                    Some(Refusal::ArrayMirror)
                 } else {
                     None
                 }
@@ -312,6 +314,51 @@ impl Mapper {
             settle(&mut sources[i], p, best);
             sources.remove(j);
         }
+    }
+
+    /// Whether source `i` is another's mirror image in the array (see
+    /// [`IasmConfig::array_mirror`]).
+    pub(super) fn array_mirror(&self, i: usize, sources: &[Source], stops: &Stops) -> bool {
+        if !self.config.array_mirror || self.mirror.is_some() {
+            return false;
+        }
+        let (gate, turn) = (2.0 * self.sigma, 20f64.to_radians());
+        let poses = stops.poses();
+        let a = &sources[i];
+        let headings: Vec<f64> = a.rays.iter().map(|r| poses[r.stop].theta).collect();
+        let a_stops = stops_of(&a.rays);
+        sources.iter().enumerate().any(|(j, b)| {
+            if j == i || stops_of(&b.rays).len() <= a_stops.len() {
+                return false;
+            }
+            // Each of a's DoAs mirrored about its stop's heading: 2 theta - bearing.
+            let mirrored: Vec<Ray> = a
+                .rays
+                .iter()
+                .map(|r| Ray {
+                    bearing: 2.0 * poses[r.stop].theta - r.bearing,
+                    ..*r
+                })
+                .collect();
+            let fits = mirrored
+                .iter()
+                .filter(|r| r.miss([b.x, b.y]) <= gate)
+                .count();
+            // Where the mirrored DoAs meet: at b, as a's own meet at a.
+            let meets = fit_bearings([b.x, b.y], &mirrored, self.sigma, Trim::OFF)
+                .is_some_and(|(p, _)| (p[0] - b.x).hypot(p[1] - b.y) <= self.config.merge_dist_m);
+            // And b was heard after the robot turned, where a was not.
+            let turned = b
+                .rays
+                .iter()
+                .filter(|r| {
+                    headings
+                        .iter()
+                        .all(|h| wrap_rad(poses[r.stop].theta - h).abs() >= turn)
+                })
+                .count();
+            meets && fits + 1 >= a.rays.len() && turned >= 2
+        })
     }
 
     /// Whether `q` lies within `margin` (m) of the bounding box of the map's known cells.

@@ -1,4 +1,5 @@
-//! Scenes: a shoebox room with sources, and a robot carrying an array along a trajectory.
+//! Scenes: a room (a shoebox, or any floor plan) with sources, and a robot carrying an
+//! array along a trajectory.
 //! One TOML file describes a scene; [`PreparedScene::render_stop`] renders what the array hears at
 //! one stop.
 //!
@@ -11,6 +12,11 @@
 //! [room]
 //! dims = [6.0, 4.0, 3.0]
 //! rt60 = 0.3            # or absorption = [x0, x1, y0, y1, floor, ceiling]
+//! # A room that is not a box: its floor plan instead of dims (corners in order, x, y >= 0),
+//! # rendered by `crate::plan` (images checked per microphone, a diffuse tail):
+//! # plan = [[0, 0], [8, 0], [8, 7], [5, 7], [5, 3], [0, 3]]   # an L
+//! # height = 3.0
+//! # rt60 = 0.6          # or absorption = [one per wall (corner i to i + 1)..., floor, ceiling]
 //! [array]
 //! preset = "iasm6"      # resolved by the application; or positions = [[x, y, z], ...]
 //! height = 0.6          # height of the array frame's origin (m)
@@ -37,8 +43,9 @@ use rand_distr::StandardNormal;
 use serde::Deserialize;
 
 use crate::error::SimError;
+use crate::plan::PlanRoom;
 use crate::render::{RenderConfig, Renderer, RoomSource};
-use crate::room::Room;
+use crate::room::{Room, Space};
 use crate::signal::{SignalKind, generate, scale_to_unit_power};
 
 fn invalid(field: impl Into<String>, message: impl Into<String>) -> SimError {
@@ -113,16 +120,22 @@ fn default_c() -> f64 {
     343.0
 }
 
-/// The room of a scene.
+/// The room of a scene: a shoebox (`dims`) or a floor plan (`plan` and `height`).
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RoomSpec {
-    /// Dimensions (m).
-    pub dims: [f64; 3],
+    /// A shoebox's dimensions (m).
+    pub dims: Option<[f64; 3]>,
+    /// A floor plan's corners (m, in order, either way round; x and y not negative), for a
+    /// room that is not a box ([`crate::plan`]).
+    pub plan: Option<Vec<[f64; 2]>>,
+    /// A floor plan's height (m).
+    pub height: Option<f64>,
     /// Target reverberation time (s); exclusive with `absorption`.
     pub rt60: Option<f64>,
-    /// Per-wall energy absorption (x0, x1, y0, y1, floor, ceiling).
-    pub absorption: Option<[f64; 6]>,
+    /// Per-surface energy absorption: a shoebox's six (x0, x1, y0, y1, floor, ceiling), or
+    /// one per wall of a plan (corner `i` to `i + 1`) then floor and ceiling.
+    pub absorption: Option<Vec<f64>>,
 }
 
 /// The array of a scene.
@@ -214,7 +227,7 @@ pub struct PreparedScene {
     /// The scene as written.
     pub scene: Scene,
     /// The room.
-    pub room: Room,
+    pub room: Space,
     /// Microphone positions in the array frame (m).
     pub mics: Vec<[f64; 3]>,
     /// The robot's stops.
@@ -248,6 +261,71 @@ impl Scene {
             {
                 *p = base.join(&*p);
             }
+        }
+    }
+
+    /// The room as written: a shoebox from `dims`, or a plan from `plan` and `height`,
+    /// with `rt60` or `absorption`.
+    ///
+    /// # Errors
+    /// [`SimError::Invalid`] naming the field.
+    pub fn space(&self) -> Result<Space, SimError> {
+        let r = &self.room;
+        let both = || invalid("room", "give rt60 or absorption, not both");
+        let neither = || invalid("room", "give rt60 or absorption");
+        match (r.dims, &r.plan, r.height) {
+            (Some(dims), None, None) => Ok(Space::Shoebox(match (r.rt60, &r.absorption) {
+                (Some(t), None) => Room::with_rt60(dims, t, self.speed_of_sound)?,
+                (None, Some(a)) => {
+                    let six: [f64; 6] = a.as_slice().try_into().map_err(|_| {
+                        invalid(
+                            "room.absorption",
+                            format!("{} values for a shoebox's six surfaces", a.len()),
+                        )
+                    })?;
+                    Room::new(dims, six)?
+                }
+                (None, None) => return Err(neither()),
+                (Some(_), Some(_)) => return Err(both()),
+            })),
+            (None, Some(plan), Some(height)) => {
+                if let Some(c) = plan.iter().find(|c| c[0] < 0.0 || c[1] < 0.0) {
+                    return Err(invalid(
+                        "room.plan",
+                        format!("corner {c:?}: give the plan in x, y >= 0 (the map starts at 0)"),
+                    ));
+                }
+                Ok(Space::Plan(match (r.rt60, &r.absorption) {
+                    (Some(t), None) => {
+                        if !(t.is_finite() && t > 0.0 && t <= MAX_RT60_S) {
+                            return Err(invalid(
+                                "room.rt60",
+                                format!("{t} s is not a reverberation time in (0, {MAX_RT60_S}] s"),
+                            ));
+                        }
+                        PlanRoom::with_rt60(plan, height, t)?
+                    }
+                    (None, Some(a)) => PlanRoom::new(plan, height, a)?,
+                    (None, None) => return Err(neither()),
+                    (Some(_), Some(_)) => return Err(both()),
+                }))
+            }
+            _ => Err(invalid(
+                "room",
+                "give dims (a shoebox) or plan and height (a floor plan), not both",
+            )),
+        }
+    }
+
+    /// The x and y extent of the room as written (m), from 0: what the waypoints must lie
+    /// in before the stops are checked one by one.
+    fn room_extent(&self) -> [f64; 2] {
+        match (&self.room.dims, &self.room.plan) {
+            (Some(d), _) => [d[0], d[1]],
+            (None, Some(p)) => p
+                .iter()
+                .fold([0.0f64; 2], |m, c| [m[0].max(c[0]), m[1].max(c[1])]),
+            (None, None) => [0.0; 2],
         }
     }
 
@@ -288,8 +366,9 @@ impl Scene {
         let r = &self.room;
         // Refuses a time `t` (s) for `field` unless in (0, MAX_RT60_S] and its `travel`
         // (metres of sound per second of it) reaches at most MAX_CALIBRATION_IMAGES image
-        // sources (a sphere over the room's volume).
-        let volume: f64 = r.dims.iter().product();
+        // sources (a sphere over the room's volume). A plan's images are enumerated for
+        // its first 55 ms only, whatever the times.
+        let volume: f64 = r.dims.map_or(0.0, |d| d.iter().product());
         let check_time = |field: &str, what: &str, t: f64, travel: f64, hint: &str| {
             if !(t.is_finite() && t > 0.0 && t <= MAX_RT60_S) {
                 return Err(invalid(
@@ -334,14 +413,7 @@ impl Scene {
                 "the RT60 calibration enumerates them; give a shorter rt60 or `absorption`",
             )?;
         }
-        let room = match (r.rt60, r.absorption) {
-            (Some(t), None) => Room::with_rt60(r.dims, t, self.speed_of_sound)?,
-            (None, Some(a)) => Room::new(r.dims, a)?,
-            (None, None) => return Err(invalid("room", "give rt60 or absorption")),
-            (Some(_), Some(_)) => {
-                return Err(invalid("room", "give rt60 or absorption, not both"));
-            }
-        };
+        let room = self.space()?;
         let mics = match (&self.array.preset, &self.array.positions) {
             (Some(p), None) => {
                 preset(p).ok_or_else(|| invalid("array.preset", format!("unknown array {p:?}")))?
@@ -359,7 +431,7 @@ impl Scene {
             if !room.contains(s.pos) {
                 return Err(invalid(
                     format!("sources[{i}].pos"),
-                    format!("{:?} is outside the room {:?}", s.pos, r.dims),
+                    format!("{:?} is outside the room", s.pos),
                 ));
             }
         }
@@ -536,12 +608,12 @@ impl Scene {
                     ));
                 }
                 // Check the path before walking it: its length bounds the stop count.
-                let [lx, ly, _] = self.room.dims;
+                let [lx, ly] = self.room_extent();
                 for (i, p) in w.iter().enumerate() {
                     if !((0.0..=lx).contains(&p[0]) && (0.0..=ly).contains(&p[1])) {
                         return Err(invalid(
                             format!("trajectory.waypoints[{i}]"),
-                            format!("{p:?} is outside the room {:?}", self.room.dims),
+                            format!("{p:?} is outside the room (0..{lx}, 0..{ly})"),
                         ));
                     }
                 }
@@ -658,7 +730,7 @@ impl PreparedScene {
                     signal: x.clone(),
                 })
                 .collect();
-            Renderer::new(
+            Renderer::new_in(
                 &self.room,
                 &sources,
                 self.clip_samples(),
@@ -712,7 +784,7 @@ impl PreparedScene {
             .collect();
         let n = signals.iter().map(Vec::len).max().unwrap_or(0);
         (!sources.is_empty())
-            .then(|| Renderer::new(&self.room, &sources, n, &self.render_config()).render(mics))
+            .then(|| Renderer::new_in(&self.room, &sources, n, &self.render_config()).render(mics))
     }
 
     /// What the array hears of the robot alone at stop `k`: its own sources (`on_robot`,
