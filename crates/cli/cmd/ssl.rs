@@ -137,7 +137,7 @@ fn localise_dataset(setup: &Setup, ds: &Dataset, dir: &Path) -> Result<(Vec<File
         setup.config.method,
         elapsed,
         1e3 * elapsed / rows.len() as f64,
-        pooling_note(&rows, setup.config.pooling),
+        pooling_note(&rows, &setup.config),
         match &setup.settings.noise {
             Some(p) => format!("; the robot's own noise in {} subtracted", p.display()),
             None => String::new(),
@@ -484,10 +484,13 @@ fn print_rows(rows: &[FileDoas], config: &SslConfig, array: &MicArray, json: boo
 }
 
 /// With the default pooling ([`ssl::Pooling::Auto`]), how many recordings were steady and
-/// pooled by their mean (empty when the pooling was set).
-fn pooling_note(rows: &[crate::pipeline::FileDoas], set: ssl::Pooling) -> String {
-    if set != ssl::Pooling::Auto {
+/// pooled by their mean (empty when the pooling was set; MUSIC always pools by the mean).
+fn pooling_note(rows: &[crate::pipeline::FileDoas], config: &ssl::SslConfig) -> String {
+    if config.pooling != ssl::Pooling::Auto {
         return String::new();
+    }
+    if config.method == ssl::Method::Music {
+        return "; pooled by the blocks' mean, as MUSIC always is (ssl::Pooling::Auto)".into();
     }
     let mean = rows
         .iter()

@@ -158,6 +158,10 @@ class _DOA:
         }
         if self.dim == 2:
             ssl["elevation"] = {"min_deg": 0.0, "max_deg": 0.0}
+        if self._method == "music":
+            # pyroomacoustics' MUSIC takes num_src as its signal subspace (iasm's own MUSIC
+            # takes one per block and bin: pass music_sources to choose).
+            ssl["music_sources"] = max(1, min(self.num_src, self.M - 1))
         ssl.update(self._settings)
         frames = np.ascontiguousarray(X.transpose(2, 0, 1), dtype=np.complex64)
         key = _json({"ssl": ssl})

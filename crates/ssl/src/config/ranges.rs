@@ -117,7 +117,7 @@ impl SslConfig {
             ),
             (
                 "music_freq_smoothing",
-                self.music_freq_smoothing,
+                self.music_freq_smoothing.unwrap_or(0),
                 0,
                 4096,
                 "0 to 4096 bins",

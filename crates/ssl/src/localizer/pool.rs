@@ -17,10 +17,23 @@ impl Localizer {
 
     /// How the blocks of `spec` are pooled: as set, or for [`Pooling::Auto`], the mean
     /// where the recording is steady and noise-like in each octave of the band
-    /// ([`crate::steady`]), else max.
+    /// ([`crate::steady`]), else max; always the mean for MUSIC.
+    ///
+    /// Why the mean for MUSIC: its pseudo-spectrum is no power. A block's peak height is
+    /// how nearly the noise subspace misses a steering vector, which spans orders of
+    /// magnitude from block to block, so the maximum over blocks is the maximum of
+    /// outliers; MUSIC as Schmidt defines it uses every snapshot, and the mean of the
+    /// blocks' pseudo-spectra uses them all. Measured on arrangement II (first 4 DoAs
+    /// within 5 degrees, in the poses' frame): max 0.194, mean 0.381 with the bins grouped
+    /// as NormMUSIC groups them, 0.606 with each bin apart
+    /// ([`crate::SslConfig::music_freq_smoothing`]), 0.662 with noise-only groups flat
+    /// ([`crate::SslConfig::music_sources`]); pyroomacoustics' MUSIC 0.388.
     pub(super) fn pooling_of(&self, spec: &Spectrogram) -> Pooling {
         if self.config.pooling != Pooling::Auto {
             return self.config.pooling;
+        }
+        if self.config.method == crate::Method::Music {
+            return Pooling::Mean;
         }
         let (n_blocks, frames) = self.blocks(spec.num_frames());
         if crate::steady::Octaves::of(spec, n_blocks, &frames).is_steady() {

@@ -89,7 +89,7 @@ pub(crate) fn estimator(
                 music::Subspace {
                     sources: config.music_sources,
                     max_sources: config.num_peaks,
-                    smoothing: config.music_freq_smoothing,
+                    smoothing: config.music_smoothing(),
                     normalise,
                 },
             )

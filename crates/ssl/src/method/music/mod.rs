@@ -87,6 +87,18 @@ const FLOOR: f32 = 1e-5;
 /// 10 dB weaker than the group's strongest still counts as one.
 const EIG_RATIO: f32 = 0.1;
 
+/// MUSIC (unnormalised) with the subspace dimension estimated: a signal eigenvalue must
+/// also stand this far above the group's noise floor, the smallest eigenvalue its
+/// snapshots can resolve; a group with none holds no source and adds the same to every
+/// direction. 10 dB, as [`EIG_RATIO`].
+///
+/// Why for MUSIC: its groups are summed unnormalised, and in a group that holds only noise
+/// the eigenvalues lie close together, so [`EIG_RATIO`] alone takes N of them for signal
+/// and leaves a noise subspace whose pseudo-spectrum spikes at random directions as high
+/// as a source's; those groups decide the sum. NormMUSIC, each group scaled to a peak of
+/// one, shrugs them off.
+const FLOOR_RATIO: f32 = 10.0;
+
 /// The MUSIC and NormMUSIC estimators for one array, grid, band and sample rate.
 #[derive(Clone, Debug)]
 pub struct Music {
@@ -446,6 +458,7 @@ impl Music {
         let mut cov = DMatrix::<Complex<f32>>::zeros(m, m);
         for (k, &c) in self.centres.iter().enumerate() {
             let band = c.saturating_sub(self.smoothing)..(c + self.smoothing + 1).min(self.n_bins);
+            let snapshots = frames.len() * band.len();
             covariance(stft, frames.clone(), band, &mut cov);
             // Scale to unit trace (the decomposition does not care, f32 does), then mirror.
             let tr: f32 = (0..m).map(|i| cov[(i, i)].re).sum();
@@ -464,7 +477,19 @@ impl Music {
             let eig = SymmetricEigen::new(cov.clone());
             let mut order: Vec<usize> = (0..m).collect();
             order.sort_by(|&x, &y| eig.eigenvalues[y].total_cmp(&eig.eigenvalues[x]));
-            let k_sig = if self.estimate {
+            let k_sig = if self.estimate && !self.normalise {
+                // The eigenvalues the group's snapshots resolve; the least is the floor.
+                let rank = snapshots.clamp(2, m);
+                let floor = eig.eigenvalues[order[rank - 1]].max(0.0);
+                let top = eig.eigenvalues[order[0]];
+                order[..self.sources.min(rank - 1)]
+                    .iter()
+                    .take_while(|&&e| {
+                        let v = eig.eigenvalues[e];
+                        v >= EIG_RATIO * top && v >= FLOOR_RATIO * floor
+                    })
+                    .count()
+            } else if self.estimate {
                 let top = eig.eigenvalues[order[0]];
                 1 + order[1..self.sources]
                     .iter()
@@ -473,6 +498,10 @@ impl Music {
             } else {
                 self.sources
             };
+            if k_sig == 0 {
+                // No source in the group: an empty signal subspace, as for no energy.
+                continue;
+            }
             let signal = k_sig <= m - k_sig;
             let keep = if signal {
                 &order[..k_sig]
