@@ -290,3 +290,59 @@ fn r49_the_report_folder_is_replaced_whole_or_not_at_all() {
     let left: Vec<_> = std::fs::read_dir(&theirs).unwrap().collect();
     assert_eq!(left.len(), 1);
 }
+
+/// Another tool's DoA table (`--table`) is a row beside ours, scored and mapped as the
+/// published tables are: a method's own DoAs, written by `iasm ssl --out` and given back
+/// as a table, score exactly what the method's row scores; a table with a row missing is
+/// refused by name.
+#[test]
+fn a_table_of_another_tool_is_a_row_beside_ours() {
+    let dir = tempdir();
+    let root = dataset(&dir);
+    let table = path(&dir, "theirs_gcc.csv");
+    let o = iasm(&[
+        "ssl",
+        "--dataset",
+        arg(&root),
+        "--method",
+        "gcc-phat",
+        "--num",
+        "2",
+        "--out",
+        arg(&table),
+    ]);
+    assert!(o.status.success(), "{}", show(&o));
+    let out = path(&dir, "report");
+    let table_arg = arg(&table).to_owned();
+    let r = json(&compare(
+        &root,
+        &out,
+        "gcc-phat",
+        "2",
+        &["--json", "--table", &table_arg],
+    ));
+    let rows = r["rows"].as_array().unwrap();
+    let names: Vec<&str> = rows.iter().map(|x| x["name"].as_str().unwrap()).collect();
+    assert_eq!(names, ["gcc-phat", "azEst_exact.csv", "theirs_gcc.csv"]);
+    assert_eq!(rows[2]["kind"], "given");
+    // The same DoAs (written to 0.01 degree): the same hits, errors and maps.
+    assert_eq!(rows[2]["doa"]["hits"], rows[0]["doa"]["hits"], "{r}");
+    let err = |k: usize| rows[k]["doa"]["mean_hit_error_deg"].as_f64().unwrap();
+    assert!((err(2) - err(0)).abs() < 0.005, "{r}");
+    let ospa = |k: usize| rows[k]["ospa"]["mean"].as_f64().unwrap();
+    assert!((ospa(2) - ospa(0)).abs() < 1e-3, "{r}");
+    assert!(rows[2]["ms_per_recording"].is_null());
+    // One row short: named, not a shifted map.
+    let text = std::fs::read_to_string(&table).unwrap();
+    let short = path(&dir, "short.csv");
+    let mut lines: Vec<&str> = text.lines().collect();
+    lines.pop();
+    std::fs::write(&short, lines.join("\n")).unwrap();
+    let o = compare(&root, &out, "gcc-phat", "1", &["--table", arg(&short)]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("short.csv") && err.contains("19 rows for 20 recordings"),
+        "{err}"
+    );
+}

@@ -424,6 +424,13 @@ pub struct CompareArgs {
     /// --score --rules` does: six more localisations per recording and method.
     #[arg(long)]
     pub rules: bool,
+    /// A DoA table of another tool on the same recordings (one row per recording in the
+    /// audio's order, N azimuths in degrees in the array frame, strongest first; CSV or
+    /// .xlsx, as `iasm ssl --out` writes and `scripts/pra_doa_tables.py` writes for
+    /// pyroomacoustics' methods): a row beside ours, scored and mapped the same way.
+    /// Repeatable; the row is named after the file.
+    #[arg(long = "table", value_name = "FILE")]
+    pub tables: Vec<PathBuf>,
     /// The settings (the method is each row's own).
     #[command(flatten)]
     pub settings: SettingsArgs,

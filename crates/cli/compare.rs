@@ -49,6 +49,8 @@ pub struct CompareOptions {
     pub open_margin_m: Option<f64>,
     /// Also take each method's census of missed near sources ([`crate::rules`]).
     pub rules: bool,
+    /// DoA tables of other tools, each a row (`--table`).
+    pub tables: Vec<std::path::PathBuf>,
 }
 
 /// One row of the comparison: a method of ours, or a published table.
@@ -56,7 +58,8 @@ pub struct CompareOptions {
 pub struct Row {
     /// The method's name, or the published table's file name.
     pub name: String,
-    /// `"ssl"` for a method run here, `"published"` for a table in `azimuth/`.
+    /// `"ssl"` for a method run here, `"published"` for a table in `azimuth/`, `"given"`
+    /// for a table given with `--table` (another tool's DoAs).
     pub kind: &'static str,
     /// The DoA score (first N DoAs, hit within [`HIT_DEG`]).
     pub doa: DoaScore,
@@ -154,7 +157,9 @@ pub fn compare(
     };
     let n = settings.ssl.num_peaks;
     let array = settings.mic_array()?;
-    let stages = (2 + usize::from(opts.rules)) * opts.methods.len() + ds.doa_tables.len();
+    let stages = (2 + usize::from(opts.rules)) * opts.methods.len()
+        + ds.doa_tables.len()
+        + opts.tables.len();
     let mut stage = 0;
     let mut tell = |what: String| {
         stage += 1;
@@ -222,12 +227,20 @@ pub fn compare(
         }
         rows.push(r);
     }
-    for t in &ds.doa_tables {
+    let published = ds.doa_tables.iter().map(|t| (t, "published"));
+    for (t, kind) in published.chain(opts.tables.iter().map(|t| (t, "given"))) {
         let name = crate::dataset::file_name(t);
         tell(format!("{name}: {} maps", opts.runs));
         let table = first_columns(read_table(t)?, n, t);
+        ensure!(
+            kind == "published" || table.len() == ds.audio.len(),
+            "{}: {} rows for {} recordings (one row per recording, in the audio's order)",
+            t.display(),
+            table.len(),
+            ds.audio.len()
+        );
         let survey = survey(table, t.display().to_string(), None, settings)?;
-        rows.push(row(&survey, name, "published", None, settings, opts)?);
+        rows.push(row(&survey, name, kind, None, settings, opts)?);
     }
     let base = base.context("nothing to compare: no method and no published table")?;
     Ok(Report {

@@ -24,6 +24,7 @@ pub fn run(a: &CompareArgs) -> Result<Outcome> {
         ospa_p: a.report.ospa_p,
         open_margin_m: a.open_margin,
         rules: a.rules,
+        tables: a.tables.clone(),
     };
     let t0 = std::time::Instant::now();
     // One line per stage; the stages' own progress bars (localising, mapping) show the rest.
