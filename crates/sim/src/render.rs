@@ -277,12 +277,11 @@ impl Renderer {
     /// In a plan, each playing source's diffuse tail heard at `centre`: its plane waves'
     /// spectra, high-passed as the images are, with where each comes from. A fresh draw
     /// per source and stop (seeded by both), so that sources and stops do not share it.
-    #[allow(clippy::type_complexity)]
     fn tails(
         &self,
         centre: [f64; 3],
         playing: &[bool],
-    ) -> Vec<Option<Vec<([f64; 3], Vec<Complex64>)>>> {
+    ) -> Vec<Option<TailWaves>> {
         let Images::Plan(room, images) = &self.images else {
             return vec![None; playing.len()];
         };
@@ -325,6 +324,9 @@ impl Renderer {
             .collect()
     }
 }
+
+/// A diffuse tail's plane waves: where each comes from, and its spectrum.
+type TailWaves = Vec<([f64; 3], Vec<Complex64>)>;
 
 /// Adds to the response spectrum `hs` (an `n`-point real FFT) the tail's plane waves as
 /// the microphone at `mic` hears them: each arrives `u . (mic - centre) / c` earlier there
