@@ -277,11 +277,7 @@ impl Renderer {
     /// In a plan, each playing source's diffuse tail heard at `centre`: its plane waves'
     /// spectra, high-passed as the images are, with where each comes from. A fresh draw
     /// per source and stop (seeded by both), so that sources and stops do not share it.
-    fn tails(
-        &self,
-        centre: [f64; 3],
-        playing: &[bool],
-    ) -> Vec<Option<TailWaves>> {
+    fn tails(&self, centre: [f64; 3], playing: &[bool]) -> Vec<Option<TailWaves>> {
         let Images::Plan(room, images) = &self.images else {
             return vec![None; playing.len()];
         };

@@ -317,7 +317,9 @@ pub struct IasmConfig {
     /// profile: 0). Measured: see the module docs.
     pub wall_clearance_m: f64,
     /// The map is the room: a source must lie in a cell the map marks free, or within this
-    /// distance (m) of one (a source may stand at a wall, on a table, in a vent's grille).
+    /// distance (m) of one (a source may stand at a wall, on a table, in a vent's grille),
+    /// or in unknown space that a stop which heard it sees through cells that are not
+    /// occupied (a corner the robot's range sensor never surveyed, a doorway's far side).
     /// One that does not, whichever step made it, moves to the free place nearest it
     /// where its own DoAs still fit (as many of its stops within the vote's gate, 2
     /// `sigma`, as before, less one, and never fewer than

@@ -1,8 +1,10 @@
 //! The map is the room ([`IasmConfig::room_margin_m`]): no source is reported where the
 //! map holds a wall or space the robot never saw behind one.
 //!
-//! A source outside the room moves to the free place nearest it where its DoAs still fit,
-//! or is refused. Which free places are looked at: the free cells within the vote's reach
+//! A source outside the room (in a wall, or in the unknown that every stop that heard it
+//! sees only through a wall) moves to the free place nearest it where its DoAs still fit,
+//! or is refused. Unknown space that a stop sees through free cells is unsurveyed, not
+//! beyond the walls, and a source there stays. Which free places are looked at: the free cells within the vote's reach
 //! of it, `merge_dist_m` + 2 `sigma` of its nearest stop's range (a DoA error of 2 `sigma`
 //! moves a crossing by that much along it), nearest first; the first that keeps as many
 //! of its stops within the gate as the source had, less one, is taken. Looking further
@@ -38,9 +40,28 @@ impl Mapper {
                 .is_empty()
     }
 
+    /// Whether a stop that heard the source at `p` (one of `rays`) sees it through cells
+    /// that are not occupied: the unknown it stands in is then space the robot did not
+    /// survey (a corner its range sensor never turned to, a doorway's far side), not space
+    /// behind a wall. Occupied cells within [`IasmConfig::room_margin_m`] of `p` are its
+    /// own (the wall it stands at, the furniture it stands on).
+    fn seen_in_the_open(&self, p: [f64; 2], rays: &[Ray]) -> bool {
+        let margin = self.config.room_margin_m;
+        rays.iter().any(|r| {
+            let d = [p[0] - r.from[0], p[1] - r.from[1]];
+            let len = d[0].hypot(d[1]);
+            let keep = 1.0 - margin / len;
+            len <= margin
+                || self
+                    .map
+                    .first_occupied(r.from, [r.from[0] + keep * d[0], r.from[1] + keep * d[1]])
+                    .is_none()
+        })
+    }
+
     /// Where a source at `p` explaining `rays` may stand in the room (see the module docs).
     pub(super) fn place_in_room(&self, p: [f64; 2], rays: &[Ray]) -> InRoom {
-        if self.in_room(p) {
+        if self.in_room(p) || self.seen_in_the_open(p, rays) {
             return InRoom::Inside;
         }
         let gate = 2.0 * self.sigma;

@@ -100,3 +100,40 @@ fn an_open_region_is_no_room() {
     assert!(refused.is_empty(), "{refused:?}");
     assert_eq!([sources[0].x, sources[0].y], q);
 }
+
+#[test]
+fn unknown_space_seen_in_the_open_is_unsurveyed_not_outside() {
+    // The L's hall with its north wall opened between x = 1 and 2 (a doorway): a source
+    // 1.2 m beyond it, in the unknown, is seen through the doorway by stop 1 (at x = 1)
+    // and stays; the same source with the wall closed is behind it.
+    let q = [1.5, 1.9];
+    let run = |door: bool| {
+        let mapper = ghost_mapper_on(
+            |[x, y]| match (x, y) {
+                (_, y) if y < 0.5 => Cell::Free,
+                (x, y) if door && (1.0..2.0).contains(&x) && y < 0.65 => Cell::Free,
+                (x, _) if x > 6.0 => Cell::Free,
+                (x, y) if y < 0.65 || x > 5.85 => Cell::Occupied,
+                _ => Cell::Unknown,
+            },
+            IasmConfig::default(),
+        );
+        let poses: Vec<Pose> = (0..9).map(|i| Pose::new(i as f64, -1.0, 0.0)).collect();
+        let rows: Vec<Vec<f64>> = poses.iter().map(|p| vec![p.bearing_to(q)]).collect();
+        let complete = mapper.complete_by_length(&rows);
+        let stops = stops_with(&poses, &rows, &complete, &[false; 9]);
+        let mut sources = vec![heard_from(q, &poses, &[0, 1, 2, 3])];
+        let mut left = vec![Vec::new(); 9];
+        let refused = mapper.drop_implausible(&mut sources, &stops, &mut left);
+        (
+            sources.iter().map(|s| [s.x, s.y]).collect::<Vec<_>>(),
+            refused,
+        )
+    };
+    let (kept, refused) = run(true);
+    assert!(refused.is_empty(), "{refused:?}");
+    assert_eq!(kept, vec![q]);
+    let (kept, refused) = run(false);
+    assert!(kept.is_empty(), "{kept:?}");
+    assert_eq!(refused[0].rule, Refusal::OutsideRoom);
+}
