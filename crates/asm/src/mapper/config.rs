@@ -406,12 +406,12 @@ pub struct IasmConfig {
     /// pyroomacoustics within 0.004 m either way. Every other scene unchanged.
     pub reassociate: bool,
     /// A source whose DoAs, each mirrored about its stop's array axis (azimuth `a` to
-    /// `-a`), all but one fit another source within the vote's gate (2 `sigma`) and meet
-    /// within [`IasmConfig::merge_dist_m`] of it, which is
+    /// `-a`), all but one fit another source within the vote's gate (2 `sigma`) at stops
+    /// that heard that source too (a mirror is heard in the same recording as its source)
+    /// and meet within [`IasmConfig::merge_dist_m`] of it, which is
     /// heard from more stops, two of them at headings 20 degrees or more from every
     /// heading the first was heard at, is that source's mirror image in the array, and is
-    /// removed ([`Refusal::ArrayMirror`]). Not in the paper. Default: on (the paper
-    /// profile: off).
+    /// removed ([`Refusal::ArrayMirror`]). Not in the paper. Default: off.
     ///
     /// Why: an array that is nearly symmetric about its axis hears a source off the axis
     /// and high above it also at the mirrored azimuth, as strongly at some stops (the
@@ -422,6 +422,12 @@ pub struct IasmConfig {
     /// turns, the true place keeps being heard and the mirror moves. Two real sources
     /// mirrored across a straight path are kept: no turn tells them apart, and neither
     /// is removed.
+    ///
+    /// Why off: two real sources mirrored across a path the robot drives back and forth,
+    /// one of them not heard after a turn, look the same. Measured: `l_wing` GCC-PHAT
+    /// 0.283 -> 0.209 m with it (the vent's mirror gone), the suite and `fixtures/heldout`
+    /// unchanged, but arrangement II from raw audio (MVDR, 50 runs) 0.147 -> 0.149 m: in
+    /// one run a loudspeaker mirrored across the robot's line by another was refused.
     pub array_mirror: bool,
     /// For DoAs from a linear array: the azimuth of its line (degrees, array frame; the
     /// `ssl` crate's `MicArray::mirror_axis_deg`). Such an array hears the angle to its
@@ -549,7 +555,7 @@ impl Default for IasmConfig {
             room_margin_m: 0.3,
             share_gate_sigmas: 0.5,
             reassociate: true,
-            array_mirror: true,
+            array_mirror: false,
             rank_gain: 0.5,
             mirror_axis_deg: None,
         }

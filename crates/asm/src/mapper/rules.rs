@@ -340,9 +340,11 @@ impl Mapper {
                     ..*r
                 })
                 .collect();
+            // A mirror is heard in the same recording as its source: at b's own stops.
+            let b_stops = stops_of(&b.rays);
             let fits = mirrored
                 .iter()
-                .filter(|r| r.miss([b.x, b.y]) <= gate)
+                .filter(|r| r.miss([b.x, b.y]) <= gate && b_stops.binary_search(&r.stop).is_ok())
                 .count();
             // Where the mirrored DoAs meet: at b, as a's own meet at a.
             let meets = fit_bearings([b.x, b.y], &mirrored, self.sigma, Trim::OFF)

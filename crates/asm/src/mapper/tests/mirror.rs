@@ -1,6 +1,7 @@
 //! An array nearly symmetric about its axis hears a high source also at the mirrored
-//! azimuth ([`IasmConfig::array_mirror`]): the mirror is no source once the robot has
-//! turned, and two real sources mirrored across a straight path both stay.
+//! azimuth ([`IasmConfig::array_mirror`], off by default): with the rule on, the mirror is
+//! no source once the robot has turned, and two real sources mirrored across a straight
+//! path both stay.
 
 use super::*;
 
@@ -12,12 +13,20 @@ fn turning_path() -> Vec<Pose> {
         .collect()
 }
 
+/// The rule on (it is off by default).
+fn on() -> IasmConfig {
+    IasmConfig {
+        array_mirror: true,
+        ..IasmConfig::default()
+    }
+}
+
 fn judged(
     poses: &[Pose],
     sources: Vec<Source>,
     heard: &[[f64; 2]],
 ) -> (Vec<[f64; 2]>, Vec<Refused>) {
-    let mapper = ghost_mapper(IasmConfig::default());
+    let mapper = ghost_mapper(on());
     let rows: Vec<Vec<f64>> = poses
         .iter()
         .map(|p| heard.iter().map(|&q| p.bearing_to(q)).collect())
@@ -48,11 +57,8 @@ fn a_sources_mirror_in_the_array_is_no_source_once_the_robot_turned() {
         ([refused[0].x, refused[0].y], &refused[0].rule),
         (mirror, &Refusal::ArrayMirror)
     );
-    // Off (the paper profile's value), the rule removes nothing.
-    let mapper = ghost_mapper(IasmConfig {
-        array_mirror: false,
-        ..IasmConfig::default()
-    });
+    // Off (the default), the rule removes nothing.
+    let mapper = ghost_mapper(IasmConfig::default());
     let (mut s, mut left) = (sources, vec![Vec::new(); poses.len()]);
     let rows: Vec<Vec<f64>> = poses.iter().map(|p| vec![p.bearing_to(vent)]).collect();
     let complete = mapper.complete_by_length(&rows);
