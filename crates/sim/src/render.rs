@@ -228,24 +228,16 @@ impl Renderer {
                     match &self.images {
                         Images::Shoebox(images) => add_images(&mut h[..l], &images[i], m, fs, c),
                         Images::Plan(room, images) => {
-                            let from = plan::tail_start(distance(images[i].src, centre), c);
-                            plan::add_plan_images(
-                                room,
-                                &images[i],
-                                m,
-                                fs,
-                                c,
-                                &mut h[..l],
-                                Some(from),
-                            );
+                            let from = tails[i].as_ref().map(|t| t.from);
+                            plan::add_plan_images(room, &images[i], m, fs, c, &mut h[..l], from);
                         }
                     }
                     high_pass(&mut h[..l], HIGH_PASS_HZ, fs);
                     self.fwd
                         .process(&mut h, &mut hs)
                         .expect("buffers sized by the plan");
-                    if let Some(waves) = &tails[i] {
-                        add_tail(&mut hs, waves, m, centre, c / fs, self.fft_len);
+                    if let Some(tail) = &tails[i] {
+                        add_tail(&mut hs, &tail.waves, m, centre, c / fs, self.fft_len);
                     }
                     for (a, x) in acc.iter_mut().zip(spectra) {
                         for ((a, x), h) in a.iter_mut().zip(x).zip(&hs) {
@@ -274,12 +266,13 @@ impl Renderer {
 }
 
 impl Renderer {
-    /// In a plan, each playing source's diffuse tail heard at `centre`: its plane waves'
-    /// spectra, high-passed as the images are, with where each comes from. A fresh draw
-    /// per source and stop (seeded by both), so that sources and stops do not share it.
-    fn tails(&self, centre: [f64; 3], playing: &[bool]) -> Vec<Option<TailWaves>> {
+    /// In a plan, each playing source's diffuse tail heard at `centre`: when it takes
+    /// over, and its plane waves' spectra, high-passed as the images are, with where each
+    /// comes from. A fresh draw per source and stop (seeded by both), so that sources and
+    /// stops do not share it.
+    fn tails(&self, centre: [f64; 3], playing: &[bool]) -> Vec<Option<Tail>> {
         let Images::Plan(room, images) = &self.images else {
-            return vec![None; playing.len()];
+            return playing.iter().map(|_| None).collect();
         };
         let RenderConfig {
             fs,
@@ -301,7 +294,7 @@ impl Renderer {
                         ^ centre[1].to_bits().rotate_left(31)
                         ^ centre[2].to_bits().rotate_left(47);
                     let mut buf = self.fwd.make_input_vec();
-                    plan::tail_waves(room, fs, c, l, from, seed)
+                    let waves = plan::tail_waves(room, fs, c, l, from, seed)
                         .into_iter()
                         .zip(&dirs)
                         .map(|(mut w, d)| {
@@ -314,7 +307,8 @@ impl Renderer {
                                 .expect("buffers sized by the plan");
                             (*d, spec)
                         })
-                        .collect()
+                        .collect();
+                    Tail { from, waves }
                 })
             })
             .collect()
@@ -323,6 +317,13 @@ impl Renderer {
 
 /// A diffuse tail's plane waves: where each comes from, and its spectrum.
 type TailWaves = Vec<([f64; 3], Vec<Complex64>)>;
+
+/// One source's diffuse tail at one stop: when it takes over (s from emission, at the
+/// array's centre), and its plane waves.
+struct Tail {
+    from: f64,
+    waves: TailWaves,
+}
 
 /// Adds to the response spectrum `hs` (an `n`-point real FFT) the tail's plane waves as
 /// the microphone at `mic` hears them: each arrives `u . (mic - centre) / c` earlier there
