@@ -399,7 +399,7 @@ pub struct CompareArgs {
     #[arg(long, value_name = "DIR")]
     pub dataset: PathBuf,
     /// The methods: all, or a comma-separated list (gcc-phat, mvdr, srp-phat, music,
-    /// normmusic).
+    /// normmusic, tops, cssm, waves).
     #[arg(long, default_value = "all")]
     pub methods: String,
     /// Maps per method (seeds seed..seed + runs).
@@ -463,7 +463,7 @@ pub struct SettingsArgs {
     /// the settings file's `noise`, or the one WAV in the data set's noise/ folder].
     #[arg(long, value_name = "WAV")]
     pub noise: Option<PathBuf>,
-    /// Angular-spectrum method: gcc-phat, mvdr, srp-phat, music or normmusic [default:
+    /// Angular-spectrum method: gcc-phat, mvdr, srp-phat, music, normmusic, tops, cssm or waves [default:
     /// mvdr, or the settings file's].
     #[arg(long)]
     pub method: Option<Method>,

@@ -27,17 +27,46 @@ pub enum Method {
     /// are summed (Salvati, Drioli & Foresti 2014), so every bin votes alike.
     #[serde(rename = "normmusic", alias = "norm-music")]
     NormMusic,
+    /// Test of orthogonality of projected subspaces (Yoon, Kaplan & McClellan 2006): the
+    /// signal subspace of the loudest bin, carried to every other bin along each
+    /// direction, tested against that bin's noise subspace. One spectrum per recording.
+    Tops,
+    /// Coherent signal-subspace method (Wang & Kaveh 1985): every bin's covariance focused
+    /// onto the loudest bin and summed, then MUSIC there. One spectrum per recording.
+    Cssm,
+    /// Weighted average of signal subspaces (di Claudio & Parisi 2001): every bin's
+    /// weighted signal subspace focused onto the loudest bin, then MUSIC there. One
+    /// spectrum per recording.
+    Waves,
 }
 
 impl Method {
     /// Every method, in report order.
-    pub const ALL: [Method; 5] = [
+    pub const ALL: [Method; 8] = [
+        Method::GccPhat,
+        Method::Mvdr,
+        Method::SrpPhat,
+        Method::Music,
+        Method::NormMusic,
+        Method::Tops,
+        Method::Cssm,
+        Method::Waves,
+    ];
+
+    /// The methods that pool short blocks of frames ([`SslConfig::block_frames`]): all but
+    /// the coherent wideband ones ([`Method::COHERENT`]).
+    pub const BLOCKWISE: [Method; 5] = [
         Method::GccPhat,
         Method::Mvdr,
         Method::SrpPhat,
         Method::Music,
         Method::NormMusic,
     ];
+
+    /// The coherent wideband subspace methods, which take one spectrum of the whole
+    /// recording (their per-bin statistics need more snapshots than a block holds; see
+    /// [`crate::coherent`]).
+    pub const COHERENT: [Method; 3] = [Method::Tops, Method::Cssm, Method::Waves];
 
     /// The two methods of the paper's Table I (MBSS Locate's GCC-PHAT and MVDR).
     pub const PAPER: [Method; 2] = [Method::GccPhat, Method::Mvdr];
@@ -50,6 +79,9 @@ impl Method {
             Method::SrpPhat => "srp-phat",
             Method::Music => "music",
             Method::NormMusic => "normmusic",
+            Method::Tops => "tops",
+            Method::Cssm => "cssm",
+            Method::Waves => "waves",
         }
     }
 }
@@ -69,6 +101,9 @@ impl FromStr for Method {
             "srp-phat" | "srpphat" | "srp_phat" | "srp" => Ok(Method::SrpPhat),
             "music" => Ok(Method::Music),
             "normmusic" | "norm-music" | "norm_music" => Ok(Method::NormMusic),
+            "tops" => Ok(Method::Tops),
+            "cssm" => Ok(Method::Cssm),
+            "waves" => Ok(Method::Waves),
             _ => Err(ConfigError::UnknownMethod(s.to_owned())),
         }
     }
@@ -498,8 +533,11 @@ pub struct SslConfig {
     /// MVDR: the pair covariance is also averaged over this many bins on each side
     /// (Default: 2), so that a block of a few frames still gives a well-conditioned matrix.
     pub mvdr_freq_smoothing: usize,
-    /// MUSIC and NormMUSIC: the dimension `K` of the signal subspace, at most one less than
-    /// the number of microphones. Default: `None`, estimated for each group of bins of each
+    /// The subspace methods: the dimension `K` of the signal subspace, at most one less than
+    /// the number of microphones. TOPS, CSSM and WAVES take [`SslConfig::num_peaks`] when
+    /// unset: their one spectrum of a whole recording holds every source heard in it
+    /// (decision 0012; TOPS on arrangement II 0.537 with K = 4, 0.475 estimated as below).
+    /// MUSIC and NormMUSIC, default `None`: estimated for each group of bins of each
     /// block: the eigenvectors whose eigenvalue lies within 10 dB of the largest, up to
     /// [`SslConfig::num_peaks`]. Why not N for all: a group (4 frames x 5 bins, about
     /// 50 ms x 230 Hz) often holds only one or two of the N sources, since speech and most
@@ -646,13 +684,16 @@ impl SslConfig {
     }
 
     /// The frame length used at `sample_rate` ([`SslConfig::frame_len`]): as set; else,
-    /// for MUSIC and NormMUSIC, the power of two at or above 20 ms; for the other methods,
+    /// for the subspace methods (MUSIC, NormMUSIC, TOPS, CSSM, WAVES), the power of two at
+    /// or above 20 ms (pyroomacoustics' 1024 points at 48 kHz); for the other methods,
     /// [`FRAME_S`] rounded up to a length whose only prime factors are 2, 3 and 5 (an FFT
     /// as fast as a power of two's).
     pub fn frame_len_at(&self, sample_rate: u32) -> usize {
         let fs = f64::from(sample_rate);
         self.frame_len.unwrap_or_else(|| match self.method {
-            Method::Music | Method::NormMusic => ((0.020 * fs).ceil() as usize).next_power_of_two(),
+            Method::Music | Method::NormMusic | Method::Tops | Method::Cssm | Method::Waves => {
+                ((0.020 * fs).ceil() as usize).next_power_of_two()
+            }
             // Less a hair, so that 32 ms of a round rate is not one sample more.
             _ => smooth_at_or_above((FRAME_S * fs - 1e-6).ceil() as usize),
         })
@@ -752,7 +793,10 @@ mod tests {
         assert_eq!(smooth_at_or_above(1411), 1440);
         assert_eq!(smooth_at_or_above(7), 8);
         assert_eq!(smooth_at_or_above(1), 1);
-        for method in [Method::Music, Method::NormMusic] {
+        for method in [Method::Music, Method::NormMusic]
+            .into_iter()
+            .chain(Method::COHERENT)
+        {
             let c = SslConfig {
                 method,
                 ..SslConfig::default()

@@ -114,7 +114,9 @@ pub enum ConfigError {
     #[error("sample rate must be positive")]
     SampleRate,
     /// A method name that is not known.
-    #[error("unknown method {0:?}; expected one of: gcc-phat, mvdr, srp-phat, music, normmusic")]
+    #[error(
+        "unknown method {0:?}; expected one of: gcc-phat, mvdr, srp-phat, music, normmusic, tops, cssm, waves"
+    )]
     UnknownMethod(String),
     /// A pooling name that is not known.
     #[error("unknown pooling {0:?}; expected one of: auto, max, mean")]

@@ -72,7 +72,7 @@ pub use covariance::SpatialCovariance;
 pub use error::{ArrayError, ConfigError, Error, Result};
 pub use grid::{DirectionGrid, ElevationRange};
 pub use localizer::{Localizer, Located, Scratch, SpectrumEstimator};
-pub use method::{gcc_phat, music, mvdr, srp_phat};
+pub use method::{coherent, gcc_phat, music, mvdr, srp_phat};
 pub use noise::NoiseField;
 pub use spectrum::{AngularSpectrum, Doa, wrap_deg};
 pub use stft::{Spectrogram, Stft};

@@ -31,7 +31,7 @@ import numpy as np
 
 from . import Doa, _iasm, _json
 
-__all__ = ["algorithms", "SRP", "MUSIC", "NormMUSIC", "GCCPHAT", "MVDR", "Grid"]
+__all__ = ["algorithms", "SRP", "MUSIC", "NormMUSIC", "TOPS", "CSSM", "WAVES", "GCCPHAT", "MVDR", "Grid"]
 
 # The settings file's [ssl] names: passed through; pyroomacoustics-only keywords are not.
 _SSL_NAMES = frozenset(
@@ -225,6 +225,25 @@ class NormMUSIC(_DOA):
     _method = "normmusic"
 
 
+class TOPS(_DOA):
+    """TOPS (pyroomacoustics' ``TOPS``): one spectrum of every snapshot given, its signal
+    subspace ``num_src`` wide."""
+
+    _method = "tops"
+
+
+class CSSM(_DOA):
+    """CSSM (pyroomacoustics' ``CSSM``): one spectrum of every snapshot given."""
+
+    _method = "cssm"
+
+
+class WAVES(_DOA):
+    """WAVES (pyroomacoustics' ``WAVES``): one spectrum of every snapshot given."""
+
+    _method = "waves"
+
+
 class GCCPHAT(_DOA):
     """GCC-PHAT, iasm's pairwise method (no pyroomacoustics twin)."""
 
@@ -242,6 +261,9 @@ algorithms = {
     "SRP": SRP,
     "MUSIC": MUSIC,
     "NormMUSIC": NormMUSIC,
+    "TOPS": TOPS,
+    "CSSM": CSSM,
+    "WAVES": WAVES,
     "GCC-PHAT": GCCPHAT,
     "MVDR": MVDR,
 }

@@ -74,6 +74,14 @@ pub trait SpectrumEstimator: Send + Sync {
         each_block(self, stft, blocks, block, scratch, sink);
     }
 
+    /// Whether the estimator takes one spectrum of a recording's every frame instead of
+    /// pooling short blocks (the coherent wideband methods, [`crate::coherent`]:
+    /// their per-bin statistics need every snapshot): the localizer then makes one block
+    /// of the recording, whatever [`SslConfig::block_frames`] says. Default: no.
+    fn whole_recording(&self) -> bool {
+        false
+    }
+
     /// Whether [`SpectrumEstimator::estimate_blocks_parts`] gives the spectra of parts of
     /// the band in the same pass as the band's. Default: no.
     fn estimates_parts(&self) -> bool {

@@ -182,7 +182,11 @@ impl Localizer {
     /// How `nf` frames split into blocks: their number, and each block's frames. Blocks
     /// split the frames as evenly as possible and cover all of them.
     pub(super) fn blocks(&self, nf: usize) -> (usize, impl Fn(usize) -> Range<usize> + Copy) {
-        let n_blocks = (nf / self.config.block_frames).max(1);
+        let n_blocks = if self.estimator.whole_recording() {
+            1
+        } else {
+            (nf / self.config.block_frames).max(1)
+        };
         (n_blocks, move |b: usize| {
             b * nf / n_blocks..(b + 1) * nf / n_blocks
         })

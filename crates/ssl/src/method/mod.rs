@@ -4,11 +4,14 @@
 //!   statistic is turned into a function of the pair's lag, and a direction reads each
 //!   pair's value at its delay ([`crate::grid`]). A method only says what its bins hold and
 //!   how a bin votes at a lag; the cost grows with pairs x lags, not with directions.
-//! - **Full-array** ([`music`]): the `M x M` covariance per bin is decomposed as a whole and
-//!   every direction is steered to it; the cost grows with directions x bins.
+//! - **Full-array** ([`music`], [`coherent`]): the `M x M` covariance per bin is decomposed
+//!   as a whole and every direction is steered to it; the cost grows with directions x
+//!   bins. MUSIC and NormMUSIC add the bins' pseudo-spectra; TOPS, CSSM and WAVES combine
+//!   the bins coherently, one spectrum per recording.
 //!
 //! [`crate::Localizer::new`] builds the one a [`crate::SslConfig`] names.
 
+pub mod coherent;
 pub mod gcc_phat;
 pub mod music;
 pub mod mvdr;
@@ -96,6 +99,21 @@ pub(crate) fn estimator(
             .coarse_search(grid, config.music_coarse),
         )
     };
+    let plan = || {
+        coherent::Plan::new(
+            array,
+            grid,
+            coherent::Band {
+                fs,
+                c,
+                bins: (bins.start, bins.end),
+                frame_len,
+                sources: config.music_sources,
+                max_sources: config.num_peaks,
+                min_sep_deg: config.min_sep_deg,
+            },
+        )
+    };
     match config.method {
         Method::GccPhat => Box::new(gcc_phat::GccPhat::new(lags())),
         Method::Mvdr => Box::new(mvdr::Mvdr::new(
@@ -106,6 +124,19 @@ pub(crate) fn estimator(
         Method::SrpPhat => Box::new(srp_phat::SrpPhat::new(lags())),
         Method::Music => music(false),
         Method::NormMusic => music(true),
+        Method::Tops => Box::new(coherent::Tops::new(plan())),
+        Method::Cssm => Box::new(coherent::Focused::new(
+            plan(),
+            lags(),
+            false,
+            config.block_frames,
+        )),
+        Method::Waves => Box::new(coherent::Focused::new(
+            plan(),
+            lags(),
+            true,
+            config.block_frames,
+        )),
     }
 }
 

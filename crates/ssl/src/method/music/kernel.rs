@@ -253,7 +253,7 @@ pub(super) fn accumulate_portable(
 /// The upper triangle of `cov` (the rest left as it was) = `sum x x^H` over `frames` and
 /// the band-relative bins `bins`, `x` a bin's value at every microphone; less the robot's
 /// noise over as many frames and bins when it is known ([`crate::noise`]).
-pub(super) fn covariance(
+pub(crate) fn covariance(
     stft: &Spectrogram,
     frames: Range<usize>,
     bins: Range<usize>,

@@ -75,6 +75,7 @@ mod kernel;
 #[cfg(test)]
 mod tests;
 
+pub(crate) use kernel::covariance;
 use kernel::*;
 
 /// The smallest value of `|E_n^H a|^2 / |a|^2` used: it bounds one bin's peak at `1e5`
