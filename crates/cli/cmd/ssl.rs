@@ -492,6 +492,12 @@ fn pooling_note(rows: &[crate::pipeline::FileDoas], config: &ssl::SslConfig) -> 
     if config.method == ssl::Method::Music {
         return "; pooled by the blocks' mean, as MUSIC always is (ssl::Pooling::Auto)".into();
     }
+    if ssl::Method::COHERENT.contains(&config.method) {
+        return format!(
+            "; one spectrum of each whole recording, as {} takes",
+            config.method
+        );
+    }
     let mean = rows
         .iter()
         .filter(|r| r.pooling == ssl::Pooling::Mean)

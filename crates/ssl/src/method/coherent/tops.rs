@@ -134,11 +134,8 @@ impl Tops {
             let lanes = W.min(n - c0);
             sums.run(self, &self.steered[c0..c0 + lanes], sub);
             for l in 0..lanes {
-                let mut at = vec![(self.steered[c0 + l], false)];
-                if let Some(anti) = &self.antipode {
-                    at.push((anti[c0 + l], true));
-                }
-                for (d, mirrored) in at {
+                let anti = self.antipode.as_ref().map(|a| (a[c0 + l], true));
+                for (d, mirrored) in std::iter::once((self.steered[c0 + l], false)).chain(anti) {
                     for (i, &v) in sub.diag.iter().enumerate() {
                         s[i * m + i] = C64::new(v, 0.0);
                     }
