@@ -71,10 +71,12 @@ use crate::localizer::{each_block, zeroed};
 use crate::stft::Spectrogram;
 use crate::{Scratch, SpectrumEstimator};
 
+mod coarse;
 mod kernel;
 #[cfg(test)]
 mod tests;
 
+use coarse::Coarse;
 pub(crate) use kernel::covariance;
 use kernel::*;
 
@@ -149,30 +151,6 @@ struct Antipodes {
     start_im: Vec<f32>,
     step_re: Vec<f32>,
     step_im: Vec<f32>,
-}
-
-/// The coarse-to-fine search: a thinned grid searched everywhere, the full grid around the
-/// coarse spectrum's strongest local maxima, and the rest interpolated.
-#[derive(Clone, Debug)]
-struct Coarse {
-    n_az: usize,
-    /// Fine azimuth cells per coarse one.
-    az_stride: usize,
-    /// Fine elevation indices searched coarsely, ascending, the first and last included.
-    els: Vec<usize>,
-    /// The steering tables of the coarse directions, coarse-elevation-major ([`Tables`]'
-    /// layout).
-    start_re: Vec<f32>,
-    start_im: Vec<f32>,
-    step_re: Vec<f32>,
-    step_im: Vec<f32>,
-    /// For each fine elevation: the bracketing coarse elevations and the weight of the
-    /// upper one.
-    el_bracket: Vec<(usize, usize, f32)>,
-    /// For each fine azimuth: the bracketing coarse azimuths and the weight of the second.
-    az_bracket: Vec<(usize, usize, f32)>,
-    /// Local maxima refined per block.
-    candidates: usize,
 }
 
 /// Working memory of the subspace estimators (part of [`crate::Scratch`]).
@@ -348,66 +326,6 @@ impl Music {
         })
     }
 
-    /// Searches `grid` coarse-to-fine when `on` (and the grid is fine enough to thin: at
-    /// least 72 azimuths, an even number): every other azimuth at every other elevation
-    /// (the first and last kept) everywhere, the full grid within one coarse cell of the
-    /// coarse spectrum's strongest local maxima (`6 N`, at least 12), and the rest
-    /// interpolated bilinearly from the coarse cells. About a third of the directions are
-    /// steered. See [`crate::SslConfig::music_coarse`] for what it costs the maps.
-    #[must_use]
-    pub(crate) fn coarse_search(mut self, grid: &DirectionGrid, on: bool) -> Self {
-        let n_az = grid.num_azimuths();
-        let n_el = grid.elevations().len();
-        if !on || n_az < 72 || !n_az.is_multiple_of(2) {
-            self.coarse = None;
-            return self;
-        }
-        let mut els: Vec<usize> = (0..n_el).step_by(2).collect();
-        if els.last() != Some(&(n_el - 1)) {
-            els.push(n_el - 1);
-        }
-        let az_stride = 2;
-        let dirs: Vec<usize> = els
-            .iter()
-            .flat_map(|&e| (0..n_az).step_by(az_stride).map(move |a| e * n_az + a))
-            .collect();
-        let mut tables: [Vec<f32>; 4] = Default::default();
-        self.gather_into(&dirs, &mut tables);
-        let [start_re, start_im, step_re, step_im] = tables;
-        let el_bracket = (0..n_el)
-            .map(|e| {
-                let hi = els.iter().position(|&c| c >= e).expect("the last is kept");
-                if els[hi] == e || hi == 0 {
-                    (hi, hi, 0.0)
-                } else {
-                    let lo = hi - 1;
-                    let t = (e - els[lo]) as f32 / (els[hi] - els[lo]) as f32;
-                    (lo, hi, t)
-                }
-            })
-            .collect();
-        let caz = n_az / az_stride;
-        let az_bracket = (0..n_az)
-            .map(|a| {
-                let (i0, r) = (a / az_stride, a % az_stride);
-                (i0, (i0 + 1) % caz, r as f32 / az_stride as f32)
-            })
-            .collect();
-        self.coarse = Some(Coarse {
-            n_az,
-            az_bracket,
-            az_stride,
-            els,
-            start_re,
-            start_im,
-            step_re,
-            step_im,
-            el_bracket,
-            candidates: (6 * self.sources).max(12),
-        });
-        self
-    }
-
     /// The steering tables of directions `dirs` (in that order), chunk-major, into `out`.
     fn gather_into(&self, dirs: &[usize], out: &mut [Vec<f32>; 4]) {
         let m = self.mics;
@@ -427,6 +345,31 @@ impl Music {
     /// (up to [`crate::SslConfig::num_peaks`]).
     pub fn sources(&self) -> Option<usize> {
         (!self.estimate).then_some(self.sources)
+    }
+
+    /// A group's signal-subspace dimension for its eigenvalues `vals` (descending) from
+    /// `snapshots` snapshots: fixed; or, estimated, those within [`EIG_RATIO`] of the
+    /// largest, up to the cap, and for MUSIC also [`FLOOR_RATIO`] above the least
+    /// eigenvalue the snapshots resolve (possibly none).
+    fn signal_dimension(&self, vals: &[f32], snapshots: usize) -> usize {
+        let m = vals.len();
+        if !self.estimate {
+            return self.sources;
+        }
+        let top = vals[0];
+        if self.normalise {
+            return 1 + vals[1..self.sources]
+                .iter()
+                .take_while(|&&v| v >= EIG_RATIO * top)
+                .count();
+        }
+        // The eigenvalues the group's snapshots resolve; the least is the floor.
+        let rank = snapshots.clamp(2, m);
+        let floor = vals[rank - 1].max(0.0);
+        vals[..self.sources.min(rank - 1)]
+            .iter()
+            .take_while(|&&v| v >= EIG_RATIO * top && v >= FLOOR_RATIO * floor)
+            .count()
     }
 
     /// Fills `s.vec_re`/`s.vec_im` with each group's projected-on eigenvectors, and
@@ -478,27 +421,8 @@ impl Music {
             let eig = SymmetricEigen::new(cov.clone());
             let mut order: Vec<usize> = (0..m).collect();
             order.sort_by(|&x, &y| eig.eigenvalues[y].total_cmp(&eig.eigenvalues[x]));
-            let k_sig = if self.estimate && !self.normalise {
-                // The eigenvalues the group's snapshots resolve; the least is the floor.
-                let rank = snapshots.clamp(2, m);
-                let floor = eig.eigenvalues[order[rank - 1]].max(0.0);
-                let top = eig.eigenvalues[order[0]];
-                order[..self.sources.min(rank - 1)]
-                    .iter()
-                    .take_while(|&&e| {
-                        let v = eig.eigenvalues[e];
-                        v >= EIG_RATIO * top && v >= FLOOR_RATIO * floor
-                    })
-                    .count()
-            } else if self.estimate {
-                let top = eig.eigenvalues[order[0]];
-                1 + order[1..self.sources]
-                    .iter()
-                    .take_while(|&&e| eig.eigenvalues[e] >= EIG_RATIO * top)
-                    .count()
-            } else {
-                self.sources
-            };
+            let vals: Vec<f32> = order.iter().map(|&e| eig.eigenvalues[e]).collect();
+            let k_sig = self.signal_dimension(&vals, snapshots);
             if k_sig == 0 {
                 // No source in the group: an empty signal subspace, as for no energy.
                 continue;
@@ -854,131 +778,5 @@ impl Music {
         };
         let nd_pad = self.pseudo(&tables, nd, &sub, (a_re, a_im), proj);
         self.sum_groups(proj, nd_pad, nd, out);
-    }
-
-    /// The coarse-to-fine search (see [`Music::coarse_search`]).
-    fn coarse_to_fine(&self, c: &Coarse, dim: usize, out: &mut [f32], s: &mut SubspaceScratch) {
-        let (caz, cel) = (c.n_az / c.az_stride, c.els.len());
-        let nc = caz * cel;
-        let coarse = Tables {
-            start_re: &c.start_re,
-            start_im: &c.start_im,
-            step_re: &c.step_re,
-            step_im: &c.step_im,
-        };
-        let sub = Subspaces {
-            re: &s.vec_re,
-            im: &s.vec_im,
-            stride: dim,
-            used: &s.used,
-            signal: &s.signal,
-        };
-        let nc_pad = self.pseudo(&coarse, nc, &sub, (&mut s.a_re, &mut s.a_im), &mut s.proj);
-        // The coarse spectrum with each group scaled by its coarse maximum: enough to rank
-        // the local maxima.
-        let sum = zeroed(&mut s.coarse_sum, nc);
-        self.sum_groups(&s.proj, nc_pad, nc, sum);
-        let at = |j: usize, i: usize| sum[j * caz + i];
-        let peaks = &mut s.peaks;
-        peaks.clear();
-        for j in 0..cel {
-            let (j0, j1) = (j.saturating_sub(1), (j + 1).min(cel - 1));
-            for i in 0..caz {
-                let v = at(j, i);
-                let (il, ir) = (
-                    if i == 0 { caz - 1 } else { i - 1 },
-                    if i + 1 == caz { 0 } else { i + 1 },
-                );
-                // A local maximum: nothing around it (azimuth wraps) is larger.
-                let top = (j0..=j1)
-                    .all(|jj| at(jj, il) <= v && at(jj, ir) <= v && (jj == j || at(jj, i) <= v));
-                if top {
-                    peaks.push((v, j, i));
-                }
-            }
-        }
-        peaks.sort_by(|a, b| b.0.total_cmp(&a.0));
-        peaks.truncate(c.candidates);
-        // The full grid within one coarse cell of each.
-        let n_el = c.el_bracket.len();
-        let mark = zeroed(&mut s.fine_mark, self.n_dirs);
-        s.fine_dirs.clear();
-        for &(_, j, i) in peaks.iter() {
-            let e_lo = if j == 0 { 0 } else { c.els[j - 1] };
-            let e_hi = if j + 1 < cel { c.els[j + 1] } else { n_el - 1 };
-            let a0 = i * c.az_stride;
-            for e in e_lo..=e_hi {
-                for da in 0..=2 * c.az_stride {
-                    let a = (a0 + c.n_az + da - c.az_stride) % c.n_az;
-                    let d = e * c.n_az + a;
-                    if !mark[d] {
-                        mark[d] = true;
-                        s.fine_dirs.push(d);
-                    }
-                }
-            }
-        }
-        let nf = s.fine_dirs.len();
-        self.gather_into(&s.fine_dirs, &mut s.fine_tables);
-        let [fr, fi, sr, si] = &s.fine_tables;
-        let fine = Tables {
-            start_re: fr,
-            start_im: fi,
-            step_re: sr,
-            step_im: si,
-        };
-        let sub = Subspaces {
-            re: &s.vec_re,
-            im: &s.vec_im,
-            stride: dim,
-            used: &s.used,
-            signal: &s.signal,
-        };
-        let nf_pad = self.pseudo(
-            &fine,
-            nf,
-            &sub,
-            (&mut s.a_re, &mut s.a_im),
-            &mut s.proj_fine,
-        );
-        // Final sums, each group scaled by its largest value over both sets.
-        let sum = zeroed(&mut s.coarse_sum, nc);
-        let fine_sum = zeroed(&mut s.fine_sum, nf);
-        for (pc, pf) in s
-            .proj
-            .chunks_exact(nc_pad)
-            .zip(s.proj_fine.chunks_exact(nf_pad))
-        {
-            let (pc, pf) = (&pc[..nc], &pf[..nf]);
-            let max = pc.iter().chain(pf).copied().fold(0.0, f32::max);
-            let scale = self.group_scale(max);
-            for (o, v) in sum.iter_mut().zip(pc) {
-                *o += v * scale;
-            }
-            for (o, v) in fine_sum.iter_mut().zip(pf) {
-                *o += v * scale;
-            }
-        }
-        // Everywhere: linear in azimuth along each coarse elevation, then in elevation.
-        let rows = zeroed(&mut s.rows, cel * c.n_az);
-        for (j, row) in rows.chunks_exact_mut(c.n_az).enumerate() {
-            let cs = &sum[j * caz..(j + 1) * caz];
-            for (o, &(i0, i1, u)) in row.iter_mut().zip(&c.az_bracket) {
-                *o = cs[i0] + (cs[i1] - cs[i0]) * u;
-            }
-        }
-        for (e, &(lo, hi, t)) in c.el_bracket.iter().enumerate() {
-            let (rl, rh) = (
-                &rows[lo * c.n_az..(lo + 1) * c.n_az],
-                &rows[hi * c.n_az..(hi + 1) * c.n_az],
-            );
-            for ((o, &l), &h) in out[e * c.n_az..(e + 1) * c.n_az].iter_mut().zip(rl).zip(rh) {
-                *o = l + (h - l) * t;
-            }
-        }
-        // Where refined: the values themselves.
-        for (&d, &v) in s.fine_dirs.iter().zip(fine_sum.iter()) {
-            out[d] = v;
-        }
     }
 }
