@@ -51,7 +51,7 @@ def drop_in(runs=31):
     bins = np.arange(5, 60)
     print("| method | pyroomacoustics (ms) | iasm.doa (ms) | ratio | azimuths (pra / iasm) |")
     print("|---|---:|---:|---:|---|")
-    for name in ["SRP", "MUSIC", "NormMUSIC"]:
+    for name in ["SRP", "MUSIC", "NormMUSIC", "TOPS", "CSSM", "WAVES"]:
         times = {"pra": [], "iasm": []}
         az = {}
         for _ in range(runs):
