@@ -9,7 +9,8 @@
 //! - **CSSM** (coherent signal-subspace method; Wang & Kaveh 1985) *focuses* each bin's
 //!   covariance `R_b` onto the reference bin `b0` by a matrix `T_b` that maps the steering
 //!   vectors of preliminary directions at `b` onto theirs at `b0`, sums `T_b R_b T_b^H`,
-//!   and runs MUSIC on the sum at `b0`; the peaks become the next preliminary directions.
+//!   and runs MUSIC on the sum at `b0` (pyroomacoustics then takes its peaks as the next
+//!   preliminary directions; here it is done once, see below).
 //! - **WAVES** (weighted average of signal subspaces; di Claudio & Parisi 2001) focuses each
 //!   bin's signal subspace instead, each eigenvector weighted by its eigenvalue's excess
 //!   over the noise, `(lambda - sigma^2) / sqrt(lambda sigma^2)`, so that a bin counts by
@@ -18,10 +19,21 @@
 //!   `Z Z^H`).
 //! - **TOPS** (test of orthogonality of projected subspaces; Yoon, Kaplan & McClellan
 //!   2006) needs no preliminary directions: the reference bin's signal subspace `F_0`,
-//!   carried to bin `b` along a direction `u` (`Phi_b(u) = diag(a_b(u) / a_0(u))`) and
-//!   projected off `a_b(u)`, is orthogonal to bin `b`'s noise subspace `W_b` for every bin
-//!   only when `u` is a source's direction; the spectrum is `1 / sigma_min(D(u))`, `D` the
-//!   `K x B (M - K)` matrix of every bin's `U_b^H W_b`.
+//!   carried to bin `b` along a direction `u` (`Phi_b(u) = diag(a_b(u) / a_0(u))`; the
+//!   paper also projects it off `a_b(u)`, left out here, see below), holds one and the
+//!   same combination orthogonal to every bin's noise subspace `W_b` only when `u` is a
+//!   source's direction (it is then `a_b(u)`); the spectrum is `1 / sigma_min(D(u))`, `D`
+//!   the `K x B (M - K)` matrix of every bin's `U_b^H W_b`, which then loses rank.
+//!
+//! **TOPS's cost.** Written out, `D(u)` holds `B (M - K)` columns of `K` entries, each `M`
+//! multiply-adds, per direction. Since every steering entry has unit modulus,
+//! `U_b^H W_b = C(u)^H diag(conj a_b(u)) W_b` with `C(u) = diag(conj a_0(u)) F_0` the same
+//! for every bin, so `D D^H = C^H S C` with `S_ij(u) = sum_b Pi_b,ij conj(a_b,i(u))
+//! a_b,j(u)`, `Pi_b = W_b W_b^H`: per direction and bin one complex multiply-add per
+//! microphone pair (the pair-phasor sum of MUSIC's kernel), and one `K x K` eigenvalue,
+//! `sigma_min(D)^2`, per direction; and since the antipode `-u` has the conjugate
+//! phasors, the same sums give both where the grid holds every antipode. The test
+//! `tops_is_its_definition_written_out` checks the two against each other.
 //!
 //! **One spectrum per recording.** Each is defined on sample covariances over every
 //! snapshot (as pyroomacoustics computes them), and a 4-frame block would leave a bin's
