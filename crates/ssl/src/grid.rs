@@ -169,6 +169,35 @@ impl DirectionGrid {
         let n = self.num_azimuths();
         unit_vector(self.az_deg[d % n], self.el_deg[d / n])
     }
+
+    /// Half of the grid and the antipodes of its directions, in the same order, when the
+    /// grid holds every direction's antipode (an even number of azimuths, elevations
+    /// symmetric about 0: the default 3-D grid and the horizontal plane); else `None`. The
+    /// half is every elevation below 0 at all azimuths, and at 0 the azimuths from -180 up
+    /// to (not including) 0; direction `(e, a)` has its antipode at `(n_el - 1 - e, a +
+    /// n_az / 2)`. The subspace methods steer the half only: `-u` has the conjugate
+    /// steering phasors of `u`.
+    pub(crate) fn antipodal_half(&self) -> Option<(Vec<usize>, Vec<usize>)> {
+        let (n_az, els) = (self.num_azimuths(), self.elevations());
+        let n_el = els.len();
+        let symmetric = (0..n_el).all(|e| (els[e] + els[n_el - 1 - e]).abs() < 1e-9);
+        if !n_az.is_multiple_of(2) || !symmetric {
+            return None;
+        }
+        let half: Vec<usize> = (0..n_el / 2 * n_az)
+            .chain(
+                (n_el % 2 == 1)
+                    .then(|| (0..n_az / 2).map(|a| n_el / 2 * n_az + a))
+                    .into_iter()
+                    .flatten(),
+            )
+            .collect();
+        let anti = half
+            .iter()
+            .map(|&d| (n_el - 1 - d / n_az) * n_az + (d % n_az + n_az / 2) % n_az)
+            .collect();
+        Some((half, anti))
+    }
 }
 
 /// The unit vector of azimuth `azimuth_deg` and elevation `elevation_deg` (degrees) in the

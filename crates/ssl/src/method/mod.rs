@@ -53,6 +53,24 @@ pub(crate) fn block_cross(
     }
 }
 
+/// Per direction of `grid` and microphone of `array` (direction-major), the microphone's
+/// lead over the array's centroid in samples at `fs`, speed of sound `c`:
+/// `(p - centroid) . u / c * fs`. A microphone further along `u` hears the wave earlier:
+/// its STFT is the reference's times `exp(+i w lead)` at `w` rad per sample. Delays
+/// relative to the centroid keep the phases small. The full-array methods steer with it.
+pub(crate) fn steering_leads(array: &MicArray, grid: &DirectionGrid, c: f64, fs: f64) -> Vec<f64> {
+    let pos = array.positions();
+    let n = pos.len() as f64;
+    let centroid: [f64; 3] = std::array::from_fn(|a| pos.iter().map(|p| p[a]).sum::<f64>() / n);
+    (0..grid.len())
+        .flat_map(|d| {
+            let u = grid.unit(d);
+            pos.iter()
+                .map(move |p| (0..3).map(|a| (p[a] - centroid[a]) * u[a]).sum::<f64>() / c * fs)
+        })
+        .collect()
+}
+
 /// `x / |x|`, or 0 for a bin with no energy (it carries no phase and votes for nothing):
 /// PHAT's whitening. `|x|` is the square root of the sum of squares rather than libm's
 /// `hypot`, whose care against overflow cost 4.5 % of a GCC-PHAT run (`perf`) for values
@@ -124,7 +142,7 @@ pub(crate) fn estimator(
         Method::SrpPhat => Box::new(srp_phat::SrpPhat::new(lags())),
         Method::Music => music(false),
         Method::NormMusic => music(true),
-        Method::Tops => Box::new(coherent::Tops::new(plan())),
+        Method::Tops => Box::new(coherent::Tops::new(plan(), grid)),
         Method::Cssm => Box::new(coherent::Focused::new(
             plan(),
             lags(),
@@ -137,6 +155,18 @@ pub(crate) fn estimator(
             true,
             config.block_frames,
         )),
+    }
+}
+
+/// Uniform numbers in `[-0.5, 0.5)` from a linear congruential generator (24-bit
+/// values, exact in `f32`): the methods' tests' random spectrograms and matrices.
+#[cfg(test)]
+pub(crate) fn lcg(mut state: u64) -> impl FnMut() -> f64 {
+    move || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (state >> 40) as f64 / (1u64 << 24) as f64 - 0.5
     }
 }
 

@@ -105,19 +105,15 @@ pub(crate) type Mat = DMatrix<C64>;
 const FLOOR: f64 = 1e-6;
 
 /// What the three methods share: the steering of every direction at every band bin, the
-/// grid's shape, the subspace rule.
+/// grid's shape, the subspace dimension.
 #[derive(Clone, Debug)]
 pub(crate) struct Plan {
     mics: usize,
     /// Per direction and microphone, its lead over the array's centroid (samples): at bin
     /// `k` of the FFT the steering entry is `exp(i 2 pi k lead / frame_len)`.
     leads: Vec<f64>,
-    units: Vec<[f64; 3]>,
     n_az: usize,
     n_el: usize,
-    /// Whether the grid holds every direction's antipode (an even number of azimuths,
-    /// elevations symmetric about 0), at `(n_el - 1 - e, a + n_az / 2)`.
-    symmetric: bool,
     /// The band's first FFT bin, its bin count, and the FFT length.
     bin0: usize,
     n_bins: usize,
@@ -146,17 +142,7 @@ impl Plan {
     pub(crate) fn new(array: &MicArray, grid: &DirectionGrid, band: Band) -> Self {
         let mics = array.len();
         let pos = array.positions();
-        let centroid: [f64; 3] =
-            std::array::from_fn(|a| pos.iter().map(|p| p[a]).sum::<f64>() / mics as f64);
-        let units: Vec<[f64; 3]> = (0..grid.len()).map(|d| grid.unit(d)).collect();
-        let leads = units
-            .iter()
-            .flat_map(|u| {
-                pos.iter().map(move |p| {
-                    (0..3).map(|a| (p[a] - centroid[a]) * u[a]).sum::<f64>() / band.c * band.fs
-                })
-            })
-            .collect();
+        let leads = super::steering_leads(array, grid, band.c, band.fs);
         let k = band
             .sources
             .unwrap_or(band.max_sources)
@@ -179,13 +165,8 @@ impl Plan {
         Self {
             mics,
             leads,
-            units,
             n_az: grid.num_azimuths(),
             n_el: grid.elevations().len(),
-            symmetric: grid.num_azimuths().is_multiple_of(2) && {
-                let els = grid.elevations();
-                (0..els.len()).all(|e| (els[e] + els[els.len() - 1 - e]).abs() < 1e-9)
-            },
             bin0: band.bins.0,
             n_bins,
             frame_len: band.frame_len,
@@ -196,7 +177,7 @@ impl Plan {
     }
 
     fn n_dirs(&self) -> usize {
-        self.units.len()
+        self.leads.len() / self.mics
     }
 
     /// Radians per sample of band bin `b`.

@@ -2,16 +2,7 @@
 
 use super::*;
 use crate::grid::{ElevationRange, unit_vector};
-
-/// Uniform numbers in `[-0.5, 0.5)` from a linear congruential generator.
-fn lcg(mut state: u64) -> impl FnMut() -> f64 {
-    move || {
-        state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (state >> 40) as f64 / (1u64 << 24) as f64 - 0.5
-    }
-}
+use crate::method::lcg;
 
 const FS: f64 = 48_000.0;
 const C: f64 = 343.0;
@@ -89,7 +80,7 @@ fn tops_is_its_definition_written_out() {
     let grid = DirectionGrid::new(10.0, ElevationRange::ROBOT).unwrap();
     let spec = plane_waves(&array, &[(40.0, -20.0, 1.0), (-100.0, 10.0, 0.5)], 40, 0.05);
     for sources in [None, Some(1), Some(2), Some(3)] {
-        let tops = Tops::new(Plan::new(&array, &grid, band(sources)));
+        let tops = Tops::new(Plan::new(&array, &grid, band(sources)), &grid);
         let mut got = vec![0.0f32; grid.len()];
         tops.estimate_into(&spec, 0..40, &mut got, &mut Scratch::default());
         let p = &tops.plan;
@@ -198,7 +189,7 @@ fn each_method_finds_plane_waves() {
     for truth in [&three[..2], &three[..]] {
         let spec = plane_waves(&array, truth, 60, 0.03);
         let plan = || Plan::new(&array, &grid, band(Some(truth.len())));
-        let mut methods: Vec<Box<dyn SpectrumEstimator>> = vec![Box::new(Tops::new(plan()))];
+        let mut methods: Vec<Box<dyn SpectrumEstimator>> = vec![Box::new(Tops::new(plan(), &grid))];
         if truth.len() == 2 {
             methods.push(Box::new(Focused::new(plan(), lags(), false, 4)));
             methods.push(Box::new(Focused::new(plan(), lags(), true, 4)));

@@ -6,6 +6,7 @@ use std::ops::Range;
 
 use super::{C64, Mat, Plan, eigh_desc, projector};
 use crate::Scratch;
+use crate::grid::DirectionGrid;
 use crate::localizer::SpectrumEstimator;
 use crate::stft::Spectrogram;
 
@@ -44,7 +45,8 @@ pub(crate) struct Subspaces {
 }
 
 impl Tops {
-    pub(crate) fn new(plan: Plan) -> Self {
+    /// TOPS on `plan`, which was made for `grid`.
+    pub(crate) fn new(plan: Plan, grid: &DirectionGrid) -> Self {
         let m = plan.mics;
         let pairs = (0..m)
             .flat_map(|i| (i + 1..m).map(move |j| (i, j)))
@@ -53,24 +55,9 @@ impl Tops {
         let phasor = |w: f64| move |&lead: &f64| [(w * lead).cos() as f32, (w * lead).sin() as f32];
         let start = plan.leads.iter().map(phasor(w0)).collect();
         let step = plan.leads.iter().map(phasor(dw)).collect();
-        let (na, ne) = (plan.n_az, plan.n_el);
-        let (steered, antipode) = if plan.symmetric {
-            // Every elevation below 0, and at 0 the first half of the azimuths.
-            let half: Vec<usize> = (0..ne / 2 * na)
-                .chain(
-                    (ne % 2 == 1)
-                        .then(|| (0..na / 2).map(|a| ne / 2 * na + a))
-                        .into_iter()
-                        .flatten(),
-                )
-                .collect();
-            let anti = half
-                .iter()
-                .map(|&d| (ne - 1 - d / na) * na + (d % na + na / 2) % na)
-                .collect();
-            (half, Some(anti))
-        } else {
-            ((0..plan.n_dirs()).collect(), None)
+        let (steered, antipode) = match grid.antipodal_half() {
+            Some((half, anti)) => (half, Some(anti)),
+            None => ((0..plan.n_dirs()).collect(), None),
         };
         Self {
             plan,

@@ -240,10 +240,7 @@ impl Music {
         } else {
             vec![n_bins / 2]
         };
-        // Delays relative to the array's centroid keep the phases small.
-        let pos = array.positions();
-        let centroid: [f64; 3] =
-            std::array::from_fn(|a| pos.iter().map(|p| p[a]).sum::<f64>() / mics as f64);
+        let leads = super::steering_leads(array, grid, c, fs);
         let n_dirs = grid.len();
         // Chunk-major, padded to whole chunks of W directions (the padding stays 0).
         let len = n_dirs.div_ceil(W) * W * mics;
@@ -254,11 +251,7 @@ impl Music {
         let w0 = std::f64::consts::TAU * (bins.start + centres[0]) as f64 / frame_len as f64;
         let dw = std::f64::consts::TAU * g as f64 / frame_len as f64;
         for d in 0..n_dirs {
-            let u = grid.unit(d);
-            for (m, p) in pos.iter().enumerate() {
-                // A microphone further along u hears the wave earlier: its STFT is the
-                // reference's times exp(+i w lead), lead = (p - centroid) . u / c (samples).
-                let lead = (0..3).map(|a| (p[a] - centroid[a]) * u[a]).sum::<f64>() / c * fs;
+            for (m, &lead) in leads[d * mics..(d + 1) * mics].iter().enumerate() {
                 let i = ((d / W) * mics + m) * W + d % W;
                 (start_re[i], start_im[i]) = ((w0 * lead).cos() as f32, (w0 * lead).sin() as f32);
                 (step_re[i], step_im[i]) = ((dw * lead).cos() as f32, (dw * lead).sin() as f32);
@@ -285,33 +278,13 @@ impl Music {
     }
 
     /// The steered half of `grid` and the antipodes of its directions, if the grid holds
-    /// them: every elevation below 0 at all azimuths, and at 0 the azimuths from -180 up to
-    /// (not including) 0; direction `(e, a)` has its antipode at `(n_el - 1 - e, a + n_az /
-    /// 2)`.
+    /// them ([`DirectionGrid::antipodal_half`]).
     fn antipodes(&self, grid: &DirectionGrid) -> Option<Antipodes> {
-        let (n_az, els) = (grid.num_azimuths(), grid.elevations());
-        let n_el = els.len();
-        let symmetric = (0..n_el).all(|e| (els[e] + els[n_el - 1 - e]).abs() < 1e-9);
-        if !n_az.is_multiple_of(2) || !symmetric {
-            return None;
-        }
-        let anti = |d: usize| (n_el - 1 - d / n_az) * n_az + (d % n_az + n_az / 2) % n_az;
-        let half: Vec<usize> = (0..n_el / 2 * n_az)
-            .chain(
-                (n_el % 2 == 1)
-                    .then(|| (0..n_az / 2).map(|a| n_el / 2 * n_az + a))
-                    .into_iter()
-                    .flatten(),
-            )
-            .collect();
+        let (half, anti) = grid.antipodal_half()?;
         let mut tables: [Vec<f32>; 4] = Default::default();
         self.gather_into(&half, &mut tables);
         let [start_re, start_im, step_re, step_im] = tables;
-        let order: Vec<usize> = half
-            .iter()
-            .copied()
-            .chain(half.iter().map(|&d| anti(d)))
-            .collect();
+        let order: Vec<usize> = half.into_iter().chain(anti).collect();
         let mut slot_of = vec![0; order.len()];
         for (slot, &d) in order.iter().enumerate() {
             slot_of[d] = slot;
@@ -347,28 +320,27 @@ impl Music {
         (!self.estimate).then_some(self.sources)
     }
 
-    /// A group's signal-subspace dimension for its eigenvalues `vals` (descending) from
-    /// `snapshots` snapshots: fixed; or, estimated, those within [`EIG_RATIO`] of the
-    /// largest, up to the cap, and for MUSIC also [`FLOOR_RATIO`] above the least
-    /// eigenvalue the snapshots resolve (possibly none).
-    fn signal_dimension(&self, vals: &[f32], snapshots: usize) -> usize {
-        let m = vals.len();
+    /// A group's signal-subspace dimension for its eigenvalues `vals` taken in `order`
+    /// (descending) from `snapshots` snapshots: fixed; or, estimated, those within
+    /// [`EIG_RATIO`] of the largest, up to the cap, and for MUSIC also [`FLOOR_RATIO`]
+    /// above the least eigenvalue the snapshots resolve (possibly none).
+    fn signal_dimension(&self, vals: &[f32], order: &[usize], snapshots: usize) -> usize {
         if !self.estimate {
             return self.sources;
         }
-        let top = vals[0];
+        let v = |i: usize| vals[order[i]];
+        let top = v(0);
         if self.normalise {
-            return 1 + vals[1..self.sources]
-                .iter()
-                .take_while(|&&v| v >= EIG_RATIO * top)
-                .count();
+            return 1
+                + (1..self.sources)
+                    .take_while(|&i| v(i) >= EIG_RATIO * top)
+                    .count();
         }
         // The eigenvalues the group's snapshots resolve; the least is the floor.
-        let rank = snapshots.clamp(2, m);
-        let floor = vals[rank - 1].max(0.0);
-        vals[..self.sources.min(rank - 1)]
-            .iter()
-            .take_while(|&&v| v >= EIG_RATIO * top && v >= FLOOR_RATIO * floor)
+        let rank = snapshots.clamp(2, order.len());
+        let floor = v(rank - 1).max(0.0);
+        (0..self.sources.min(rank - 1))
+            .take_while(|&i| v(i) >= EIG_RATIO * top && v(i) >= FLOOR_RATIO * floor)
             .count()
     }
 
@@ -421,8 +393,7 @@ impl Music {
             let eig = SymmetricEigen::new(cov.clone());
             let mut order: Vec<usize> = (0..m).collect();
             order.sort_by(|&x, &y| eig.eigenvalues[y].total_cmp(&eig.eigenvalues[x]));
-            let vals: Vec<f32> = order.iter().map(|&e| eig.eigenvalues[e]).collect();
-            let k_sig = self.signal_dimension(&vals, snapshots);
+            let k_sig = self.signal_dimension(eig.eigenvalues.as_slice(), &order, snapshots);
             if k_sig == 0 {
                 // No source in the group: an empty signal subspace, as for no energy.
                 continue;

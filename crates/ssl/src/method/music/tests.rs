@@ -2,6 +2,7 @@
 
 use super::*;
 use crate::grid::ElevationRange;
+use crate::method::lcg;
 
 /// NormMUSIC for `array` on `grid` (at most 4 sources, groups of 5 bins).
 fn plan(
@@ -22,17 +23,6 @@ fn subspace(sources: Option<usize>) -> Subspace {
         max_sources: 4,
         smoothing: 2,
         normalise: true,
-    }
-}
-
-/// Uniform numbers in `[-0.5, 0.5)` from a linear congruential generator (24-bit
-/// values, exact in `f32`).
-fn lcg(mut state: u64) -> impl FnMut() -> f64 {
-    move || {
-        state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (state >> 40) as f64 / (1u64 << 24) as f64 - 0.5
     }
 }
 
