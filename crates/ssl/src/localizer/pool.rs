@@ -27,7 +27,8 @@ impl Localizer {
     /// within 5 degrees, in the poses' frame): max 0.194, mean 0.381 with the bins grouped
     /// as NormMUSIC groups them, 0.606 with each bin apart
     /// ([`crate::SslConfig::music_freq_smoothing`]), 0.662 with noise-only groups flat
-    /// ([`crate::SslConfig::music_sources`]); pyroomacoustics' MUSIC 0.388.
+    /// ([`crate::SslConfig::music_sources`]), 0.688 with no block's peak sharper than its
+    /// snapshots resolve (`Music::resolution`); pyroomacoustics' MUSIC 0.388.
     pub(super) fn pooling_of(&self, spec: &Spectrogram) -> Pooling {
         if self.config.pooling != Pooling::Auto {
             return self.config.pooling;

@@ -112,7 +112,14 @@ impl Music {
             used: &s.used,
             signal: &s.signal,
         };
-        let nc_pad = self.pseudo(&coarse, nc, &sub, (&mut s.a_re, &mut s.a_im), &mut s.proj);
+        let nc_pad = self.pseudo(
+            &coarse,
+            nc,
+            &sub,
+            &s.floor,
+            (&mut s.a_re, &mut s.a_im),
+            &mut s.proj,
+        );
         // The coarse spectrum with each group scaled by its coarse maximum: enough to rank
         // the local maxima.
         let sum = zeroed(&mut s.coarse_sum, nc);
@@ -177,6 +184,7 @@ impl Music {
             &fine,
             nf,
             &sub,
+            &s.floor,
             (&mut s.a_re, &mut s.a_im),
             &mut s.proj_fine,
         );

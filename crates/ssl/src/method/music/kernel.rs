@@ -174,24 +174,24 @@ pub(super) fn put_sums(
     }
 }
 
-/// `outs[b] += scale(low_b) / max(a0_b + a1_b x_b, FLOOR)` for each block `b`, its `x_b`
-/// the values of its row of `xs` in the ranges `segs`, one after the other (as many as
-/// `outs[b]` holds), and `low_b` the smallest denominator of the row: one group's
-/// pseudo-spectrum `1 / max(a0 + a1 x, FLOOR)`, scaled by its largest value and summed.
+/// `outs[b] += scale(top_b) * p_b(x_b)` for each block `b`, `p_b` its [`Pseudo`], its
+/// `x_b` the values of its row of `xs` in the ranges `segs`, one after the other (as many
+/// as `outs[b]` holds), and `top_b` the row's largest value of `p_b`: one group's
+/// pseudo-spectrum, scaled by its largest value and summed.
 pub(super) fn accumulate(
     xs: &[f32],
     segs: &[Range<usize>; 2],
     outs: &mut [f32],
-    affine: &[(f32, f32)],
+    pseudo: &[Pseudo],
     scale: &dyn Fn(f32) -> f32,
 ) {
     #[cfg(target_arch = "x86_64")]
     if crate::localizer::avx2_fma() {
         // SAFETY: the CPU supports the features the function is compiled for.
-        unsafe { accumulate_avx2(xs, segs, outs, affine, scale) };
+        unsafe { accumulate_avx2(xs, segs, outs, pseudo, scale) };
         return;
     }
-    accumulate_portable(xs, segs, outs, affine, scale);
+    accumulate_portable(xs, segs, outs, pseudo, scale);
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -200,10 +200,10 @@ unsafe fn accumulate_avx2(
     xs: &[f32],
     segs: &[Range<usize>; 2],
     outs: &mut [f32],
-    affine: &[(f32, f32)],
+    pseudo: &[Pseudo],
     scale: &dyn Fn(f32) -> f32,
 ) {
-    accumulate_portable(xs, segs, outs, affine, scale);
+    accumulate_portable(xs, segs, outs, pseudo, scale);
 }
 
 #[inline(always)]
@@ -211,15 +211,15 @@ pub(super) fn accumulate_portable(
     xs: &[f32],
     segs: &[Range<usize>; 2],
     outs: &mut [f32],
-    affine: &[(f32, f32)],
+    pseudo: &[Pseudo],
     scale: &dyn Fn(f32) -> f32,
 ) {
-    let nb = affine.len();
+    let nb = pseudo.len();
     let (row, nd) = (xs.len() / nb, outs.len() / nb);
-    for ((x, o), &(a0, a1)) in xs
+    for ((x, o), &Pseudo { a0, a1, floor }) in xs
         .chunks_exact(row)
         .zip(outs.chunks_exact_mut(nd))
-        .zip(affine)
+        .zip(pseudo)
     {
         let parts = segs.clone().map(|r| &x[r]);
         // The smallest denominator is the largest value; reduced in lanes, so that it
@@ -240,11 +240,11 @@ pub(super) fn accumulate_portable(
                 .map(|&v| a0 + a1 * v)
                 .fold(rest, f32::min);
         }
-        let s = scale(low.into_iter().fold(rest, f32::min));
+        let s = scale(1.0 / low.into_iter().fold(rest, f32::min).max(floor));
         let (o0, o1) = o.split_at_mut(parts[0].len());
         for (o, part) in [o0, o1].into_iter().zip(parts) {
             for (o, &v) in o.iter_mut().zip(part) {
-                *o += s / (a0 + a1 * v).max(FLOOR);
+                *o += s / (a0 + a1 * v).max(floor);
             }
         }
     }
@@ -359,12 +359,33 @@ pub(super) fn covariance_lanes(
     }
 }
 
-/// `(a0, a1)` such that `a0 + a1 x = |E_n^H a|^2 / |a|^2` (`|a|^2 = M`, `m` microphones)
-/// for a group whose projected-on vectors sum to `x = sum_v |e_v^H a|^2`: the noise
-/// subspace's projection itself, or `M` less the signal subspace's.
-pub(super) fn noise_share(signal: bool, m: usize) -> (f32, f32) {
-    let inv_m = 1.0 / m as f32;
-    if signal { (1.0, -inv_m) } else { (0.0, inv_m) }
+/// One group's pseudo-spectrum in one block, `1 / max(a0 + a1 x, floor)`, for a group whose
+/// projected-on vectors sum to `x = sum_v |e_v^H a|^2`: `a0 + a1 x = |E_n^H a|^2 / |a|^2`
+/// (`|a|^2 = M`) is the noise subspace's projection itself, or `M` less the signal
+/// subspace's, and `floor` the least of it that the group's snapshots resolve
+/// ([`super::Music::resolution`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Pseudo {
+    pub(super) a0: f32,
+    pub(super) a1: f32,
+    pub(super) floor: f32,
+}
+
+impl Pseudo {
+    /// For `m` microphones, projecting on the signal subspace when `signal`, else on the
+    /// noise subspace.
+    pub(super) fn new(signal: bool, m: usize, floor: f32) -> Self {
+        let inv_m = 1.0 / m as f32;
+        let (a0, a1) = if signal { (1.0, -inv_m) } else { (0.0, inv_m) };
+        Self { a0, a1, floor }
+    }
+
+    /// The pseudo-spectrum of a group holding no vector: 1 everywhere.
+    pub(super) const FLAT: Self = Self {
+        a0: 1.0,
+        a1: 0.0,
+        floor: 1.0,
+    };
 }
 
 /// `a b + c`, fused when `FMA`.
