@@ -3,6 +3,7 @@
 use super::*;
 use crate::grid::ElevationRange;
 use crate::method::lcg;
+use nalgebra::SymmetricEigen;
 
 /// NormMUSIC for `array` on `grid` (at most 4 sources, groups of 5 bins).
 fn plan(
