@@ -165,67 +165,19 @@ pub fn compare(
         stage += 1;
         progress(stage, stages, &what);
     };
-    // The map, poses and truth are read once, with the first DoA table; every other row
-    // swaps its DoAs in.
-    let mut base: Option<Survey> = None;
-    let mut survey =
-        |table: Table, source: String, cut: Option<Vec<bool>>, s: &Settings| -> Result<Survey> {
-            let b = match &base {
-                Some(b) => b.clone(),
-                None => {
-                    let first =
-                        Survey::load_with_doas(&inputs, s, Some((table.clone(), source.clone())))?;
-                    if let Some(note) = first.map_note() {
-                        eprintln!("{note}");
-                    }
-                    base = Some(first.clone());
-                    first
-                }
-            };
-            b.with_doas(table, source, cut)
-        };
+    let mut surveys = Surveys { inputs, base: None };
     let noise = crate::pipeline::RobotNoise::of(settings)?;
     let mut rows = Vec::new();
     for &method in &opts.methods {
-        tell(format!(
-            "{method}: localising {} recordings",
-            ds.audio.len()
-        ));
         let mut s = settings.clone();
         s.ssl.method = method;
-        let files = localise_files(
-            &ds.audio,
-            &array,
-            s.channels.as_deref(),
-            &s.ssl,
-            noise.as_ref(),
-        )?;
-        if Some(&method) == opts.methods.first() {
-            crate::pipeline::warn_recordings(&files);
-        }
-        let ms = 1e3 * files.iter().map(|f| f.seconds).sum::<f64>() / files.len() as f64;
-        let table = mapped_table(files.iter().map(|f| (&f.doas[..], &f.extra[..])), n);
-        let cut = Some(files.iter().map(|f| f.cut).collect());
-        let survey = survey(table, format!("ssl:{method}"), cut, &s)?;
-        tell(format!("{method}: {} maps", opts.runs));
-        let mut r = row(&survey, method.name().to_owned(), "ssl", Some(ms), &s, opts)?;
-        if opts.rules {
-            tell(format!("{method}: why near sources were missed"));
-            let rec = Recordings {
-                files: &ds.audio,
-                array: &array,
-                channels: s.channels.as_deref(),
-                noise: noise.as_ref(),
-            };
-            let truth = Truth {
-                poses: &survey.poses,
-                sources: survey.truth.as_deref().unwrap_or_default(),
-                tol_deg: HIT_DEG,
-                mirror_axis_deg: survey.mirror_axis_deg,
-            };
-            r.rules = Some(run_census(&rec, &s.ssl, &files, &truth)?);
-        }
-        rows.push(r);
+        let rec = Recordings {
+            files: &ds.audio,
+            array: &array,
+            channels: s.channels.as_deref(),
+            noise: noise.as_ref(),
+        };
+        rows.push(method_row(&rec, &s, opts, &mut surveys, &mut tell)?);
     }
     let published = ds.doa_tables.iter().map(|t| (t, "published"));
     for (t, kind) in published.chain(opts.tables.iter().map(|t| (t, "given"))) {
@@ -239,10 +191,12 @@ pub fn compare(
             table.len(),
             ds.audio.len()
         );
-        let survey = survey(table, t.display().to_string(), None, settings)?;
+        let survey = surveys.with(table, t.display().to_string(), None, settings)?;
         rows.push(row(&survey, name, kind, None, settings, opts)?);
     }
-    let base = base.context("nothing to compare: no method and no published table")?;
+    let base = surveys
+        .base
+        .context("nothing to compare: no method and no published table")?;
     Ok(Report {
         schema_version: SCHEMA_VERSION,
         dataset: root.display().to_string(),
@@ -254,6 +208,77 @@ pub fn compare(
         path: base.poses.iter().map(|p| [p.x, p.y]).collect(),
         rows,
     })
+}
+
+/// The survey of a comparison: its map, poses and truth read once, with the first DoA
+/// table; every other row swaps its DoAs in.
+struct Surveys {
+    inputs: SurveyInputs,
+    base: Option<Survey>,
+}
+
+impl Surveys {
+    /// The survey with `table`'s DoAs (from `source`; `cut`: which rows the SSL cut at N).
+    fn with(
+        &mut self,
+        table: Table,
+        source: String,
+        cut: Option<Vec<bool>>,
+        s: &Settings,
+    ) -> Result<Survey> {
+        let base = match &self.base {
+            Some(b) => b.clone(),
+            None => {
+                let first =
+                    Survey::load_with_doas(&self.inputs, s, Some((table.clone(), source.clone())))?;
+                if let Some(note) = first.map_note() {
+                    eprintln!("{note}");
+                }
+                self.base = Some(first.clone());
+                first
+            }
+        };
+        base.with_doas(table, source, cut)
+    }
+}
+
+/// The row of the method `s.ssl.method`: the recordings localised, timed and mapped, and
+/// with `opts.rules`, why the near sources it missed were missed. `tell` is told each
+/// stage as it starts.
+fn method_row(
+    rec: &Recordings<'_>,
+    s: &Settings,
+    opts: &CompareOptions,
+    surveys: &mut Surveys,
+    tell: &mut dyn FnMut(String),
+) -> Result<Row> {
+    let method = s.ssl.method;
+    tell(format!(
+        "{method}: localising {} recordings",
+        rec.files.len()
+    ));
+    let files = localise_files(rec.files, rec.array, rec.channels, &s.ssl, rec.noise)?;
+    if Some(&method) == opts.methods.first() {
+        crate::pipeline::warn_recordings(&files);
+    }
+    let ms = 1e3 * files.iter().map(|f| f.seconds).sum::<f64>() / files.len() as f64;
+    let n = s.ssl.num_peaks;
+    let table = mapped_table(files.iter().map(|f| (&f.doas[..], &f.extra[..])), n);
+    let cut = Some(files.iter().map(|f| f.cut).collect());
+    let survey = surveys.with(table, format!("ssl:{method}"), cut, s)?;
+    tell(format!("{method}: {} maps", opts.runs));
+    let mut r = row(&survey, method.name().to_owned(), "ssl", Some(ms), s, opts)?;
+    if opts.rules {
+        tell(format!("{method}: why near sources were missed"));
+        let truth = Truth {
+            poses: &survey.poses,
+            sources: survey.truth.as_deref().unwrap_or_default(),
+            tol_deg: HIT_DEG,
+            mirror_axis_deg: survey.mirror_axis_deg,
+        };
+        r.rules = Some(run_census(rec, &s.ssl, &files, &truth)?);
+    }
+    Ok(r)
 }
 
 fn row(
