@@ -231,14 +231,53 @@ pub fn dbscan(points: &[[f64; 2]], eps: f64, min_pts: usize) -> Vec<Label> {
     // each other, and neighbours are at most two cells away in x and in y.
     let grid = Grid::new(points, eps / std::f64::consts::SQRT_2);
     let eps2 = eps * eps;
-    let near = |a: usize, b: usize| {
-        let (p, q) = (points[a], points[b]);
-        (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) <= eps2
-    };
+    let near = |a: usize, b: usize| within(points, a, b, eps2);
     let n_cells = grid.start.len() - 1;
+    let core = core_points(points, &grid, eps2, min_pts);
+    let (cores, core_boxes, mut parent) = join_cells(points, &grid, &core, eps2);
 
-    // 1. Core points.
-    let mut core = vec![false; n];
+    // 3. Labels, numbered in order of first appearance; border points join a core neighbour.
+    // Each root cell's cluster number, u32::MAX until its first point is labelled.
+    let mut names = vec![u32::MAX; n_cells];
+    let mut named = 0u32;
+    let mut labels = vec![Label::Noise; n];
+    for i in 0..n {
+        let c = grid.cell_of[i] as usize;
+        let root = if core[i] || !cores[c].is_empty() {
+            // Own cell first: every point there is within eps.
+            Some(find(&mut parent, c))
+        } else {
+            grid.around(c)
+                .filter(|&b| !cores[b].is_empty())
+                .find(|&b| {
+                    let (near2, far2) = core_boxes[b].reach2(points[i]);
+                    near2 <= eps2 && (far2 <= eps2 || cores[b].iter().any(|&j| near(i, j as usize)))
+                })
+                .map(|b| find(&mut parent, b))
+        };
+        if let Some(r) = root {
+            if names[r] == u32::MAX {
+                names[r] = named;
+                named += 1;
+            }
+            labels[i] = Label::Cluster(names[r]);
+        }
+    }
+    labels
+}
+
+/// Whether points `a` and `b` lie within `eps` (`eps2` its square).
+fn within(points: &[[f64; 2]], a: usize, b: usize, eps2: f64) -> bool {
+    let (p, q) = (points[a], points[b]);
+    (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) <= eps2
+}
+
+/// Step 1: which points are core points (at least `min_pts` within `eps`, themselves
+/// included).
+fn core_points(points: &[[f64; 2]], grid: &Grid, eps2: f64, min_pts: usize) -> Vec<bool> {
+    let near = |a: usize, b: usize| within(points, a, b, eps2);
+    let n_cells = grid.start.len() - 1;
+    let mut core = vec![false; points.len()];
     let mut partial: Vec<usize> = Vec::with_capacity(24);
     let mut cut: Vec<usize> = Vec::with_capacity(24);
     for c in 0..n_cells {
@@ -304,8 +343,17 @@ pub fn dbscan(points: &[[f64; 2]], eps: f64, min_pts: usize) -> Vec<Label> {
             core[i as usize] = count >= min_pts;
         }
     }
+    core
+}
 
-    // 2. Union cells' core points (a cell's core points are one set).
+/// The core points of each cell, their boxes, and the union-find forest over the cells.
+type Joined = (Vec<Vec<u32>>, Vec<BBox>, Vec<usize>);
+
+/// Step 2: the cells' core points joined (a cell's core points are one set; two cells'
+/// sets are one where some of their core points lie within `eps`).
+fn join_cells(points: &[[f64; 2]], grid: &Grid, core: &[bool], eps2: f64) -> Joined {
+    let near = |a: usize, b: usize| within(points, a, b, eps2);
+    let n_cells = grid.start.len() - 1;
     let cores: Vec<Vec<u32>> = (0..n_cells)
         .map(|c| {
             grid.members(c)
@@ -320,13 +368,6 @@ pub fn dbscan(points: &[[f64; 2]], eps: f64, min_pts: usize) -> Vec<Label> {
         .map(|m| BBox::of(m.iter().map(|&i| points[i as usize])))
         .collect();
     let mut parent: Vec<usize> = (0..n_cells).collect();
-    fn find(parent: &mut [usize], mut x: usize) -> usize {
-        while parent[x] != x {
-            parent[x] = parent[parent[x]];
-            x = parent[x];
-        }
-        x
-    }
     for a in 0..n_cells {
         if cores[a].is_empty() {
             continue;
@@ -351,34 +392,16 @@ pub fn dbscan(points: &[[f64; 2]], eps: f64, min_pts: usize) -> Vec<Label> {
         }
     }
 
-    // 3. Labels, numbered in order of first appearance; border points join a core neighbour.
-    // Each root cell's cluster number, u32::MAX until its first point is labelled.
-    let mut names = vec![u32::MAX; n_cells];
-    let mut named = 0u32;
-    let mut labels = vec![Label::Noise; n];
-    for i in 0..n {
-        let c = grid.cell_of[i] as usize;
-        let root = if core[i] || !cores[c].is_empty() {
-            // Own cell first: every point there is within eps.
-            Some(find(&mut parent, c))
-        } else {
-            grid.around(c)
-                .filter(|&b| !cores[b].is_empty())
-                .find(|&b| {
-                    let (near2, far2) = core_boxes[b].reach2(points[i]);
-                    near2 <= eps2 && (far2 <= eps2 || cores[b].iter().any(|&j| near(i, j as usize)))
-                })
-                .map(|b| find(&mut parent, b))
-        };
-        if let Some(r) = root {
-            if names[r] == u32::MAX {
-                names[r] = named;
-                named += 1;
-            }
-            labels[i] = Label::Cluster(names[r]);
-        }
+    (cores, core_boxes, parent)
+}
+
+/// The root of `x` in the union-find forest `parent`, halving the path on the way.
+fn find(parent: &mut [usize], mut x: usize) -> usize {
+    while parent[x] != x {
+        parent[x] = parent[parent[x]];
+        x = parent[x];
     }
-    labels
+    x
 }
 
 #[cfg(test)]
