@@ -441,7 +441,7 @@ fn the_subspace_is_capped_below_the_number_of_microphones() {
 /// eigenvalues agree within a factor of 1.5, at 4 snapshots (a block's, fewer than
 /// microphones) and at 16, from 0 to 20 dB per microphone (measured over predicted:
 /// 0.70-0.83 at 4 snapshots, 1.06-1.08 at 16; numpy with 2000 draws, 0.73-0.79 and
-/// 1.07-1.10). The first-order formula without its `(r - 1)^2` gives 1.1-1.6 at 16.
+/// 1.07-1.10). The first-order formula without its `(r - 1)^2` gives 1.1-1.5 at 16.
 #[test]
 fn musics_floor_is_the_residual_its_snapshots_leave() {
     let array = MicArray::default();
