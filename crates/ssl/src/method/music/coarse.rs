@@ -111,15 +111,9 @@ impl Music {
             stride: dim,
             used: &s.used,
             signal: &s.signal,
+            floor: &s.floor,
         };
-        let nc_pad = self.pseudo(
-            &coarse,
-            nc,
-            &sub,
-            &s.floor,
-            (&mut s.a_re, &mut s.a_im),
-            &mut s.proj,
-        );
+        let nc_pad = self.pseudo(&coarse, nc, &sub, (&mut s.a_re, &mut s.a_im), &mut s.proj);
         // The coarse spectrum with each group scaled by its coarse maximum: enough to rank
         // the local maxima.
         let sum = zeroed(&mut s.coarse_sum, nc);
@@ -179,12 +173,12 @@ impl Music {
             stride: dim,
             used: &s.used,
             signal: &s.signal,
+            floor: &s.floor,
         };
         let nf_pad = self.pseudo(
             &fine,
             nf,
             &sub,
-            &s.floor,
             (&mut s.a_re, &mut s.a_im),
             &mut s.proj_fine,
         );

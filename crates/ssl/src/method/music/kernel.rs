@@ -403,6 +403,8 @@ pub(super) struct Subspaces<'a> {
     pub(super) stride: usize,
     pub(super) used: &'a [usize],
     pub(super) signal: &'a [bool],
+    /// Per group, the least `|E_n^H a|^2 / |a|^2` its pseudo-spectrum takes.
+    pub(super) floor: &'a [f32],
 }
 
 /// `proj[k * nd_pad + d] = sum over the group's vectors e of |e^H a_k(d)|^2` for every

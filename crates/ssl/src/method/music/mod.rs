@@ -189,9 +189,10 @@ pub(crate) struct SubspaceScratch {
     /// ([`Music::resolution`]).
     floor: Vec<f32>,
     /// The blocks of a recording at once ([`Music::all_blocks`]): per group and block, the
-    /// projector's trace and pair terms, and the pseudo-spectrum's two coefficients.
+    /// projector's trace and pair terms, and how its projections become the group's
+    /// pseudo-spectrum.
     terms: Vec<f32>,
-    affine: Vec<Pseudo>,
+    pseudo: Vec<Pseudo>,
     /// Per direction chunk and microphone, the steering phasors at the current group.
     cur_re: Vec<f32>,
     cur_im: Vec<f32>,
@@ -439,7 +440,7 @@ impl Music {
     /// Each block's projector `Q = sum_v conj(e_v) e_v^T` on each group's projected-on
     /// vectors, as the pair kernel takes it: into `s.terms` (group-major, then block) its
     /// trace and, per microphone pair `i < j`, `2 Re Q_ij` and `-2 Im Q_ij`; into
-    /// `s.affine` how each becomes the group's pseudo-spectrum. Returns the terms per
+    /// `s.pseudo` how each becomes the group's pseudo-spectrum. Returns the terms per
     /// projector, `1 + M (M - 1)`.
     fn projectors(
         &self,
@@ -450,8 +451,8 @@ impl Music {
         let (m, ng, nb) = (self.mics, self.centres.len(), blocks.len());
         let stride = 1 + m * (m - 1);
         zeroed(&mut s.terms, ng * nb * stride);
-        s.affine.clear();
-        s.affine.resize(ng * nb, Pseudo::FLAT);
+        s.pseudo.clear();
+        s.pseudo.resize(ng * nb, Pseudo::FLAT);
         for (b, frames) in blocks.iter().enumerate() {
             let dim = self.subspaces(stft, frames.clone(), s);
             for k in 0..ng {
@@ -471,7 +472,7 @@ impl Music {
                         }
                     }
                 }
-                s.affine[k * nb + b] = Pseudo::new(s.signal[k], m, s.floor[k]);
+                s.pseudo[k * nb + b] = Pseudo::new(s.signal[k], m, s.floor[k]);
             }
         }
         stride
@@ -499,7 +500,7 @@ impl Music {
         let stride = self.projectors(stft, blocks, s);
         let SubspaceScratch {
             terms,
-            affine,
+            pseudo,
             cur_re,
             cur_im,
             g_re,
@@ -562,7 +563,7 @@ impl Music {
                 }
                 _ => &mut *outs,
             };
-            accumulate(xs, &segs, target, &affine[k * nb..(k + 1) * nb], &scale);
+            accumulate(xs, &segs, target, &pseudo[k * nb..(k + 1) * nb], &scale);
         }
         if split.is_some() {
             // The band's sum is its parts' and the rest's.
@@ -593,7 +594,6 @@ impl Music {
         tables: &Tables,
         n: usize,
         sub: &Subspaces,
-        floors: &[f32],
         a: (&mut Vec<f32>, &mut Vec<f32>),
         proj: &mut Vec<f32>,
     ) -> usize {
@@ -604,7 +604,7 @@ impl Music {
         let proj = zeroed(proj, ng * n_pad);
         steer_all(tables, sub, m, ng, a_re, a_im, proj);
         // Branch-free within a group, so that the loop runs on whole vectors.
-        for ((p, &signal), &floor) in proj.chunks_exact_mut(n_pad).zip(sub.signal).zip(floors) {
+        for ((p, &signal), &floor) in proj.chunks_exact_mut(n_pad).zip(sub.signal).zip(sub.floor) {
             let Pseudo { a0, a1, floor } = Pseudo::new(signal, m, floor);
             for v in p.iter_mut() {
                 *v = 1.0 / (a0 + a1 * *v).max(floor);
@@ -673,8 +673,9 @@ impl Music {
             stride: dim,
             used,
             signal,
+            floor,
         };
-        let nd_pad = self.pseudo(&tables, nd, &sub, floor, (a_re, a_im), proj);
+        let nd_pad = self.pseudo(&tables, nd, &sub, (a_re, a_im), proj);
         self.sum_groups(proj, nd_pad, nd, out);
     }
 }

@@ -62,13 +62,14 @@ fn the_steering_kernel_matches_a_direct_sum() {
         step_re: &music.step_re,
         step_im: &music.step_im,
     };
-    let (used, signal) = (vec![dim; ng], vec![true; ng]);
+    let (used, signal, floor) = (vec![dim; ng], vec![true; ng], vec![FLOOR; ng]);
     let vecs = Subspaces {
         re: &vec_re,
         im: &vec_im,
         stride: dim,
         used: &used,
         signal: &signal,
+        floor: &floor,
     };
     steer_all(&t, &vecs, m, ng, &mut a_re, &mut a_im, &mut proj);
     // The portable build is the same source compiled without AVX2 (no fused
