@@ -6,7 +6,7 @@ use rand::{SeedableRng, rngs::StdRng};
 
 use super::{
     MAX_CALIBRATION_IMAGES, MAX_CLIP_S, MAX_FS, MAX_RT60_S, MAX_SIGNAL_SAMPLES, PreparedScene,
-    ROBOT_ALONE_S, ROBOT_ALONE_SEED, Scene, invalid, mic_world, wav_signal,
+    ROBOT_ALONE_S, ROBOT_ALONE_SEED, Scene, SourceSpec, invalid, mic_world, wav_signal,
 };
 use crate::error::SimError;
 use crate::room::Space;
@@ -250,8 +250,7 @@ impl Scene {
                         generate(signal, n, self.fs, &mut rng)
                     }
                 };
-                // 94 dB SPL is 1 Pa RMS.
-                let rms = 10f64.powf((s.level_db - 94.0) / 20.0);
+                let rms = s.rms_pa();
                 let mut x: Vec<f64> = unit.into_iter().map(|v| v * rms).collect();
                 if let Some([start, stop]) = s.active_s {
                     if !(0.0 <= start && start < stop && start < self.clip_s) {
@@ -303,9 +302,16 @@ impl Scene {
                         &mut rng,
                     ),
                 };
-                let rms = 10f64.powf((s.level_db - 94.0) / 20.0);
+                let rms = s.rms_pa();
                 unit.into_iter().map(|v| v * rms).collect()
             })
             .collect()
+    }
+}
+
+impl SourceSpec {
+    /// The source's RMS pressure (Pa) at its `level_db`: 94 dB SPL is 1 Pa RMS.
+    fn rms_pa(&self) -> f64 {
+        10f64.powf((self.level_db - 94.0) / 20.0)
     }
 }
