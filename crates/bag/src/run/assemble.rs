@@ -71,7 +71,7 @@ pub(crate) fn assemble(summary: &Summary, kept: Kept, options: &ReadOptions) -> 
     let encoding = |topic: &str| msgs.encoding(topic);
     let start_ns = summary.spans.values().map(|s| s.0).min().unwrap_or(0);
     let rel = |ns: i64| (ns - start_ns) as f64 * 1e-9;
-    let topics = topic_infos(summary, start_ns);
+    let topics = topic_infos(summary, &rel);
     let mut notes = Vec::new();
     let audio = audio_topic(&topics, options, &mut notes)?;
     let poses = pose_sources(&topics, &msgs, options, &mut notes)?;
@@ -139,9 +139,8 @@ pub(crate) fn assemble(summary: &Summary, kept: Kept, options: &ReadOptions) -> 
 }
 
 /// Each topic once (its connections merged): type, messages, and the span of their times
-/// (s from `start_ns`).
-fn topic_infos(summary: &Summary, start_ns: i64) -> Vec<TopicInfo> {
-    let rel = |ns: i64| (ns - start_ns) as f64 * 1e-9;
+/// (s, by `rel` from the bag's time in ns).
+fn topic_infos(summary: &Summary, rel: &dyn Fn(i64) -> f64) -> Vec<TopicInfo> {
     summary
         .connections
         .iter()
