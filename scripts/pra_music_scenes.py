@@ -25,6 +25,7 @@ import os
 import re
 import subprocess
 import sys
+import tempfile
 import tomllib
 
 import numpy as np
@@ -46,12 +47,18 @@ def wrap(a):
     return (a + 180.0) % 360.0 - 180.0
 
 
-def pra_score(root):
-    mics = np.array(tomllib.load(open(os.path.join(root, "array.toml"), "rb"))["positions"]).T
-    files = sorted(glob.glob(os.path.join(root, "audio", "*.wav")), key=natural)
+def truth(root):
+    """The data set's poses (x, y, theta in degrees) and true sources (x, y)."""
     poses = [(float(r["x"]), float(r["y"]), float(r["theta_deg"]))
              for r in csv.DictReader(open(os.path.join(root, "pose", "poses.csv")))]
     srcs = [(float(r["x"]), float(r["y"])) for r in csv.DictReader(open(os.path.join(root, "src_gt.csv")))]
+    return poses, srcs
+
+
+def pra_score(root):
+    mics = np.array(tomllib.load(open(os.path.join(root, "array.toml"), "rb"))["positions"]).T
+    files = sorted(glob.glob(os.path.join(root, "audio", "*.wav")), key=natural)
+    poses, srcs = truth(root)
     hits = 0
     for f, (x, y, th) in zip(files, poses):
         fs, sig = wavfile.read(f)
@@ -85,14 +92,12 @@ def iasm_score(iasm, root):
                               str(N), "--score", "--json"],
                              capture_output=True, text=True, check=True).stdout
         return json.loads(out)["ours"]["score"]
-    table = os.path.join(root, f"doas_{IASM}.csv")
-    subprocess.run([iasm, "ssl", "--dataset", root, "--method", IASM, "--num", str(N),
-                    "--out", table], capture_output=True, text=True, check=True)
-    poses = [(float(r["x"]), float(r["y"]), float(r["theta_deg"]))
-             for r in csv.DictReader(open(os.path.join(root, "pose", "poses.csv")))]
-    srcs = [(float(r["x"]), float(r["y"])) for r in csv.DictReader(open(os.path.join(root, "src_gt.csv")))]
-    rows = [[float(v) for v in line.strip().split(",") if v] for line in open(table)]
-    os.remove(table)
+    with tempfile.TemporaryDirectory() as tmp:
+        table = os.path.join(tmp, "doas.csv")
+        subprocess.run([iasm, "ssl", "--dataset", root, "--method", IASM, "--num", str(N),
+                        "--out", table], capture_output=True, text=True, check=True)
+        rows = [[float(v) for v in line.strip().split(",") if v] for line in open(table)]
+    poses, srcs = truth(root)
     return sum(count_hits(r[:N], p, srcs) for r, p in zip(rows, poses)) / (N * len(rows))
 
 
