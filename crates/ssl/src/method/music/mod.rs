@@ -436,6 +436,19 @@ struct Split<'a> {
     parts: usize,
 }
 
+/// The directions [`Music::all_blocks`] steers: the steering tables (start and step,
+/// real and imaginary), the order of the grid's directions in a row of its output when
+/// only half the grid is steered (the steered half, then their antipodes), the padded
+/// length of the steered directions, the ranges of a row that hold values, and a row's
+/// length.
+struct Steered<'a> {
+    tables: [&'a Vec<f32>; 4],
+    order: Option<&'a Vec<usize>>,
+    n_pad: usize,
+    segs: [Range<usize>; 2],
+    row: usize,
+}
+
 impl Music {
     /// Each block's projector `Q = sum_v conj(e_v) e_v^T` on each group's projected-on
     /// vectors, as the pair kernel takes it: into `s.terms` (group-major, then block) its
@@ -478,6 +491,36 @@ impl Music {
         stride
     }
 
+    /// Which directions [`Music::all_blocks`] steers, and where their values lie.
+    fn steered(&self) -> Steered<'_> {
+        let nd = self.n_dirs;
+        match &self.antipodes {
+            // Half the directions, each row of `xs` holding the steered half and (from
+            // `n_pad` on) their antipodes.
+            Some(h) => {
+                let n_steer = nd / 2;
+                let n_pad = n_steer.div_ceil(W) * W;
+                Steered {
+                    tables: [&h.start_re, &h.start_im, &h.step_re, &h.step_im],
+                    order: Some(&h.order),
+                    n_pad,
+                    segs: [0..n_steer, n_pad..n_pad + n_steer],
+                    row: 2 * n_pad,
+                }
+            }
+            None => {
+                let n_pad = nd.div_ceil(W) * W;
+                Steered {
+                    tables: [&self.start_re, &self.start_im, &self.step_re, &self.step_im],
+                    order: None,
+                    n_pad,
+                    segs: [0..nd, 0..0],
+                    row: n_pad,
+                }
+            }
+        }
+    }
+
     /// Every block's spectrum of the full search at once: per block and group, the
     /// projector `Q = sum_v conj(e_v) e_v^T` of the projected-on vectors, so that
     /// `sum_v |e_v^H a|^2 = a^T Q conj(a) = tr Q + 2 Re sum_(i<j) Q_ij a_i conj(a_j)` (unit
@@ -512,25 +555,13 @@ impl Music {
             part_count,
             ..
         } = s;
-        // Half the directions steered when the grid holds their antipodes, each row of
-        // `xs` then holding the steered half and (from `n_pad` on) their antipodes.
-        let (tables, order) = match &self.antipodes {
-            Some(h) => (
-                [&h.start_re, &h.start_im, &h.step_re, &h.step_im],
-                Some(&h.order),
-            ),
-            None => (
-                [&self.start_re, &self.start_im, &self.step_re, &self.step_im],
-                None,
-            ),
-        };
-        let n_steer = if order.is_some() { nd / 2 } else { nd };
-        let n_pad = n_steer.div_ceil(W) * W;
-        let segs = match order {
-            Some(_) => [0..n_steer, n_pad..n_pad + n_steer],
-            None => [0..nd, 0..0],
-        };
-        let row = if order.is_some() { 2 * n_pad } else { n_pad };
+        let Steered {
+            tables,
+            order,
+            n_pad,
+            segs,
+            row,
+        } = self.steered();
         cur_re.clear();
         cur_re.extend_from_slice(tables[0]);
         cur_im.clear();
@@ -571,16 +602,28 @@ impl Music {
                 outs.iter_mut().zip(part).for_each(|(o, v)| *o += v);
             }
         }
-        for (b, o) in outs.chunks_exact(nd).enumerate() {
-            match order {
-                Some(order) => {
-                    for (&d, &v) in order.iter().zip(o) {
-                        block[d] = v;
-                    }
-                    sink(b, block);
+        deliver(outs, nd, order, block, sink);
+    }
+}
+
+/// Hands each block's spectrum in `outs` (`nd` values per block, in the steered `order`
+/// when only half the grid was steered) to `sink` in the grid's order, through `block`.
+fn deliver(
+    outs: &[f32],
+    nd: usize,
+    order: Option<&Vec<usize>>,
+    block: &mut [f32],
+    sink: &mut dyn FnMut(usize, &[f32]),
+) {
+    for (b, o) in outs.chunks_exact(nd).enumerate() {
+        match order {
+            Some(order) => {
+                for (&d, &v) in order.iter().zip(o) {
+                    block[d] = v;
                 }
-                None => sink(b, o),
+                sink(b, block);
             }
+            None => sink(b, o),
         }
     }
 }
