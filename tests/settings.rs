@@ -67,6 +67,7 @@ beyond_map_m = 0.7
 wall_clearance_m = 0.2
 room_margin_m = 0.25
 array_mirror = true
+reflections = false
 share_gate_sigmas = 0.4
 reassociate = false
 rank_gain = 0.8

@@ -202,9 +202,11 @@ pub struct MissedTally {
     pub spoken_against: f64,
     /// Refused as too thinly heard ([`asm::IasmConfig::vote_min_thresholded_stops`]).
     pub thinly_heard: f64,
-    /// Refused as on the robot's path, beyond the map, outside the room or behind a wall
-    /// ([`asm::IasmConfig::min_range_m`], [`asm::IasmConfig::beyond_map_m`],
-    /// [`asm::IasmConfig::room_margin_m`], [`asm::IasmConfig::wall_clearance_m`]).
+    /// Refused as on the robot's path, beyond the map, outside the room, behind a wall,
+    /// the array's mirror image or another's reflections ([`asm::IasmConfig::min_range_m`],
+    /// [`asm::IasmConfig::beyond_map_m`], [`asm::IasmConfig::room_margin_m`],
+    /// [`asm::IasmConfig::wall_clearance_m`], [`asm::IasmConfig::array_mirror`],
+    /// [`asm::IasmConfig::reflections`]).
     pub misplaced: f64,
     /// Refused because its DoAs fit other mapped sources better
     /// ([`asm::IasmConfig::reassociate`]).
@@ -222,7 +224,10 @@ impl MissedTally {
                 Some(asm::Refusal::SpokenAgainst { .. }) => t.spoken_against += 1.0,
                 Some(asm::Refusal::ThinlyHeard) => t.thinly_heard += 1.0,
                 Some(
-                    asm::Refusal::Misplaced | asm::Refusal::OutsideRoom | asm::Refusal::ArrayMirror,
+                    asm::Refusal::Misplaced
+                    | asm::Refusal::OutsideRoom
+                    | asm::Refusal::ArrayMirror
+                    | asm::Refusal::Reflection,
                 ) => t.misplaced += 1.0,
                 Some(asm::Refusal::Reassigned) => t.reassigned += 1.0,
                 None => {}

@@ -283,7 +283,7 @@ fn print_map(a: &MapArgs, survey: &Survey, report: &MapReport<'_>, result: &MapR
     );
     if result.removed > 0 {
         println!(
-            "  {} more found and removed: on the robot's path, beyond the map, outside the room or behind a wall, contradicted by stops that heard nothing there, or left with too few DoAs by sources that fit them better (--explain says which; see asm::IasmConfig::min_range_m, room_margin_m, wall_clearance_m, absence_ratio, reassociate)",
+            "  {} more found and removed: on the robot's path, beyond the map, outside the room or behind a wall, another's reflections, contradicted by stops that heard nothing there, or left with too few DoAs by sources that fit them better (--explain says which; see asm::IasmConfig::min_range_m, room_margin_m, wall_clearance_m, reflections, absence_ratio, reassociate)",
             result.removed
         );
     }
@@ -420,6 +420,10 @@ fn refusal(rule: &asm::Refusal) -> String {
         }
         asm::Refusal::ArrayMirror => {
             "the mirror image, about the array's axis, of a source heard from more stops and after the robot turned (array_mirror)"
+                .to_owned()
+        }
+        asm::Refusal::Reflection => {
+            "heard only by reflection: its DoAs are another source's reflections in the map's walls (reflections)"
                 .to_owned()
         }
         asm::Refusal::OutsideRoom => {

@@ -375,6 +375,18 @@ impl OccupancyMap {
     /// Centres of the free cells whose centres lie within `radius` (m) of `p`, nearest
     /// first.
     pub fn free_within(&self, p: [f64; 2], radius: f64) -> Vec<[f64; 2]> {
+        self.cells_within(p, radius, Cell::Free)
+    }
+
+    /// Centres of the occupied cells whose centres lie within `radius` (m) of `p`,
+    /// nearest first: the stretch of wall around a point on it.
+    pub fn occupied_within(&self, p: [f64; 2], radius: f64) -> Vec<[f64; 2]> {
+        self.cells_within(p, radius, Cell::Occupied)
+    }
+
+    /// Centres of the cells of `kind` whose centres lie within `radius` (m) of `p`,
+    /// nearest first.
+    fn cells_within(&self, p: [f64; 2], radius: f64, kind: Cell) -> Vec<[f64; 2]> {
         if !(p[0].is_finite() && p[1].is_finite() && radius.is_finite() && radius >= 0.0) {
             return Vec::new();
         }
@@ -393,7 +405,7 @@ impl OccupancyMap {
         for fr in f0 as usize..=f1 as usize {
             let j = self.height - 1 - fr;
             for i in i0 as usize..=i1 as usize {
-                if self.cell(i, j) != Cell::Free {
+                if self.cell(i, j) != kind {
                     continue;
                 }
                 let c = self.cell_center(i, j);

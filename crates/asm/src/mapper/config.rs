@@ -319,8 +319,11 @@ pub struct IasmConfig {
     /// The map is the room: a source must lie in a cell the map marks free, or within this
     /// distance (m) of one (a source may stand at a wall, on a table, in a vent's grille),
     /// or in unknown space that a stop which heard it sees through cells that are not
-    /// occupied (a corner the robot's range sensor never surveyed, a doorway's far side).
-    /// One that does not, whichever step made it, moves to the free place nearest it
+    /// occupied (a corner the robot's range sensor never surveyed, a doorway's far side),
+    /// unless a wall lies between it and the free cell nearest it within
+    /// [`IasmConfig::merge_dist_m`] (it is then just behind the wall's face: the unknown
+    /// the wall hid, not a place a sound comes from). One that does not, whichever step
+    /// made it, moves to the free place nearest it
     /// where its own DoAs still fit (as many of its stops within the vote's gate, 2
     /// `sigma`, as before, less one, and never fewer than
     /// [`IasmConfig::min_observations`]), or is refused ([`Refusal::OutsideRoom`]). Only
@@ -337,7 +340,19 @@ pub struct IasmConfig {
     /// fall anywhere along them. Default: 0.3 m, as [`IasmConfig::wall_clearance_m`]
     /// (a talker's or a loudspeaker's own size; a wall in a map is 0.1-0.3 m thick, so
     /// that the cells just behind a wall's face are the wall, not the space beyond it)
-    /// (the paper profile: 0).
+    /// (the paper profile: 0). Why a source just behind a wall's face moves to the face
+    /// although a stop sees it "in the open": the stop's view is shortened by this margin,
+    /// which ends it in front of the wall; a talker in an alcove whose rays meet 0.3 m
+    /// behind its back wall (its image there pulls its DoAs) stood in the unknown, 0.6 m
+    /// from the talker, and moved to the wall's face stands 0.35 m from it. Moving a
+    /// point onto the region that holds the truth (a half-plane, locally) never takes it
+    /// further from the truth. An occupied cell near free space (a table, a
+    /// loudspeaker's own cells) is not moved from. Measured (`docs/decisions/0010`):
+    /// `corridor_alcoves` 0.202 / 0.262 -> 0.186 / 0.231 m (GCC-PHAT / MVDR),
+    /// `l_west_wing` (held out) GCC-PHAT 0.202 -> 0.126; `dogleg_uma8` (held out) MVDR
+    /// kept the right count in 27 % of maps, not 47 (a vent's estimate 1 m off, beyond the
+    /// wall, had stood there; moved to the face, its rays' own crossing was found behind
+    /// the wall and refused); every other scene of the suite and arrangement II unchanged.
     pub room_margin_m: f64,
     /// The vote lets a DoA that a source already explains support a second source too,
     /// where the DoA lies within this many `sigma` of the bearing to it and its stop's row
@@ -429,6 +444,34 @@ pub struct IasmConfig {
     /// unchanged, but arrangement II from raw audio (MVDR, 50 runs) 0.147 -> 0.149 m: in
     /// one run a loudspeaker mirrored across the robot's line by another was refused.
     pub array_mirror: bool,
+    /// A source whose DoAs are another mapped source's reflections in the map's walls is
+    /// removed ([`Refusal::Reflection`]): each of its DoAs but one is the other's direct
+    /// bearing or, traced through the wall its line meets, passes the other (within the
+    /// vote's gate, 2 `sigma`, and within one `sigma` of how well the source itself fits
+    /// it), as many of them as a source needs stops ([`IasmConfig::min_observations`])
+    /// and half of them or more reflections, and each stop that heard such a reflection
+    /// heard the other's direct sound too or has it hidden by a wall. Only on a surveyed
+    /// map (one with occupied cells). Not in the paper. Default: on (the paper profile:
+    /// off). See `mapper/reflection.rs`.
+    ///
+    /// Why: a talker in an alcove is heard from the corridor's far stops only by its
+    /// reflections in the alcove's side walls, and those heard from either side cross at
+    /// the alcove's mouth as consistently as a source's own rays meet (`corridor_alcoves`:
+    /// a ghost 0.9 m in front of the talker in most GCC-PHAT maps). The map holds the
+    /// walls, so the image-source model says where each mapped source's reflections are
+    /// heard (reflection-aware localisation, An et al., ICRA 2018). Why the conditions
+    /// beyond the gate: a reflection is weaker than its direct sound and not heard
+    /// without it where nothing hides the source; with eight or ten sources some image
+    /// lies within 10 degrees of a real source's bearings by chance (`sparse_ten`: a
+    /// talker whose own rays fitted it within 0.6 degrees, its "images" 9 off;
+    /// `sparse_eight_speech`: a talker heard from three stops, two of them near images),
+    /// and a ghost of reflections is made of as many reflections as a source of stops.
+    /// Measured (`docs/decisions/0010`; with the room rule's face step in both):
+    /// `corridor_alcoves` GCC-PHAT 0.186 -> 0.159 m (the right count in 67 -> 80 % of
+    /// maps), MVDR 0.231 -> 0.187 (60 -> 70 %); `l_west_wing` (held out) MVDR 0.197 ->
+    /// 0.139 (63 -> 90 %); every other scene of the suite and `fixtures/heldout`, and
+    /// arrangement II (50 runs, ours and the authors' tables), unchanged.
+    pub reflections: bool,
     /// For DoAs from a linear array: the azimuth of its line (degrees, array frame; the
     /// `ssl` crate's `MicArray::mirror_axis_deg`). Such an array hears the angle to its
     /// line only, so each DoA `a` is as much `2 * axis - a`, its mirror image, and the
@@ -556,6 +599,7 @@ impl Default for IasmConfig {
             share_gate_sigmas: 0.5,
             reassociate: true,
             array_mirror: false,
+            reflections: true,
             rank_gain: 0.5,
             mirror_axis_deg: None,
         }
@@ -581,6 +625,7 @@ impl IasmConfig {
                 share_gate_sigmas: 0.0,
                 reassociate: false,
                 array_mirror: false,
+                reflections: false,
                 rank_gain: 1.0,
                 ..Self::default()
             },

@@ -11,6 +11,8 @@
 //! | `vote.rs` | the vote after the rounds ([`Mapper::vote`]) |
 //! | `rules.rs` | what cannot be a source ([`Mapper::drop_implausible`]), thin sources, merging |
 //! | `reassociation.rs` | each DoA to the source it fits best ([`Mapper::reassociate`]) |
+//! | `room.rs` | the map is the room: no source behind a wall ([`IasmConfig::room_margin_m`]) |
+//! | `reflection.rs` | a source's reflections in the map's walls are no source ([`IasmConfig::reflections`]) |
 //! | `refine.rs` | bearing least squares with trimmed rays ([`refine_by_bearings`], [`fit_bearings`]) |
 //! | `tests/` | the claims, on scenes whose answer is known |
 //!
@@ -96,6 +98,7 @@ use crate::wrap_rad;
 mod config;
 mod reassociation;
 mod refine;
+mod reflection;
 mod room;
 mod rounds;
 mod rules;
@@ -185,6 +188,9 @@ pub enum Refusal {
     /// The mirror image, about the array's axis, of a source heard from more stops and
     /// from headings it was not ([`IasmConfig::array_mirror`]).
     ArrayMirror,
+    /// Its DoAs are another mapped source's reflections in the map's walls (or that
+    /// source's own bearing), each but one ([`IasmConfig::reflections`]).
+    Reflection,
 }
 
 /// The result of one I-ASM run.

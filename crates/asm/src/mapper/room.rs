@@ -2,9 +2,10 @@
 //! map holds a wall or space the robot never saw behind one.
 //!
 //! A source outside the room (in a wall, or in the unknown that every stop that heard it
-//! sees only through a wall) moves to the free place nearest it where its DoAs still fit,
-//! or is refused. Unknown space that a stop sees through free cells is unsurveyed, not
-//! beyond the walls, and a source there stays. Which free places are looked at: the free cells within the vote's reach
+//! sees only through a wall, or in the unknown just behind a wall's face) moves to the free
+//! place nearest it where its DoAs still fit, or is refused. Unknown space that a stop
+//! sees through free cells is unsurveyed, not beyond the walls, and a source there stays,
+//! unless a wall lies between it and the free cell nearest it. Which free places are looked at: the free cells within the vote's reach
 //! of it, `merge_dist_m` + 2 `sigma` of its nearest stop's range (a DoA error of 2 `sigma`
 //! moves a crossing by that much along it), nearest first; the first that keeps as many
 //! of its stops within the gate as the source had, less one, is taken. Looking further
@@ -59,9 +60,21 @@ impl Mapper {
         })
     }
 
+    /// Whether `p` lies in unknown space just behind a wall's face: the free cell nearest
+    /// it, within [`IasmConfig::merge_dist_m`], is on the wall's other side.
+    fn behind_a_face(&self, p: [f64; 2]) -> bool {
+        if !self.room_rule() || !matches!(self.map.cell_at(p), None | Some(Cell::Unknown)) {
+            return false;
+        }
+        self.map
+            .free_within(p, self.config.merge_dist_m)
+            .first()
+            .is_some_and(|&q| self.map.first_occupied(q, p).is_some())
+    }
+
     /// Where a source at `p` explaining `rays` may stand in the room (see the module docs).
     pub(super) fn place_in_room(&self, p: [f64; 2], rays: &[Ray]) -> InRoom {
-        if self.in_room(p) || self.seen_in_the_open(p, rays) {
+        if !self.behind_a_face(p) && (self.in_room(p) || self.seen_in_the_open(p, rays)) {
             return InRoom::Inside;
         }
         let gate = 2.0 * self.sigma;

@@ -65,9 +65,10 @@ impl Mapper {
 
     /// Removes the sources that cannot be: nearer a stop than [`IasmConfig::min_range_m`],
     /// or spoken against by more stops than leave them the
-    /// [`IasmConfig::min_observations`] (see [`IasmConfig::absence_ratio`]), repeated
-    /// until none falls, since a source removed masks no stop's silence towards the
-    /// others; their DoAs go back to `pool` (one row per stop of the DoAs no source
+    /// [`IasmConfig::min_observations`] (see [`IasmConfig::absence_ratio`]), or made of
+    /// another standing source's reflections in the map's walls
+    /// ([`IasmConfig::reflections`]), repeated until none falls, since a source removed
+    /// masks no stop's silence towards the others and explains no other's rays; their DoAs go back to `pool` (one row per stop of the DoAs no source
     /// explains). Returns the removed sources, each with the rule that removed it.
     ///
     /// Where the SSL said it cut rows at `N` ([`Stops::said_cut`]), a source must also have
@@ -138,10 +139,15 @@ impl Mapper {
                     self.spoken_against(at[i], &sources[i].rays, stops, &others)
                 })
                 .collect();
-            if next == why {
+            if next != why {
+                why = next;
+                continue;
+            }
+            // Among the sources still standing, those heard only by reflection; then the
+            // absences again, which they may have masked.
+            if !self.heard_by_reflection(sources, stops, &mut why) {
                 break;
             }
-            why = next;
         }
         let mut why = why.into_iter();
         sources.retain_mut(|s| {

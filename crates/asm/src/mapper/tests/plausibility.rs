@@ -577,20 +577,29 @@ fn a_source_heard_through_a_wall_is_its_image_in_the_wall() {
         sources.len() < before
     };
     assert!(removed(IasmConfig::default(), false, true));
-    // The rule off (the paper profile's value), or the wall opened by a door that
-    // every ray passes through, or no source in front of the wall to be mirrored (a
-    // talker behind a counter): a source.
+    // With the rule off, the rays are still the talker's reflections in the wall
+    // (`reflections`): removed all the same.
     let off = IasmConfig {
         wall_clearance_m: 0.0,
         ..IasmConfig::default()
+    };
+    assert!(removed(off.clone(), false, true));
+    // Both rules off (the paper profile's values), or the wall opened by a door that
+    // every ray passes through, or no source in front of the wall to be mirrored (a
+    // talker behind a counter): a source.
+    let off = IasmConfig {
+        reflections: false,
+        ..off
     };
     assert!(!removed(off, false, true));
     assert!(!removed(IasmConfig::default(), true, true));
     assert!(!removed(IasmConfig::default(), false, false));
     // A clearance of 1 m, more than the image's 0.8 m behind the wall's far face,
-    // leaves the wall in the way of the slanted rays of stops 0-2 and 6-8 only: kept.
+    // leaves the wall in the way of the slanted rays of stops 0-2 and 6-8 only: kept
+    // (by this rule; `reflections` off).
     let wide = IasmConfig {
         wall_clearance_m: 1.0,
+        reflections: false,
         ..IasmConfig::default()
     };
     assert!(!removed(wide, false, true));

@@ -137,3 +137,39 @@ fn unknown_space_seen_in_the_open_is_unsurveyed_not_outside() {
     assert!(kept.is_empty(), "{kept:?}");
     assert_eq!(refused[0].rule, Refusal::OutsideRoom);
 }
+
+#[test]
+fn a_source_just_behind_a_walls_face_stands_at_the_face() {
+    // Rays meeting 0.05 m behind the hall's wall (y in [0.5, 0.65)), in the unknown: within
+    // the margin of the free space, and each stop's view of it, shortened by the margin,
+    // ends in front of the wall. It is behind the wall's face all the same (the free cell
+    // nearest it is on the wall's other side) and moves to the face, straight in front.
+    let all: Vec<usize> = (0..9).collect();
+    let q = [3.0, 0.7];
+    let (mapper, poses, stops) = l_room(IasmConfig::default(), &[q]);
+    assert_eq!(mapper.map.cell_at(q), Some(Cell::Unknown));
+    assert!(
+        !mapper
+            .map
+            .free_within(q, mapper.config.room_margin_m)
+            .is_empty()
+    );
+    let mut sources = vec![heard_from(q, &poses, &all)];
+    let mut left = vec![Vec::new(); poses.len()];
+    let refused = mapper.drop_implausible(&mut sources, &stops, &mut left);
+    assert!(refused.is_empty(), "{refused:?}");
+    let at = [sources[0].x, sources[0].y];
+    assert!(
+        (at[0] - 3.0).abs() < 0.05 && (0.4..0.5).contains(&at[1]),
+        "{at:?}"
+    );
+    // A source on an occupied cell beside free space (a loudspeaker on a table, a vent
+    // in a wall's grille) stays where its rays meet.
+    let vent = [3.0, 0.6];
+    let (mapper, poses, stops) = l_room(IasmConfig::default(), &[vent]);
+    assert_eq!(mapper.map.cell_at(vent), Some(Cell::Occupied));
+    let mut sources = vec![heard_from(vent, &poses, &all)];
+    let refused = mapper.drop_implausible(&mut sources, &stops, &mut left);
+    assert!(refused.is_empty(), "{refused:?}");
+    assert_eq!([sources[0].x, sources[0].y], vent);
+}

@@ -1,0 +1,203 @@
+//! Heard by reflection ([`IasmConfig::reflections`]): the place where a source's
+//! reflections in the map's walls cross is no source, and a source its own rays fit is.
+
+use super::*;
+
+/// A corridor along y in [-1.5, 0.5] with an alcove x in [3, 5] up to y = 2 on its north
+/// side, walls 0.15 m thick, the unknown beyond; a talker in the alcove at (4, 1.5) and
+/// the robot's stops along y = -0.5 at x = 0, 1, ..., 9.
+fn alcove(config: IasmConfig) -> (Mapper, Vec<Pose>) {
+    let mapper = ghost_mapper_on(
+        |[x, y]| {
+            let alcove = (3.0..5.0).contains(&x);
+            match (x, y) {
+                (_, y) if (-1.5..0.5).contains(&y) => Cell::Free,
+                (_, y) if alcove && (0.5..2.0).contains(&y) => Cell::Free,
+                (_, y) if (-1.65..-1.5).contains(&y) => Cell::Occupied,
+                (x, y) if (2.85..5.15).contains(&x) && (0.5..2.15).contains(&y) => Cell::Occupied,
+                (_, y) if (0.5..0.65).contains(&y) => Cell::Occupied,
+                _ => Cell::Unknown,
+            }
+        },
+        config,
+    );
+    let poses = (0..10).map(|i| Pose::new(i as f64, -0.5, 0.0)).collect();
+    (mapper, poses)
+}
+
+const TALKER: [f64; 2] = [4.0, 1.5];
+
+/// The talker's reflections in the alcove's side walls (faces x = 3 and x = 5) that reach
+/// stop `p`: the bearing to its image, where the path through the point of reflection
+/// stays in the free space of the map.
+fn reflections(mapper: &Mapper, p: &Pose) -> Vec<f64> {
+    [(3.0, [2.0, TALKER[1]]), (5.0, [6.0, TALKER[1]])]
+        .into_iter()
+        .filter_map(|(face, image): (f64, [f64; 2])| {
+            let t = (face - p.x) / (image[0] - p.x);
+            let at = [face, p.y + t * (image[1] - p.y)];
+            let clear = |a: [f64; 2], b: [f64; 2]| {
+                // Stop short of the wall at both ends: the reflection point is on it.
+                let (a, b) = (lerp(a, b, 0.03), lerp(a, b, 0.97));
+                mapper.map.first_occupied(a, b).is_none()
+            };
+            ((0.0..1.0).contains(&t)
+                && (0.7..1.95).contains(&at[1])
+                && clear(p.position(), at)
+                && clear(at, TALKER))
+            .then(|| p.bearing_to(image))
+        })
+        .collect()
+}
+
+fn lerp(a: [f64; 2], b: [f64; 2], t: f64) -> [f64; 2] {
+    [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])]
+}
+
+/// What each stop hears: the talker first where the map leaves it in sight, then its
+/// reflections.
+fn heard(mapper: &Mapper, poses: &[Pose]) -> Vec<Vec<f64>> {
+    poses
+        .iter()
+        .map(|p| {
+            let direct = mapper.map.first_occupied(p.position(), TALKER).is_none();
+            direct
+                .then(|| p.bearing_to(TALKER))
+                .into_iter()
+                .chain(reflections(mapper, p))
+                .collect()
+        })
+        .collect()
+}
+
+/// The sources a map would hold: the talker from the stops that see it, and a source
+/// where the reflections cross, with the rays it would take (`off_deg` turns them).
+fn talker_and_crossing(mapper: &Mapper, poses: &[Pose], heard: &[Vec<f64>]) -> Vec<Source> {
+    let sees: Vec<usize> = (0..poses.len())
+        .filter(|&k| {
+            mapper
+                .map
+                .first_occupied(poses[k].position(), TALKER)
+                .is_none()
+        })
+        .collect();
+    let rays: Vec<Ray> = heard
+        .iter()
+        .enumerate()
+        .flat_map(|(k, row)| {
+            let skip = usize::from(sees.contains(&k));
+            row.iter().skip(skip).map(move |&b| Ray {
+                stop: k,
+                from: poses[k].position(),
+                bearing: b,
+                twin: None,
+                shared: false,
+            })
+        })
+        .collect();
+    let start = least_squares_crossing(&rays).expect("the reflections cross");
+    let (at, _) = fit_bearings(start, &rays, 5f64.to_radians(), Trim::OFF).expect("a fit");
+    let mut crossing = heard_from(at, poses, &[]);
+    crossing.observations = rays.len();
+    crossing.rays = rays;
+    vec![heard_from(TALKER, poses, &sees), crossing]
+}
+
+fn judged(config: IasmConfig, silence_the_talker: bool) -> (Vec<Source>, Vec<Refused>, [f64; 2]) {
+    let (mapper, poses) = alcove(config);
+    let mut rows = heard(&mapper, &poses);
+    let mut sources = talker_and_crossing(&mapper, &poses, &rows);
+    let crossing = [sources[1].x, sources[1].y];
+    if silence_the_talker {
+        // The stops that see the talker report only the reflections they heard.
+        for k in stops_of(&sources[0].rays) {
+            rows[k].remove(0);
+        }
+    }
+    let complete = mapper.complete_by_length(&rows);
+    let stops = stops_with(&poses, &rows, &complete, &vec![false; poses.len()]);
+    let mut left = vec![Vec::new(); poses.len()];
+    let refused = mapper.drop_implausible(&mut sources, &stops, &mut left);
+    (sources, refused, crossing)
+}
+
+#[test]
+fn where_a_talkers_reflections_cross_there_is_no_source() {
+    let (kept, refused, crossing) = judged(IasmConfig::default(), false);
+    // The reflections from either side cross at the alcove's mouth, in the room, from
+    // at least four stops (the scene is what the rule is for).
+    let (mapper, poses) = alcove(IasmConfig::default());
+    let reflected = heard(&mapper, &poses)
+        .iter()
+        .zip(&poses)
+        .filter(|(row, p)| {
+            row.len() > usize::from(mapper.map.first_occupied(p.position(), TALKER).is_none())
+        })
+        .count();
+    assert!(reflected >= 4, "{reflected} stops hear a reflection");
+    assert!(
+        (3.0..5.0).contains(&crossing[0]) && (0.0..1.2).contains(&crossing[1]),
+        "{crossing:?}"
+    );
+    // The talker stays; the crossing is refused as its reflections.
+    assert_eq!(
+        kept.iter().map(|s| [s.x, s.y]).collect::<Vec<_>>(),
+        vec![TALKER]
+    );
+    assert_eq!(refused.len(), 1, "{refused:?}");
+    assert_eq!(refused[0].rule, Refusal::Reflection);
+    // Without the rule the crossing stands.
+    let (kept, refused, _) = judged(
+        IasmConfig {
+            reflections: false,
+            ..IasmConfig::default()
+        },
+        false,
+    );
+    assert!(refused.is_empty(), "{refused:?}");
+    assert_eq!(kept.len(), 2);
+}
+
+#[test]
+fn a_reflection_is_heard_with_its_direct_sound() {
+    // The same rays, but the stops that see the talker did not hear it: what they heard
+    // at its reflections' bearings is no reflection of it (a reflection is weaker than the
+    // direct sound), so the crossing, heard from them too, is not explained away.
+    let (kept, refused, _) = judged(IasmConfig::default(), true);
+    assert!(
+        refused.iter().all(|r| r.rule != Refusal::Reflection),
+        "{refused:?}"
+    );
+    assert!(kept.len() == 2, "{kept:?}");
+}
+
+#[test]
+fn a_talker_where_the_reflections_cross_stays() {
+    // A second talker stands where the first's reflections cross, heard by the stops
+    // that heard those reflections, beside what they heard before: its own rays fit it
+    // exactly, and the first talker's images, all within the vote's gate of them, miss
+    // most of them by more than a sigma (up to 7.6 degrees): it is a source, not the
+    // first's reflections.
+    let (mapper, poses) = alcove(IasmConfig::default());
+    let mut rows = heard(&mapper, &poses);
+    let sources = talker_and_crossing(&mapper, &poses, &rows);
+    let second = [sources[1].x, sources[1].y];
+    let heard_it = stops_of(&sources[1].rays);
+    let sigma = 5f64.to_radians();
+    let misses: Vec<f64> = sources[1].rays.iter().map(|r| r.miss(second)).collect();
+    assert!(misses.iter().all(|&m| m < 2.0 * sigma), "{misses:?}");
+    assert!(
+        2 * misses.iter().filter(|&&m| m > sigma).count() > misses.len(),
+        "{misses:?}"
+    );
+    for &k in &heard_it {
+        rows[k].push(poses[k].bearing_to(second));
+    }
+    let mut sources = vec![sources[0].clone(), heard_from(second, &poses, &heard_it)];
+    let complete = mapper.complete_by_length(&rows);
+    let stops = stops_with(&poses, &rows, &complete, &vec![false; poses.len()]);
+    let mut left = vec![Vec::new(); poses.len()];
+    let refused = mapper.drop_implausible(&mut sources, &stops, &mut left);
+    assert!(refused.is_empty(), "{refused:?}");
+    assert_eq!(sources.len(), 2);
+}
