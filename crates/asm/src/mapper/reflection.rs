@@ -23,6 +23,7 @@
 //! explained so (two sources explaining each other are both kept: the rule does not
 //! choose).
 
+use super::rules::principal_axis;
 use super::*;
 
 /// How far around the point where a DoA's ray meets a wall the wall's cells are taken to
@@ -201,23 +202,7 @@ fn line_normal(cells: &[[f64; 2]]) -> Option<[f64; 2]> {
     if cells.len() < 3 {
         return None;
     }
-    let n = cells.len() as f64;
-    let c = cells
-        .iter()
-        .fold([0.0, 0.0], |a, q| [a[0] + q[0] / n, a[1] + q[1] / n]);
-    let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
-    for q in cells {
-        let (dx, dy) = (q[0] - c[0], q[1] - c[1]);
-        (sxx, sxy, syy) = (sxx + dx * dx, sxy + dx * dy, syy + dy * dy);
-    }
-    // The spreads along and across the principal axis: the covariance's eigenvalues.
-    let (mean, spread) = (
-        0.5 * (sxx + syy),
-        (0.25 * (sxx - syy).powi(2) + sxy * sxy).sqrt(),
-    );
-    if mean + spread < WALL_ELONGATION.powi(2) * (mean - spread).max(0.0) {
-        return None;
-    }
-    let angle = 0.5 * (2.0 * sxy).atan2(sxx - syy);
-    Some([-angle.sin(), angle.cos()])
+    let axis = principal_axis(cells)?;
+    (axis.along >= WALL_ELONGATION.powi(2) * axis.across)
+        .then(|| [-axis.angle.sin(), axis.angle.cos()])
 }

@@ -583,16 +583,9 @@ impl Mapper {
 /// the points span less than `min_span` (m) along it, too short a stretch of wall to say
 /// which way it runs.
 pub(super) fn mirror_in_line(p: [f64; 2], points: &[[f64; 2]], min_span: f64) -> Option<[f64; 2]> {
-    let n = points.len() as f64;
-    let c = points
-        .iter()
-        .fold([0.0, 0.0], |a, q| [a[0] + q[0] / n, a[1] + q[1] / n]);
-    let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
-    for q in points {
-        let (dx, dy) = (q[0] - c[0], q[1] - c[1]);
-        (sxx, sxy, syy) = (sxx + dx * dx, sxy + dx * dy, syy + dy * dy);
-    }
-    let angle = 0.5 * (2.0 * sxy).atan2(sxx - syy);
+    let Axis {
+        centre: c, angle, ..
+    } = principal_axis(points)?;
     let u = [angle.cos(), angle.sin()];
     let along = |q: &[f64; 2]| (q[0] - c[0]) * u[0] + (q[1] - c[1]) * u[1];
     let (lo, hi) = points
@@ -608,4 +601,41 @@ pub(super) fn mirror_in_line(p: [f64; 2], points: &[[f64; 2]], min_span: f64) ->
     let t = along(&p);
     let foot = [c[0] + t * u[0], c[1] + t * u[1]];
     Some([2.0 * foot[0] - p[0], 2.0 * foot[1] - p[1]])
+}
+
+/// The line a set of points runs along: their mean, the direction of their principal axis,
+/// and their spreads (variances, m^2) along and across it.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Axis {
+    pub(super) centre: [f64; 2],
+    /// The axis' direction (rad).
+    pub(super) angle: f64,
+    pub(super) along: f64,
+    pub(super) across: f64,
+}
+
+/// The principal axis of `points` (their covariance's eigenvectors); `None` for none.
+pub(super) fn principal_axis(points: &[[f64; 2]]) -> Option<Axis> {
+    if points.is_empty() {
+        return None;
+    }
+    let n = points.len() as f64;
+    let c = points
+        .iter()
+        .fold([0.0, 0.0], |a, q| [a[0] + q[0] / n, a[1] + q[1] / n]);
+    let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
+    for q in points {
+        let (dx, dy) = (q[0] - c[0], q[1] - c[1]);
+        (sxx, sxy, syy) = (sxx + dx * dx / n, sxy + dx * dy / n, syy + dy * dy / n);
+    }
+    let (mean, spread) = (
+        0.5 * (sxx + syy),
+        (0.25 * (sxx - syy).powi(2) + sxy * sxy).sqrt(),
+    );
+    Some(Axis {
+        centre: c,
+        angle: 0.5 * (2.0 * sxy).atan2(sxx - syy),
+        along: mean + spread,
+        across: (mean - spread).max(0.0),
+    })
 }
