@@ -1,7 +1,7 @@
 //! `iasm ssl`: ranked DoAs per recording, a DoA table for a data set, and its score.
 
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
@@ -156,20 +156,7 @@ fn score(
     table: &Table,
     elapsed: f64,
 ) -> Result<ScoreReport> {
-    let dir = &ds.root;
-    let poses_path = ds
-        .poses
-        .as_ref()
-        .with_context(|| format!("--score: {} has no pose table in pose/", dir.display()))?;
-    let sources_path = match &args.truth {
-        Some(t) => t,
-        None => ds
-            .sources
-            .as_ref()
-            .with_context(|| format!("--score: {} has no src_gt* ground truth", dir.display()))?,
-    };
-    let poses = read_poses(poses_path, false)?;
-    let sources = read_sources(sources_path)?;
+    let (poses_path, poses, sources) = truth_of(args, ds)?;
     let (n, mirror, config) = (
         setup.config.num_peaks,
         setup.array.mirror_axis_deg(),
@@ -183,15 +170,12 @@ fn score(
             .transpose()
     };
     let mut diagnostics: Vec<NamedDiagnostics> = Vec::new();
-    let mut named = |table: String, d: Option<Diagnostics>| {
-        if let Some(d) = d {
-            diagnostics.push(NamedDiagnostics {
-                table,
-                diagnostics: d,
-            });
-        }
-    };
-    named(format!("iasm {}", config.method), diag(table)?);
+    if let Some(d) = diag(table)? {
+        diagnostics.push(NamedDiagnostics {
+            table: format!("iasm {}", config.method),
+            diagnostics: d,
+        });
+    }
     let mut published: Vec<PublishedScore> = Vec::new();
     for t in &ds.doa_tables {
         let name = t
@@ -207,32 +191,27 @@ fn score(
         });
         match scored {
             Ok((score, d)) => {
-                published.push(PublishedScore {
-                    table: name.clone(),
-                    score,
-                });
-                named(name, d);
+                if let Some(d) = d {
+                    diagnostics.push(NamedDiagnostics {
+                        table: name.clone(),
+                        diagnostics: d,
+                    });
+                }
+                published.push(PublishedScore { table: name, score });
             }
             Err(e) => eprintln!("warning: cannot score {}: {e:#}", t.display()),
         }
     }
-    let rules = if args.rules {
-        let rec = Recordings {
-            files: &ds.audio,
-            array: &setup.array,
-            channels: setup.settings.channels.as_deref(),
-            noise: setup.noise.as_ref(),
-        };
-        let truth = Truth {
-            poses: &poses,
-            sources: &sources,
-            tol_deg: args.tol_deg,
-            mirror_axis_deg: mirror,
-        };
-        Some(run_census(&rec, config, rows, &truth)?)
-    } else {
-        None
+    let truth = Truth {
+        poses: &poses,
+        sources: &sources,
+        tol_deg: args.tol_deg,
+        mirror_axis_deg: mirror,
     };
+    let rules = args
+        .rules
+        .then(|| census(setup, ds, rows, &truth))
+        .transpose()?;
     Ok(ScoreReport {
         schema_version: SCHEMA_VERSION,
         method: config.method.name(),
@@ -245,6 +224,38 @@ fn score(
         published,
         rules,
     })
+}
+
+/// The pose table's path, the poses and the true sources `--score` judges against: the
+/// data set's, or `--truth`.
+fn truth_of(args: &SslArgs, ds: &Dataset) -> Result<(PathBuf, Vec<asm::Pose>, Vec<[f64; 2]>)> {
+    let dir = &ds.root;
+    let poses_path = ds
+        .poses
+        .clone()
+        .with_context(|| format!("--score: {} has no pose table in pose/", dir.display()))?;
+    let sources_path = match &args.truth {
+        Some(t) => t,
+        None => ds
+            .sources
+            .as_ref()
+            .with_context(|| format!("--score: {} has no src_gt* ground truth", dir.display()))?,
+    };
+    let poses = read_poses(&poses_path, false)?;
+    let sources = read_sources(sources_path)?;
+    Ok((poses_path, poses, sources))
+}
+
+/// The `--rules` census: which SSL rule left out each source no DoA found, and let in
+/// each DoA that found none.
+fn census(setup: &Setup, ds: &Dataset, rows: &[FileDoas], truth: &Truth) -> Result<RuleCensus> {
+    let rec = Recordings {
+        files: &ds.audio,
+        array: &setup.array,
+        channels: setup.settings.channels.as_deref(),
+        noise: setup.noise.as_ref(),
+    };
+    run_census(&rec, &setup.config, rows, truth)
 }
 
 /// The score on the terminal: a row per table, the diagnostics by distance, the census.
