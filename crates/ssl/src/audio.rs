@@ -117,7 +117,60 @@ pub fn read_wav(path: &Path) -> Result<Audio> {
         path: path.to_owned(),
         message,
     };
-    let reader = hound::WavReader::open(path).map_err(|e| match e {
+    let reader = open_wav(path)?;
+    let spec = reader.spec();
+    let n_ch = usize::from(spec.channels);
+    if n_ch == 0 {
+        return Err(wav_err("the header declares zero channels".into()));
+    }
+    let declared = u64::from(reader.len());
+    if declared == 0 {
+        return Err(Error::EmptyWav {
+            path: path.to_owned(),
+        });
+    }
+    let fits = samples_that_fit(path, spec, declared)?;
+    let frames = usize::try_from(fits).unwrap_or(usize::MAX) / n_ch;
+    let mut channels = vec![Vec::with_capacity(frames); n_ch];
+    let int16 = spec.sample_format == hound::SampleFormat::Int && spec.bits_per_sample == 16;
+    let float32 = spec.sample_format == hound::SampleFormat::Float && spec.bits_per_sample == 32;
+    let read = if int16 || float32 {
+        read_in_bulk(reader, int16, declared, fits, &mut channels)
+            .map_err(|e| wav_err(e.to_string()))?
+    } else {
+        read_by_sample(path, reader, declared, &mut channels)?
+    };
+    if read < declared || declared % n_ch as u64 != 0 {
+        return Err(truncated(path, declared, read));
+    }
+    Audio::new(spec.sample_rate, channels).map_err(|e| match e {
+        Error::NonFiniteSample {
+            channel,
+            sample,
+            value,
+        } => Error::NonFiniteWav {
+            path: path.to_owned(),
+            channel,
+            sample,
+            value,
+        },
+        _ => Error::EmptyWav {
+            path: path.to_owned(),
+        },
+    })
+}
+
+/// A WAV file open for reading, its header read.
+type WavFile = hound::WavReader<std::io::BufReader<std::fs::File>>;
+
+/// `path`'s WAV reader, its header read, or the reason it is no WAV we read, in words a
+/// user acts on.
+fn open_wav(path: &Path) -> Result<WavFile> {
+    let wav_err = |message: String| Error::Wav {
+        path: path.to_owned(),
+        message,
+    };
+    hound::WavReader::open(path).map_err(|e| match e {
         hound::Error::IoError(io)
             if matches!(
                 io.kind(),
@@ -139,27 +192,19 @@ pub fn read_wav(path: &Path) -> Result<Audio> {
         ),
         hound::Error::FormatError(m) => wav_err(format!("not a valid WAV file: {m}")),
         other => wav_err(format!("not a supported WAV file: {other}")),
-    })?;
-    let spec = reader.spec();
-    let n_ch = usize::from(spec.channels);
-    if n_ch == 0 {
-        return Err(wav_err("the header declares zero channels".into()));
-    }
-    let declared = u64::from(reader.len());
-    if declared == 0 {
-        return Err(Error::EmptyWav {
-            path: path.to_owned(),
-        });
-    }
-    // A header may declare more samples than the file holds (a recorder still writing, or a
-    // damaged header declaring gigabytes): reserve only what the file can hold, and let the
-    // read below find the truncation.
+    })
+}
+
+/// How many of the `declared` samples the file can hold, refused beyond
+/// [`MAX_WAV_SAMPLES`]. A header may declare more samples than the file holds (a recorder
+/// still writing, or a damaged header declaring gigabytes): only what the file can hold is
+/// reserved, and the read finds the truncation.
+fn samples_that_fit(path: &Path, spec: hound::WavSpec, declared: u64) -> Result<u64> {
     let sample_bytes = u64::from(spec.bits_per_sample.div_ceil(8).max(1));
     let file_len = std::fs::metadata(path).map_or(u64::MAX, |m| m.len());
     let fits = (file_len / sample_bytes).min(declared);
-    // (A header declaring more than the file holds is a truncation, found below.)
     if fits > MAX_WAV_SAMPLES {
-        let per_s = f64::from(spec.sample_rate) * n_ch as f64;
+        let per_s = f64::from(spec.sample_rate) * f64::from(spec.channels);
         return Err(Error::TooLong {
             path: path.to_owned(),
             seconds: declared as f64 / per_s,
@@ -168,88 +213,93 @@ pub fn read_wav(path: &Path) -> Result<Audio> {
             limit_s: MAX_WAV_SAMPLES as f64 / per_s,
         });
     }
-    let frames = usize::try_from(fits).unwrap_or(usize::MAX) / n_ch;
-    let mut channels = vec![Vec::with_capacity(frames); n_ch];
-    let truncated = |read| Error::Truncated {
+    Ok(fits)
+}
+
+/// [`Error::Truncated`]: `path` ended after `read` of the `declared` samples.
+fn truncated(path: &Path, declared: u64, read: u64) -> Error {
+    Error::Truncated {
         path: path.to_owned(),
         declared,
         read,
-    };
-    let int16 = spec.sample_format == hound::SampleFormat::Int && spec.bits_per_sample == 16;
-    let float32 = spec.sample_format == hound::SampleFormat::Float && spec.bits_per_sample == 32;
-    let read = if int16 || float32 {
-        // The two common formats are decoded in bulk: hound's per-sample iterator costs more
-        // than all of the localisation that follows.
-        let width = if int16 { 2 } else { 4 };
-        let mut bytes = Vec::with_capacity(usize::try_from(fits).unwrap_or(0) * width);
-        let mut inner = reader.into_inner();
-        std::io::Read::by_ref(&mut inner)
-            .take(declared * width as u64)
-            .read_to_end(&mut bytes)
-            .map_err(|e| wav_err(e.to_string()))?;
-        let read = (bytes.len() / width) as u64;
-        // Channel by channel over whole frames: sequential writes, no per-sample division
-        // to find the channel, no per-sample capacity check.
-        let stride = width * n_ch;
-        let whole = bytes.len() / stride;
-        for (c, ch) in channels.iter_mut().enumerate() {
-            ch.extend(bytes[..whole * stride].chunks_exact(stride).map(|f| {
-                let b = &f[c * width..];
-                if int16 {
-                    f32::from(i16::from_le_bytes([b[0], b[1]])) * (1.0 / 32768.0)
-                } else {
-                    f32::from_le_bytes([b[0], b[1], b[2], b[3]])
-                }
-            }));
-        }
-        read
-    } else {
-        let mut read = 0u64;
-        let mut push = |i: u64, v: f32| {
-            channels[(i % n_ch as u64) as usize].push(v);
-        };
-        match spec.sample_format {
-            hound::SampleFormat::Float => {
-                return Err(wav_err(format!(
-                    "{}-bit float samples are not supported (32-bit only)",
-                    spec.bits_per_sample
-                )));
-            }
-            hound::SampleFormat::Int => {
-                let scale = 1.0 / (1u64 << (spec.bits_per_sample - 1)) as f32;
-                if spec.bits_per_sample <= 16 {
-                    for s in reader.into_samples::<i16>() {
-                        push(read, f32::from(s.map_err(|_| truncated(read))?) * scale);
-                        read += 1;
-                    }
-                } else {
-                    for s in reader.into_samples::<i32>() {
-                        push(read, s.map_err(|_| truncated(read))? as f32 * scale);
-                        read += 1;
-                    }
-                }
-            }
-        }
-        read
-    };
-    if read < declared || declared % n_ch as u64 != 0 {
-        return Err(truncated(read));
     }
-    Audio::new(spec.sample_rate, channels).map_err(|e| match e {
-        Error::NonFiniteSample {
-            channel,
-            sample,
-            value,
-        } => Error::NonFiniteWav {
+}
+
+/// The samples of a 16-bit integer (`int16`) or 32-bit float WAV, decoded in bulk into
+/// `channels`: hound's per-sample iterator costs more than all of the localisation that
+/// follows. Returns how many samples the file held (of the `declared`; `fits` of them
+/// reserved).
+fn read_in_bulk(
+    reader: WavFile,
+    int16: bool,
+    declared: u64,
+    fits: u64,
+    channels: &mut [Vec<f32>],
+) -> std::io::Result<u64> {
+    let width = if int16 { 2 } else { 4 };
+    let mut bytes = Vec::with_capacity(usize::try_from(fits).unwrap_or(0) * width);
+    let mut inner = reader.into_inner();
+    std::io::Read::by_ref(&mut inner)
+        .take(declared * width as u64)
+        .read_to_end(&mut bytes)?;
+    let read = (bytes.len() / width) as u64;
+    // Channel by channel over whole frames: sequential writes, no per-sample division to
+    // find the channel, no per-sample capacity check.
+    let stride = width * channels.len();
+    let whole = bytes.len() / stride;
+    for (c, ch) in channels.iter_mut().enumerate() {
+        ch.extend(bytes[..whole * stride].chunks_exact(stride).map(|f| {
+            let b = &f[c * width..];
+            if int16 {
+                f32::from(i16::from_le_bytes([b[0], b[1]])) * (1.0 / 32768.0)
+            } else {
+                f32::from_le_bytes([b[0], b[1], b[2], b[3]])
+            }
+        }));
+    }
+    Ok(read)
+}
+
+/// The samples of an 8-, 24- or 32-bit integer WAV, one by one into `channels`; how many
+/// it held, or [`Error::Truncated`] where one could not be read.
+fn read_by_sample(
+    path: &Path,
+    reader: WavFile,
+    declared: u64,
+    channels: &mut [Vec<f32>],
+) -> Result<u64> {
+    let spec = reader.spec();
+    if spec.sample_format == hound::SampleFormat::Float {
+        return Err(Error::Wav {
             path: path.to_owned(),
-            channel,
-            sample,
-            value,
-        },
-        _ => Error::EmptyWav {
-            path: path.to_owned(),
-        },
-    })
+            message: format!(
+                "{}-bit float samples are not supported (32-bit only)",
+                spec.bits_per_sample
+            ),
+        });
+    }
+    let n_ch = channels.len() as u64;
+    let mut read = 0u64;
+    let mut push = |i: u64, v: f32| channels[(i % n_ch) as usize].push(v);
+    let scale = 1.0 / (1u64 << (spec.bits_per_sample - 1)) as f32;
+    if spec.bits_per_sample <= 16 {
+        for s in reader.into_samples::<i16>() {
+            push(
+                read,
+                f32::from(s.map_err(|_| truncated(path, declared, read))?) * scale,
+            );
+            read += 1;
+        }
+    } else {
+        for s in reader.into_samples::<i32>() {
+            push(
+                read,
+                s.map_err(|_| truncated(path, declared, read))? as f32 * scale,
+            );
+            read += 1;
+        }
+    }
+    Ok(read)
 }
 
 #[cfg(test)]
