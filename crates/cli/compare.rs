@@ -332,21 +332,30 @@ fn row(
 /// The report as CSV: one line per row, the columns of the terminal table and the error
 /// of each distance band.
 pub fn to_csv(r: &Report) -> String {
-    let bands: Vec<String> = r
+    let bands: Vec<&str> = r
         .rows
         .first()
         .map(|row| {
             row.diagnostics
                 .bands
                 .iter()
-                .map(|b| b.band.clone())
+                .map(|b| b.band.as_str())
                 .collect()
         })
         .unwrap_or_default();
+    let mut out = csv_header(&bands);
+    for row in &r.rows {
+        out.push_str(&csv_row(row));
+    }
+    out
+}
+
+/// The CSV's header line, with a column per distance band of `bands`.
+fn csv_header(bands: &[&str]) -> String {
     let mut out = String::from(
         "name,kind,doa_score,doa_hits,doa_total,mean_hit_error_deg,recall_3m,ospa_mean,ospa_median,ospa_worst,ospa_localization,ospa_cardinality,right_count,mean_sources,ms_per_recording,aligned_mean_m",
     );
-    for b in &bands {
+    for b in bands {
         out.push_str(&format!(",err_deg_{}", b.replace(' ', "")));
     }
     out.push_str(
@@ -354,67 +363,71 @@ pub fn to_csv(r: &Report) -> String {
     );
     out.push_str(",near_missed,missed_no_peak,missed_cut_at_n,missed_by_thresholds,beyond_n,beyond_n_on_source");
     out.push('\n');
-    let num = |v: f64| {
-        if v.is_finite() {
-            format!("{v:.4}")
-        } else {
-            String::new()
-        }
-    };
-    for row in &r.rows {
-        let o = &row.ospa;
-        out.push_str(&format!(
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
-            row.name,
-            row.kind,
-            num(row.doa.score),
-            row.doa.hits,
-            row.doa.total,
-            num(row.doa.mean_hit_error_deg),
-            num(row.diagnostics.recall_3m),
-            num(o.mean),
-            num(o.median),
-            num(o.worst),
-            num(o.mean_localization),
-            num(o.mean_cardinality),
-            num(o.right_count),
-            num(o.mean_sources),
-            row.ms_per_recording.map(num).unwrap_or_default(),
-            o.aligned.map(|a| num(a.mean_after_m)).unwrap_or_default(),
-        ));
-        for b in &row.diagnostics.bands {
-            out.push(',');
-            out.push_str(&num(b.mean_abs_err_deg));
-        }
-        let m = &o.missed;
-        for v in [
+    out
+}
+
+/// A number in the CSV: four decimals, empty where it is not finite.
+fn csv_num(v: f64) -> String {
+    if v.is_finite() {
+        format!("{v:.4}")
+    } else {
+        String::new()
+    }
+}
+
+/// One row's CSV line: its scores, the error per distance band, why the maps missed
+/// sources and, with `--rules`, the SSL's census.
+fn csv_row(row: &Row) -> String {
+    let num = csv_num;
+    let o = &row.ospa;
+    let mut cells: Vec<String> = vec![
+        row.name.clone(),
+        row.kind.to_string(),
+        num(row.doa.score),
+        row.doa.hits.to_string(),
+        row.doa.total.to_string(),
+        num(row.doa.mean_hit_error_deg),
+        num(row.diagnostics.recall_3m),
+        num(o.mean),
+        num(o.median),
+        num(o.worst),
+        num(o.mean_localization),
+        num(o.mean_cardinality),
+        num(o.right_count),
+        num(o.mean_sources),
+        row.ms_per_recording.map(num).unwrap_or_default(),
+        o.aligned.map(|a| num(a.mean_after_m)).unwrap_or_default(),
+    ];
+    cells.extend(
+        row.diagnostics
+            .bands
+            .iter()
+            .map(|b| num(b.mean_abs_err_deg)),
+    );
+    let m = &o.missed;
+    cells.extend(
+        [
             m.missed,
             m.spoken_against,
             m.thinly_heard,
             m.misplaced,
             m.reassigned,
-        ] {
-            out.push(',');
-            out.push_str(&num(v));
-        }
-        let census: [Option<usize>; 6] = match &row.rules {
-            Some(c) => [
-                Some(c.pairs - c.found),
-                Some(c.no_peak),
-                Some(c.cut_at_n),
-                Some(c.by_thresholds()),
-                Some(c.beyond_n),
-                Some(c.beyond_n_on_source),
-            ],
-            None => [None; 6],
-        };
-        for v in census {
-            out.push(',');
-            out.push_str(&v.map(|v| v.to_string()).unwrap_or_default());
-        }
-        out.push('\n');
-    }
-    out
+        ]
+        .map(num),
+    );
+    let census: [Option<usize>; 6] = match &row.rules {
+        Some(c) => [
+            Some(c.pairs - c.found),
+            Some(c.no_peak),
+            Some(c.cut_at_n),
+            Some(c.by_thresholds()),
+            Some(c.beyond_n),
+            Some(c.beyond_n_on_source),
+        ],
+        None => [None; 6],
+    };
+    cells.extend(census.map(|v| v.map(|v| v.to_string()).unwrap_or_default()));
+    cells.join(",") + "\n"
 }
 
 #[cfg(test)]
