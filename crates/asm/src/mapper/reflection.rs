@@ -18,10 +18,10 @@
 //!   map hides the source from it: a reflection is weaker than its direct sound and never
 //!   heard without it in plain view.
 //!
-//! A source whose rays are, all but one, another's reflections or its direct bearing, half
-//! of them or more reflections, is removed, provided that other source is not itself
-//! explained so (two sources explaining each other are both kept: the rule does not
-//! choose).
+//! A source whose rays are, all but one, another's reflections or its direct bearing, as
+//! many reflections as a source needs stops and half of its rays or more, is removed,
+//! provided that other source is not itself explained so (two sources explaining each
+//! other are both kept: the rule does not choose).
 
 use super::rules::principal_axis;
 use super::*;
@@ -43,11 +43,11 @@ const WALL_ELONGATION: f64 = 2.5;
 /// chance within the gate of real sources' bearings (`sparse_ten`, ten talkers: the right
 /// count 100 -> 93 % with GCC-PHAT, MVDR 0.138 -> 0.170 m), and MVDR's corridor lost
 /// ground (0.187 -> 0.198 m).
-pub(super) const MAX_ORDER: usize = 1;
+const MAX_ORDER: usize = 1;
 
-/// One leg of a DoA's ray traced through the map's walls, after `order` reflections.
+/// One leg of a DoA's ray traced through the map's walls, after one reflection or more.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct Leg {
+struct Leg {
     /// Where it leaves the wall it was reflected by (m).
     from: [f64; 2],
     /// Its direction (unit).
@@ -75,7 +75,7 @@ impl Mapper {
     /// The legs of ray `r` after each of its first [`MAX_ORDER`] specular reflections in
     /// the map's walls (a wall's direction from its cells around the point hit; the trace
     /// ends at a corner, where no one line mirrors, or where it leaves the map).
-    pub(super) fn reflected_legs(&self, r: &Ray) -> Vec<Leg> {
+    fn reflected_legs(&self, r: &Ray) -> Vec<Leg> {
         let (x0, x1, y0, y1) = self.bounds;
         let far = 2.0 * (x1 - x0).hypot(y1 - y0);
         let step_off = 2.0 * self.map.resolution();
@@ -125,8 +125,8 @@ impl Mapper {
     }
 
     /// Whether the rays of `g` (their reflected legs in `legs`) are the direct sound or
-    /// the reflections of `s`: each but one, half of them or more reflections (see the
-    /// module docs).
+    /// the reflections of `s`: each but one, as many reflections as a source needs stops
+    /// ([`IasmConfig::min_observations`]) and half of them or more (see the module docs).
     fn echoes(&self, g: &Source, legs: &[Vec<Leg>], s: &Source, stops: &Stops) -> bool {
         let (at, own, gate) = ([s.x, s.y], [g.x, g.y], 2.0 * self.sigma);
         let (mut direct, mut reflected) = (0, 0);
