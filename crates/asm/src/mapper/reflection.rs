@@ -202,7 +202,7 @@ fn line_normal(cells: &[[f64; 2]]) -> Option<[f64; 2]> {
     if cells.len() < 3 {
         return None;
     }
-    let axis = principal_axis(cells)?;
+    let axis = principal_axis(cells);
     (axis.along >= WALL_ELONGATION.powi(2) * axis.across)
         .then(|| [-axis.angle.sin(), axis.angle.cos()])
 }

@@ -5,11 +5,12 @@
 //! sees only through a wall, or in the unknown just behind a wall's face) moves to the free
 //! place nearest it where its DoAs still fit, or is refused. Unknown space that a stop
 //! sees through free cells is unsurveyed, not beyond the walls, and a source there stays,
-//! unless a wall lies between it and the free cell nearest it. Which free places are looked at: the free cells within the vote's reach
-//! of it, `merge_dist_m` + 2 `sigma` of its nearest stop's range (a DoA error of 2 `sigma`
-//! moves a crossing by that much along it), nearest first; the first that keeps as many
-//! of its stops within the gate as the source had, less one, is taken. Looking further
-//! would let any source beyond a wall slide along its rays into the room.
+//! unless a wall lies between it and the free cell nearest it. Which free places are
+//! looked at: the free cells within the vote's reach of it, `merge_dist_m` + 2 `sigma` of
+//! its nearest stop's range (a DoA error of 2 `sigma` moves a crossing by that much along
+//! it), nearest first; the first that keeps as many of its stops within the gate as the
+//! source had, less one, is taken. Looking further would let any source beyond a wall
+//! slide along its rays into the room.
 
 use super::*;
 

@@ -68,8 +68,8 @@ impl Mapper {
     /// [`IasmConfig::min_observations`] (see [`IasmConfig::absence_ratio`]), or made of
     /// another standing source's reflections in the map's walls
     /// ([`IasmConfig::reflections`]), repeated until none falls, since a source removed
-    /// masks no stop's silence towards the others and explains no other's rays; their DoAs go back to `pool` (one row per stop of the DoAs no source
-    /// explains). Returns the removed sources, each with the rule that removed it.
+    /// masks no stop's silence towards the others and explains no other's rays; their DoAs
+    /// go back to `pool` (one row per stop of the DoAs no source explains). Returns the removed sources, each with the rule that removed it.
     ///
     /// Where the SSL said it cut rows at `N` ([`Stops::said_cut`]), a source must also have
     /// three stops' worth of evidence once those rows count at the vote's exchange rate
@@ -585,7 +585,7 @@ impl Mapper {
 pub(super) fn mirror_in_line(p: [f64; 2], points: &[[f64; 2]], min_span: f64) -> Option<[f64; 2]> {
     let Axis {
         centre: c, angle, ..
-    } = principal_axis(points)?;
+    } = principal_axis(points);
     let u = [angle.cos(), angle.sin()];
     let along = |q: &[f64; 2]| (q[0] - c[0]) * u[0] + (q[1] - c[1]) * u[1];
     let (lo, hi) = points
@@ -604,7 +604,7 @@ pub(super) fn mirror_in_line(p: [f64; 2], points: &[[f64; 2]], min_span: f64) ->
 }
 
 /// The line a set of points runs along: their mean, the direction of their principal axis,
-/// and their spreads (variances, m^2) along and across it.
+/// and their spreads (covariance eigenvalues, m^2) along and across it.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Axis {
     pub(super) centre: [f64; 2],
@@ -614,28 +614,15 @@ pub(super) struct Axis {
     pub(super) across: f64,
 }
 
-/// The principal axis of `points` (their covariance's eigenvectors); `None` for none.
-pub(super) fn principal_axis(points: &[[f64; 2]]) -> Option<Axis> {
-    if points.is_empty() {
-        return None;
+/// The principal axis of `points`, from their sample covariance ([`covariance`], 0 for
+/// fewer than two points: no direction, angle 0).
+pub(super) fn principal_axis(points: &[[f64; 2]]) -> Axis {
+    let c = covariance(points);
+    let along = crate::pf::max_eigenvalue(c);
+    Axis {
+        centre: mean(points),
+        angle: 0.5 * (2.0 * c[0][1]).atan2(c[0][0] - c[1][1]),
+        along,
+        across: (c[0][0] + c[1][1] - along).max(0.0),
     }
-    let n = points.len() as f64;
-    let c = points
-        .iter()
-        .fold([0.0, 0.0], |a, q| [a[0] + q[0] / n, a[1] + q[1] / n]);
-    let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
-    for q in points {
-        let (dx, dy) = (q[0] - c[0], q[1] - c[1]);
-        (sxx, sxy, syy) = (sxx + dx * dx / n, sxy + dx * dy / n, syy + dy * dy / n);
-    }
-    let (mean, spread) = (
-        0.5 * (sxx + syy),
-        (0.25 * (sxx - syy).powi(2) + sxy * sxy).sqrt(),
-    );
-    Some(Axis {
-        centre: c,
-        angle: 0.5 * (2.0 * sxy).atan2(sxx - syy),
-        along: mean + spread,
-        across: (mean - spread).max(0.0),
-    })
 }
