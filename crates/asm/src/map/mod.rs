@@ -7,6 +7,7 @@
 //! (The authors' MATLAB code crops and flips the image, which shifts its map by about
 //! 0.25 m in y against the poses; we follow ROS.)
 
+mod format;
 mod occupancy;
 
 pub use occupancy::{Cell, MAX_CELLS, OccupancyMap};
