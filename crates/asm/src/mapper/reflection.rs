@@ -114,6 +114,40 @@ impl Mapper {
         legs
     }
 
+    /// Whether stop `k` heard nothing towards `at` but the reflections of `others` in the
+    /// map's walls (each DoA within the vote's gate, 2 `sigma`, of the bearing to `at`
+    /// traced through the wall it meets passes one of them within the gate), and the map
+    /// does not hide `at` from it. Silence where the map holds no walls means no DoA
+    /// towards `at` at all.
+    pub(super) fn silent_towards(
+        &self,
+        at: [f64; 2],
+        k: usize,
+        stops: &Stops,
+        others: &[[f64; 2]],
+    ) -> bool {
+        let pose = &stops.poses()[k];
+        let (from, to, gate) = ([pose.x, pose.y], pose.bearing_to(at), 2.0 * self.sigma);
+        let slack = self.config.room_margin_m;
+        !self.hidden(from, at)
+            && stops.heard()[k]
+                .iter()
+                .filter(|&&h| wrap_rad(h - to).abs() <= gate)
+                .all(|&h| {
+                    let ray = Ray {
+                        stop: k,
+                        from,
+                        bearing: h,
+                        twin: None,
+                        shared: false,
+                    };
+                    let legs = self.reflected_legs(&ray);
+                    others
+                        .iter()
+                        .any(|&s| nearest_image(&legs, s, slack).is_some_and(|m| m <= gate))
+                })
+    }
+
     /// Whether the map holds a wall between `a` and `b`, leaving out the
     /// [`IasmConfig::room_margin_m`] at `b` (a source's own wall, its own table).
     fn hidden(&self, a: [f64; 2], b: [f64; 2]) -> bool {
@@ -140,10 +174,7 @@ impl Mapper {
                         .iter()
                         .any(|&h| h != r.bearing && wrap_rad(h - to).abs() <= gate)
             };
-            let image = legs
-                .iter()
-                .filter_map(|leg| leg.miss(at, slack))
-                .min_by(f64::total_cmp);
+            let image = nearest_image(legs, at, slack);
             if image.is_some_and(|m| m <= gate && m <= r.miss(own) + self.sigma) && heard_directly()
             {
                 reflected += 1;
@@ -194,6 +225,14 @@ impl Mapper {
         }
         marked
     }
+}
+
+/// The least angle at the stop between a ray and the image of a source at `s` along one
+/// of the ray's reflected `legs` (see [`Leg::miss`]); `None` when none passes it.
+fn nearest_image(legs: &[Leg], s: [f64; 2], slack: f64) -> Option<f64> {
+    legs.iter()
+        .filter_map(|leg| leg.miss(s, slack))
+        .min_by(f64::total_cmp)
 }
 
 /// The unit normal of the line through `cells` (their principal axis); `None` when they

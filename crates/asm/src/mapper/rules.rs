@@ -331,7 +331,6 @@ impl Mapper {
         let (gate, turn) = (2.0 * self.sigma, 20f64.to_radians());
         let poses = stops.poses();
         let a = &sources[i];
-        let headings: Vec<f64> = a.rays.iter().map(|r| poses[r.stop].theta).collect();
         let a_stops = stops_of(&a.rays);
         sources.iter().enumerate().any(|(j, b)| {
             if j == i || stops_of(&b.rays).len() <= a_stops.len() {
@@ -348,24 +347,34 @@ impl Mapper {
                 .collect();
             // A mirror is heard in the same recording as its source: at b's own stops.
             let b_stops = stops_of(&b.rays);
-            let fits = mirrored
-                .iter()
+            let fitting: Vec<Ray> = mirrored
+                .into_iter()
                 .filter(|r| r.miss([b.x, b.y]) <= gate && b_stops.binary_search(&r.stop).is_ok())
-                .count();
-            // Where the mirrored DoAs meet: at b, as a's own meet at a.
-            let meets = fit_bearings([b.x, b.y], &mirrored, self.sigma, Trim::OFF)
+                .collect();
+            if fitting.len() + 1 < a.rays.len() {
+                return false;
+            }
+            // Where those mirrored DoAs meet: at b, as a's own meet at a.
+            let meets = fit_bearings([b.x, b.y], &fitting, self.sigma, Trim::OFF)
                 .is_some_and(|(p, _)| (p[0] - b.x).hypot(p[1] - b.y) <= self.config.merge_dist_m);
-            // And b was heard after the robot turned, where a was not.
-            let turned = b
-                .rays
+            // And after the robot turned from every heading at which a mirrored b, b was
+            // still heard and a was not: nothing towards a there but the walls'
+            // reflections of the other sources.
+            let headings: Vec<f64> = fitting.iter().map(|r| poses[r.stop].theta).collect();
+            let others: Vec<[f64; 2]> = (0..sources.len())
+                .filter(|&k| k != i)
+                .map(|k| [sources[k].x, sources[k].y])
+                .collect();
+            let silent = b_stops
                 .iter()
-                .filter(|r| {
+                .filter(|&&k| {
                     headings
                         .iter()
-                        .all(|h| wrap_rad(poses[r.stop].theta - h).abs() >= turn)
+                        .all(|h| wrap_rad(poses[k].theta - h).abs() >= turn)
+                        && self.silent_towards([a.x, a.y], k, stops, &others)
                 })
                 .count();
-            meets && fits + 1 >= a.rays.len() && turned >= 2
+            meets && silent >= 2
         })
     }
 

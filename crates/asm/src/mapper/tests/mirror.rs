@@ -1,7 +1,8 @@
 //! An array nearly symmetric about its axis hears a high source also at the mirrored
-//! azimuth ([`IasmConfig::array_mirror`], off by default): with the rule on, the mirror is
-//! no source once the robot has turned, and two real sources mirrored across a straight
-//! path both stay.
+//! azimuth ([`IasmConfig::array_mirror`]): the mirror is no source once the robot has
+//! turned and heard nothing towards it but the walls' reflections of other sources; two
+//! real sources mirrored across a straight path both stay, and so does one that the
+//! stops after the turn still heard.
 
 use super::*;
 
@@ -13,26 +14,28 @@ fn turning_path() -> Vec<Pose> {
         .collect()
 }
 
-/// The rule on (it is off by default).
-fn on() -> IasmConfig {
-    IasmConfig {
-        array_mirror: true,
-        ..IasmConfig::default()
-    }
-}
-
 fn judged(
     poses: &[Pose],
     sources: Vec<Source>,
     heard: &[[f64; 2]],
 ) -> (Vec<[f64; 2]>, Vec<Refused>) {
-    let mapper = ghost_mapper(on());
     let rows: Vec<Vec<f64>> = poses
         .iter()
         .map(|p| heard.iter().map(|&q| p.bearing_to(q)).collect())
         .collect();
-    let complete = mapper.complete_by_length(&rows);
-    let stops = stops_with(poses, &rows, &complete, &vec![false; poses.len()]);
+    judged_on(&ghost_mapper(IasmConfig::default()), poses, sources, &rows)
+}
+
+/// The sources `mapper` keeps of `sources` where each stop heard its row of `rows`
+/// (world bearings), and those it refused.
+fn judged_on(
+    mapper: &Mapper,
+    poses: &[Pose],
+    sources: Vec<Source>,
+    rows: &[Vec<f64>],
+) -> (Vec<[f64; 2]>, Vec<Refused>) {
+    let complete = mapper.complete_by_length(rows);
+    let stops = stops_with(poses, rows, &complete, &vec![false; poses.len()]);
     let mut sources = sources;
     let mut left = vec![Vec::new(); poses.len()];
     let refused = mapper.drop_implausible(&mut sources, &stops, &mut left);
@@ -57,13 +60,13 @@ fn a_sources_mirror_in_the_array_is_no_source_once_the_robot_turned() {
         ([refused[0].x, refused[0].y], &refused[0].rule),
         (mirror, &Refusal::ArrayMirror)
     );
-    // Off (the default), the rule removes nothing.
-    let mapper = ghost_mapper(IasmConfig::default());
-    let (mut s, mut left) = (sources, vec![Vec::new(); poses.len()]);
+    // Off (the paper profile), the rule removes nothing.
+    let mapper = ghost_mapper(IasmConfig {
+        array_mirror: false,
+        ..IasmConfig::default()
+    });
     let rows: Vec<Vec<f64>> = poses.iter().map(|p| vec![p.bearing_to(vent)]).collect();
-    let complete = mapper.complete_by_length(&rows);
-    let stops = stops_with(&poses, &rows, &complete, &vec![false; poses.len()]);
-    let refused = mapper.drop_implausible(&mut s, &stops, &mut left);
+    let (_, refused) = judged_on(&mapper, &poses, sources, &rows);
     assert!(
         refused.iter().all(|r| r.rule != Refusal::ArrayMirror),
         "{refused:?}"
@@ -82,4 +85,91 @@ fn two_talkers_mirrored_across_a_straight_path_both_stay() {
     let (kept, refused) = judged(&poses, sources, &[a, b]);
     assert!(refused.is_empty(), "{refused:?}");
     assert_eq!(kept, vec![a, b]);
+}
+
+#[test]
+fn a_real_source_the_stops_after_the_turn_still_heard_stays() {
+    // Two loudspeakers mirrored across the path; the second is heard by the stops after
+    // the turn too, but those DoAs went to no source of it (another took them, or none):
+    // a mirror would have been silent there.
+    let poses = turning_path();
+    let (b, a) = ([4.0, -1.5], [4.0, 1.5]);
+    let all: Vec<usize> = (0..poses.len()).collect();
+    let sources = vec![
+        heard_from(b, &poses, &all),
+        heard_from(a, &poses, &[2, 3, 4, 5, 6]),
+    ];
+    let (kept, refused) = judged(&poses, sources.clone(), &[b, a]);
+    assert!(refused.is_empty(), "{refused:?}");
+    assert_eq!(kept, vec![b, a]);
+    // Heard after the turn only by the first stop of it, it goes: one stop is chance.
+    let rows: Vec<Vec<f64>> = poses
+        .iter()
+        .enumerate()
+        .map(|(k, p)| {
+            let mut row = vec![p.bearing_to(b)];
+            if k <= 9 {
+                row.push(p.bearing_to(a));
+            }
+            row
+        })
+        .collect();
+    let (kept, refused) = judged_on(&ghost_mapper(IasmConfig::default()), &poses, sources, &rows);
+    assert_eq!(kept, vec![b]);
+    assert_eq!(refused[0].rule, Refusal::ArrayMirror);
+}
+
+#[test]
+fn a_walls_reflection_towards_the_mirror_does_not_speak_for_it() {
+    // A wall along y = -2. A talker at (0.625, -1): from the stop after the turn at
+    // (8.5, 0.5) its reflection in the wall comes from exactly where the vent's mirror
+    // (4, -1.5) would be, and from the next stops within 2-6 degrees of it. Traced
+    // through the wall, those DoAs pass the talker: the turned stops heard nothing
+    // towards the mirror but a reflection, and it goes. Without the wall on the map the
+    // same DoAs could be a real source's, and the mirror stays.
+    let poses = turning_path();
+    let (vent, mirror, talker) = ([4.0, 1.5], [4.0, -1.5], [0.625, -1.0]);
+    let image = [talker[0], -4.0 - talker[1]];
+    let rows: Vec<Vec<f64>> = poses
+        .iter()
+        .enumerate()
+        .map(|(k, p)| {
+            let mut row = vec![
+                p.bearing_to(vent),
+                p.bearing_to(talker),
+                p.bearing_to(image),
+            ];
+            if (2..=6).contains(&k) {
+                row.push(p.bearing_to(mirror));
+            }
+            row
+        })
+        .collect();
+    let all: Vec<usize> = (0..poses.len()).collect();
+    let sources = vec![
+        heard_from(vent, &poses, &all),
+        heard_from(mirror, &poses, &[2, 3, 4, 5, 6]),
+        heard_from(talker, &poses, &all),
+    ];
+    let walled = ghost_mapper_on(
+        |q| match q[1] {
+            y if y >= -2.0 => Cell::Free,
+            y if y >= -2.2 => Cell::Occupied,
+            _ => Cell::Unknown,
+        },
+        IasmConfig::default(),
+    );
+    let (kept, refused) = judged_on(&walled, &poses, sources.clone(), &rows);
+    assert_eq!(kept, vec![vent, talker]);
+    assert_eq!(
+        ([refused[0].x, refused[0].y], &refused[0].rule),
+        (mirror, &Refusal::ArrayMirror)
+    );
+    let open = ghost_mapper(IasmConfig::default());
+    let (kept, refused) = judged_on(&open, &poses, sources, &rows);
+    assert!(
+        refused.iter().all(|r| r.rule != Refusal::ArrayMirror),
+        "{refused:?}"
+    );
+    assert!(kept.contains(&mirror), "{kept:?}");
 }
