@@ -1,0 +1,377 @@
+//! The live node (`iasm ros2`): its subscriptions, the live mapper they feed, and the
+//! topics, MCAP file and JSON each map update goes to.
+
+use std::collections::{BTreeMap, HashMap};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+use anyhow::{Result, anyhow};
+use bag::msg::Kind;
+use rustdds::DomainParticipant;
+use rustdds::policy::Durability;
+
+use crate::Outcome;
+use crate::args::Ros2Args;
+use crate::live::LiveMapper;
+use crate::rosmap::{self, MapMessages};
+
+use super::{Reader, Writer, now_ns, participant, qos, raw, reader, ros_names, writer};
+
+/// The node's publishers.
+struct Outputs {
+    sources: Writer,
+    doas: Writer,
+    path: Writer,
+    source_poses: Writer,
+    map: Writer,
+    /// The last grid sent (it is latched: sent again only when it changes).
+    grid_sent: Option<iasm_ros::msg::OccupancyGrid>,
+}
+
+/// Where the node publishes its grid.
+pub const NODE_MAP_TOPIC: &str = "/iasm/map";
+
+impl Outputs {
+    fn new(dp: &DomainParticipant) -> Result<Self> {
+        let p = dp
+            .create_publisher(&qos(true, false, 10))
+            .map_err(|e| anyhow!("a DDS publisher: {e}"))?;
+        let ma = "visualization_msgs/msg/MarkerArray";
+        Ok(Self {
+            sources: writer(dp, &p, rosmap::SOURCES_TOPIC, ma, false)?,
+            doas: writer(dp, &p, rosmap::DOAS_TOPIC, ma, false)?,
+            path: writer(dp, &p, rosmap::PATH_TOPIC, "nav_msgs/msg/Path", false)?,
+            source_poses: writer(
+                dp,
+                &p,
+                rosmap::SOURCE_POSES_TOPIC,
+                "geometry_msgs/msg/PoseArray",
+                false,
+            )?,
+            map: writer(dp, &p, NODE_MAP_TOPIC, "nav_msgs/msg/OccupancyGrid", true)?,
+            grid_sent: None,
+        })
+    }
+
+    fn publish(&mut self, m: &MapMessages) -> Result<()> {
+        use iasm_ros::msg::Message;
+        let send = |w: &Writer, bytes: Vec<u8>, what: &str| {
+            w.write(raw::Cdr(bytes), None)
+                .map_err(|e| anyhow!("publishing {what}: {e:?}"))
+        };
+        if self.grid_sent.as_ref() != Some(&m.grid) {
+            send(&self.map, m.grid.to_cdr(), NODE_MAP_TOPIC)?;
+            self.grid_sent = Some(m.grid.clone());
+        }
+        send(&self.path, m.path.to_cdr(), rosmap::PATH_TOPIC)?;
+        send(&self.doas, m.doas.to_cdr(), rosmap::DOAS_TOPIC)?;
+        send(&self.sources, m.sources.to_cdr(), rosmap::SOURCES_TOPIC)?;
+        send(
+            &self.source_poses,
+            m.source_poses.to_cdr(),
+            rosmap::SOURCE_POSES_TOPIC,
+        )
+    }
+
+    /// Waits until every reliable reader of every topic has acknowledged what was
+    /// published, or until `max` has passed for a topic (a reader that vanished).
+    fn wait_for_acknowledgments(&self, max: Duration) {
+        for w in [
+            &self.source_poses,
+            &self.sources,
+            &self.doas,
+            &self.path,
+            &self.map,
+        ] {
+            if !matches!(w.wait_for_acknowledgments(max), Ok(true)) {
+                eprintln!(
+                    "warning: {}: not every subscriber acknowledged the final map within {} s",
+                    rustdds::TopicDescription::name(w.topic()),
+                    max.as_secs()
+                );
+            }
+        }
+    }
+}
+
+/// Warnings said on the log: the first of each kind, then at 10, 100, 1000... (every one
+/// is counted in the map's notes).
+#[derive(Default)]
+struct Log {
+    seen: HashMap<String, u64>,
+}
+
+impl Log {
+    fn warn(&mut self, what: &str) {
+        // The kind: the message up to its first colon (a topic and what went wrong).
+        let kind = what.split(':').take(2).collect::<Vec<_>>().join(":");
+        let n = self.seen.entry(kind).or_default();
+        *n += 1;
+        if 10u64.pow(n.ilog10()) == *n {
+            eprintln!(
+                "warning: {what}{}",
+                if *n > 1 {
+                    format!(" ({n} so far)")
+                } else {
+                    String::new()
+                }
+            );
+        }
+    }
+}
+
+/// The node's subscriptions, and when each kind of message last came.
+struct Inputs {
+    subscriber: rustdds::Subscriber,
+    /// Topic -> (type, reader).
+    readers: BTreeMap<String, (String, Reader)>,
+    last_message: Option<Instant>,
+    last_pose: Option<Instant>,
+    last_audio: Option<Instant>,
+    told_no_pose: Instant,
+}
+
+impl Inputs {
+    fn new(dp: &DomainParticipant) -> Result<Self> {
+        Ok(Self {
+            subscriber: dp
+                .create_subscriber(&qos(false, false, 100))
+                .map_err(|e| anyhow!("a DDS subscriber: {e}"))?,
+            readers: BTreeMap::new(),
+            last_message: None,
+            last_pose: None,
+            last_audio: None,
+            told_no_pose: Instant::now(),
+        })
+    }
+
+    /// Subscribes to every topic DDS discovery has found a publisher of, of a type the bag
+    /// reader knows (not ours): best effort, or reliable and transient local where the
+    /// publisher offers that.
+    fn discover(&mut self, dp: &DomainParticipant) -> Result<()> {
+        for w in dp.discovered_writers() {
+            let d = &w.publication_topic_data;
+            let Some((topic, ty)) = ros_names(&d.topic_name, &d.type_name) else {
+                continue;
+            };
+            if self.readers.contains_key(&topic)
+                || Kind::of(&ty).is_none()
+                || topic.starts_with("/iasm/")
+            {
+                continue;
+            }
+            let latched = matches!(d.durability, Some(Durability::TransientLocal));
+            let q = qos(latched, latched, if latched { 1 } else { 100 });
+            let r = reader(
+                dp,
+                &self.subscriber,
+                (d.topic_name.clone(), d.type_name.clone()),
+                q,
+            )?;
+            eprintln!(
+                "subscribed to {topic} ({ty}{})",
+                if latched { ", transient local" } else { "" }
+            );
+            self.readers.insert(topic, (ty, r));
+        }
+        Ok(())
+    }
+
+    /// Hands every message waiting to `live`; how many there were.
+    fn take(&mut self, live: &mut LiveMapper, log: &mut Log) -> usize {
+        let mut got = 0usize;
+        for (topic, (ty, r)) in &mut self.readers {
+            loop {
+                match r.take_next_sample() {
+                    Ok(Some(s)) => {
+                        got += 1;
+                        let kind = Kind::of(ty);
+                        if kind.is_some_and(Kind::is_pose) || kind == Some(Kind::Tf) {
+                            self.last_pose = Some(Instant::now());
+                        } else if kind.is_some_and(Kind::is_audio) {
+                            self.last_audio = Some(Instant::now());
+                        }
+                        if let Some(w) = live.push(topic, ty, now_ns(), &s.value().0) {
+                            log.warn(&w);
+                        }
+                    }
+                    Ok(None) => break,
+                    Err(e) => {
+                        log.warn(&format!("a message of {topic} unreadable: {e:?}"));
+                        break;
+                    }
+                }
+            }
+        }
+        if got > 0 {
+            self.last_message = Some(Instant::now());
+        }
+        got
+    }
+
+    /// Warns (every 30 s at most) when audio flows but no pose has come for 10 s: no stop
+    /// can be found.
+    fn check_poses(&mut self, log: &mut Log) {
+        if self
+            .last_audio
+            .is_some_and(|t| t.elapsed() < Duration::from_secs(2))
+            && self
+                .last_pose
+                .is_none_or(|p| p.elapsed() > Duration::from_secs(10))
+            && self.told_no_pose.elapsed() > Duration::from_secs(30)
+        {
+            self.told_no_pose = Instant::now();
+            log.warn("no pose received for 10 s while audio arrives: no stop can be found (is the robot's odometry or localisation publishing?)");
+        }
+    }
+}
+
+/// Runs `iasm ros2`: the node, until Ctrl-C (or `--until-idle`); then the final map.
+///
+/// # Errors
+/// Settings refused, DDS that cannot start, or outputs that cannot be written.
+pub fn run(a: &Ros2Args) -> Result<Outcome> {
+    let settings = a.settings.settings()?;
+    let mut live = LiveMapper::new(
+        settings,
+        a.run.read_options()?,
+        a.run.stop_options()?,
+        a.seed,
+    )?;
+    let stop = Arc::new(AtomicBool::new(false));
+    {
+        let stop = Arc::clone(&stop);
+        let _ = ctrlc::set_handler(move || stop.store(true, Ordering::SeqCst));
+    }
+    let (_ctx, _node, dp) = participant(a.domain_id, &a.node_name)?;
+    let mut inputs = Inputs::new(&dp)?;
+    let mut sink = Sink {
+        out: Outputs::new(&dp)?,
+        mcap: a.mcap.as_deref().map(rosmap::McapFile::new).transpose()?,
+        json: a.out.clone(),
+    };
+    let mut log = Log::default();
+    let mut last_discovery = Instant::now() - Duration::from_secs(10);
+    let mut last_step = Instant::now();
+    eprintln!(
+        "iasm ros2: node /{} on DDS domain {}; listening for audio, poses and the map (Ctrl-C ends the run with its final map)",
+        a.node_name, a.domain_id
+    );
+    while !stop.load(Ordering::SeqCst) {
+        if last_discovery.elapsed() >= Duration::from_millis(250) {
+            last_discovery = Instant::now();
+            inputs.discover(&dp)?;
+        }
+        let got = inputs.take(&mut live, &mut log);
+        inputs.check_poses(&mut log);
+        if last_step.elapsed() >= Duration::from_millis(200) {
+            last_step = Instant::now();
+            step(&mut live, &mut sink, &mut log, false)?;
+        }
+        if let (Some(idle), Some(t)) = (a.until_idle, inputs.last_message)
+            && t.elapsed().as_secs_f64() > idle
+        {
+            eprintln!("no message for {idle} s: the run is over");
+            break;
+        }
+        if got == 0 {
+            std::thread::sleep(Duration::from_millis(5));
+        }
+    }
+    // The run's end: the stop the robot stands at, then the full map over every stop.
+    step(&mut live, &mut sink, &mut log, true)?;
+    let out = finish(&mut live, sink, a.seed)?;
+    // The writers go with the process: wait (a bounded time) until every reliable reader
+    // has acknowledged the final map, so that a subscriber hears it whatever the load.
+    // A write reaches the writer's history through DDS's own thread: asked at once, the
+    // wait would find the samples before it already acknowledged and return.
+    std::thread::sleep(Duration::from_millis(200));
+    out.wait_for_acknowledgments(Duration::from_secs(5));
+    Ok(Outcome::Success)
+}
+
+/// Publishes and writes the final map (the full map over every stop), says it, and ends
+/// the MCAP file; gives back the topics' writers.
+fn finish(live: &mut LiveMapper, mut sink: Sink, seed: u64) -> Result<Outputs> {
+    match live.finish() {
+        Some(fin) => {
+            sink.publish(live, &fin, true)?;
+            println!(
+                "{} stops; final map (full, seed {seed}): {} sources",
+                live.stops().len(),
+                fin.sources.len()
+            );
+            for (k, s) in fin.sources.iter().enumerate() {
+                println!(
+                    "  s{} ({:.3}, {:.3}) m, {} DoAs",
+                    k + 1,
+                    s.x,
+                    s.y,
+                    s.observations
+                );
+            }
+        }
+        None => println!("no stop was mapped"),
+    }
+    for n in live.notes() {
+        eprintln!("note: {n}");
+    }
+    if let Some(f) = sink.mcap {
+        f.finish()?;
+    }
+    Ok(sink.out)
+}
+
+fn announce(live: &LiveMapper, u: &crate::live::Update) {
+    let s = live.stops().last().expect("an update follows a stop");
+    println!(
+        "stop {:>3}  ({:.2}, {:.2}, {:.0} deg)  {} DoAs  {:>2} sources  ssl {:.0} ms  map {:.0} ms",
+        u.record.stop,
+        s.pose.x,
+        s.pose.y,
+        s.pose.theta_deg(),
+        u.record.doas,
+        u.record.sources,
+        u.record.ssl_ms,
+        u.record.map_ms
+    );
+}
+
+/// Where each map update goes: the topics, the MCAP file, the JSON.
+struct Sink {
+    out: Outputs,
+    mcap: Option<rosmap::McapFile>,
+    json: Option<std::path::PathBuf>,
+}
+
+impl Sink {
+    fn publish(&mut self, live: &LiveMapper, map: &asm::MapResult, final_map: bool) -> Result<()> {
+        let t = now_ns();
+        if let Some(m) = live.messages(map, t) {
+            self.out.publish(&m)?;
+            if let Some(f) = self.mcap.as_mut() {
+                f.add(&m, t)?;
+            }
+        }
+        if let Some(path) = &self.json {
+            let report = live.report(map, final_map);
+            crate::output::write_atomic(path, serde_json::to_string_pretty(&report)?.as_bytes())?;
+        }
+        Ok(())
+    }
+}
+
+/// Maps the stops the robot has finished (with `all`, the one it stands at too), says so
+/// and publishes each update.
+fn step(live: &mut LiveMapper, sink: &mut Sink, log: &mut Log, all: bool) -> Result<()> {
+    let (updates, warnings) = live.step(all);
+    for w in &warnings {
+        log.warn(w);
+    }
+    for u in updates {
+        announce(live, &u);
+        sink.publish(live, &u.map, false)?;
+    }
+    Ok(())
+}
