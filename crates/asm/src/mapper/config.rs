@@ -543,10 +543,14 @@ pub enum Profile {
     Paper,
     /// The paper's, plus bearing refinement, a minimum of three observing stops, a vote
     /// for the sources the rounds missed (in which a DoA two sources lie on supports
-    /// both), and no source where the robot stood or that stops which heard nothing
-    /// contradict (see [`IasmConfig::refine`], [`IasmConfig::min_observations`],
-    /// [`IasmConfig::vote_min_stops`], [`IasmConfig::share_gate_sigmas`],
-    /// [`IasmConfig::min_range_m`] and [`IasmConfig::absence_ratio`]).
+    /// both), and no source where the robot stood, that stops which heard nothing
+    /// contradict, outside the map's room, or made of another source's images (in the
+    /// walls, or the array's mirror) (see [`IasmConfig::refine`],
+    /// [`IasmConfig::min_observations`], [`IasmConfig::vote_min_stops`],
+    /// [`IasmConfig::share_gate_sigmas`], [`IasmConfig::min_range_m`],
+    /// [`IasmConfig::absence_ratio`], [`IasmConfig::room_margin_m`],
+    /// [`IasmConfig::wall_clearance_m`], [`IasmConfig::reflections`] and
+    /// [`IasmConfig::array_mirror`]).
     #[default]
     Robust,
 }
