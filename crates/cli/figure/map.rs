@@ -11,6 +11,7 @@ use anyhow::Result;
 use asm::map::{Cell, OccupancyMap};
 use asm::{MapResult, Pose};
 use plotters::coord::Shift;
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 
 use super::{Draw, colour, fail};
@@ -41,6 +42,20 @@ pub struct MapFigure<'a> {
 
 /// World region `(x0, x1, y0, y1)` drawn.
 type Region = (f64, f64, f64, f64);
+
+/// The map's chart: world metres on both axes.
+type Chart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
+/// Occupied cells.
+const OCCUPIED: RGBColor = RGBColor(60, 60, 60);
+/// Unknown cells.
+const UNKNOWN: RGBColor = RGBColor(215, 215, 215);
+/// The trajectory and its stops.
+const ROBOT: RGBColor = RGBColor(40, 70, 200);
+/// The true sources.
+const TRUTH: RGBColor = RGBColor(0, 140, 60);
+/// The sources found.
+const FOUND: RGBColor = RGBColor(220, 20, 20);
 
 impl MapFigure<'_> {
     /// Font size scaled with the figure's width (16 px at 1000 px).
@@ -131,9 +146,57 @@ impl Draw for MapFigure<'_> {
             .bold_line_style(BLACK.mix(0.08))
             .draw()
             .map_err(fail)?;
+        self.draw_grid(&mut chart, (x0, x1, y0, y1))?;
+        self.draw_clouds(&mut chart)?;
+        self.draw_robot(
+            &mut chart,
+            0.04 * (x1 - x0).max(y1 - y0).clamp(2.0, 20.0) / 2.0,
+        )?;
+        self.draw_truth(&mut chart)?;
+        self.draw_estimates(&mut chart)?;
+        let mut entries = vec![
+            (Glyph::Box(OCCUPIED), "occupied"),
+            (Glyph::Box(UNKNOWN), "unknown"),
+            (Glyph::Line(ROBOT), "trajectory"),
+            (Glyph::Dot(ROBOT), "stop (heading tick)"),
+            (Glyph::Dot(colour(0)), "particles (colour"),
+            (Glyph::None, "per source)"),
+            (Glyph::Cross(FOUND), "source found"),
+            (Glyph::Ring(FOUND, 1), "2-sigma ellipse"),
+        ];
+        if self.truth.is_some() {
+            entries.push((Glyph::Ring(TRUTH, 2), "true source"));
+        }
+        legend_panel(&side, &entries, small)
+    }
+}
 
-        // The occupancy map: unknown cells grey, occupied dark, free left white; one
-        // rectangle per run of equal cells in a row.
+/// The layers of the picture, each drawn on the chart in turn.
+impl MapFigure<'_> {
+    /// The occupancy map within `region`: unknown cells grey, occupied dark, free left
+    /// white; one rectangle per run of equal cells in a row.
+    fn draw_grid<DB: DrawingBackend>(
+        &self,
+        chart: &mut Chart<'_, DB>,
+        region: Region,
+    ) -> Result<()> {
+        let res = self.map.resolution();
+        chart
+            .draw_series(self.runs(region).iter().map(|&(c, xa, xb, yt)| {
+                let fill = if c == Cell::Occupied {
+                    OCCUPIED
+                } else {
+                    UNKNOWN
+                };
+                Rectangle::new([(xa, yt), (xb, yt - res)], fill.filled())
+            }))
+            .map_err(fail)?;
+        Ok(())
+    }
+
+    /// The runs of equal cells, occupied or unknown, in each row of the map within
+    /// `(x0, x1, y0, y1)`: their cell, their left and right edges and their row's top (m).
+    fn runs(&self, (x0, x1, y0, y1): Region) -> Vec<(Cell, f64, f64, f64)> {
         let m = self.map;
         let res = m.resolution();
         let (ox, oy) = (m.origin()[0], m.origin()[1]);
@@ -159,16 +222,11 @@ impl Draw for MapFigure<'_> {
                 }
             }
         }
-        let occ = RGBColor(60, 60, 60);
-        let unk = RGBColor(215, 215, 215);
-        chart
-            .draw_series(runs.iter().map(|&(c, xa, xb, yt)| {
-                let fill = if c == Cell::Occupied { occ } else { unk };
-                Rectangle::new([(xa, yt), (xb, yt - res)], fill.filled())
-            }))
-            .map_err(fail)?;
+        runs
+    }
 
-        // Particle clouds, one colour per source.
+    /// Each source's particle cloud, one colour per source.
+    fn draw_clouds<DB: DrawingBackend>(&self, chart: &mut Chart<'_, DB>) -> Result<()> {
         for (k, s) in self.result.sources.iter().enumerate() {
             let c = colour(k);
             let step = s.cluster.len().div_ceil(MAX_PARTICLES).max(1);
@@ -181,16 +239,17 @@ impl Draw for MapFigure<'_> {
                 )
                 .map_err(fail)?;
         }
+        Ok(())
+    }
 
-        // The trajectory, its stops and headings.
-        let blue = RGBColor(40, 70, 200);
+    /// The trajectory, its stops and their headings (a tick `tick` metres long).
+    fn draw_robot<DB: DrawingBackend>(&self, chart: &mut Chart<'_, DB>, tick: f64) -> Result<()> {
         chart
             .draw_series(LineSeries::new(
                 self.poses.iter().map(|p| (p.x, p.y)),
-                blue.stroke_width(2),
+                ROBOT.stroke_width(2),
             ))
             .map_err(fail)?;
-        let tick = 0.04 * (x1 - x0).max(y1 - y0).clamp(2.0, 20.0) / 2.0;
         chart
             .draw_series(self.poses.iter().map(|p| {
                 PathElement::new(
@@ -198,7 +257,7 @@ impl Draw for MapFigure<'_> {
                         (p.x, p.y),
                         (p.x + tick * p.theta.cos(), p.y + tick * p.theta.sin()),
                     ],
-                    blue.stroke_width(2),
+                    ROBOT.stroke_width(2),
                 )
             }))
             .map_err(fail)?;
@@ -206,29 +265,33 @@ impl Draw for MapFigure<'_> {
             .draw_series(
                 self.poses
                     .iter()
-                    .map(|p| Circle::new((p.x, p.y), 4, blue.filled())),
+                    .map(|p| Circle::new((p.x, p.y), 4, ROBOT.filled())),
             )
             .map_err(fail)?;
+        Ok(())
+    }
 
-        // The truth.
+    /// The true sources, when known.
+    fn draw_truth<DB: DrawingBackend>(&self, chart: &mut Chart<'_, DB>) -> Result<()> {
         if let Some(truth) = self.truth {
-            let green = RGBColor(0, 140, 60);
             chart
                 .draw_series(
                     truth
                         .iter()
-                        .map(|t| Circle::new((t[0], t[1]), 8, green.stroke_width(2))),
+                        .map(|t| Circle::new((t[0], t[1]), 8, TRUTH.stroke_width(2))),
                 )
                 .map_err(fail)?;
         }
+        Ok(())
+    }
 
-        // Estimates and their 2-sigma ellipses.
-        let red = RGBColor(220, 20, 20);
+    /// The sources found and their 2-sigma ellipses.
+    fn draw_estimates<DB: DrawingBackend>(&self, chart: &mut Chart<'_, DB>) -> Result<()> {
         for s in &self.result.sources {
             chart
                 .draw_series(LineSeries::new(
                     ellipse([s.x, s.y], s.covariance),
-                    red.stroke_width(1),
+                    FOUND.stroke_width(1),
                 ))
                 .map_err(fail)?;
         }
@@ -237,23 +300,10 @@ impl Draw for MapFigure<'_> {
                 self.result
                     .sources
                     .iter()
-                    .map(|s| Cross::new((s.x, s.y), 6, red.stroke_width(2))),
+                    .map(|s| Cross::new((s.x, s.y), 6, FOUND.stroke_width(2))),
             )
             .map_err(fail)?;
-        let mut entries = vec![
-            (Glyph::Box(occ), "occupied"),
-            (Glyph::Box(unk), "unknown"),
-            (Glyph::Line(blue), "trajectory"),
-            (Glyph::Dot(blue), "stop (heading tick)"),
-            (Glyph::Dot(colour(0)), "particles (colour"),
-            (Glyph::None, "per source)"),
-            (Glyph::Cross(red), "source found"),
-            (Glyph::Ring(red, 1), "2-sigma ellipse"),
-        ];
-        if self.truth.is_some() {
-            entries.push((Glyph::Ring(RGBColor(0, 140, 60), 2), "true source"));
-        }
-        legend_panel(&side, &entries, small)
+        Ok(())
     }
 }
 
