@@ -1,6 +1,8 @@
 //! A robot run as the mapper takes it: the inputs, the survey loaded from them (a DoA
 //! table, or the recordings localised), one map and its score.
 
+use std::path::Path;
+
 use super::*;
 
 /// Where a survey's parts come from: a data set folder, and files that override its parts.
@@ -128,85 +130,18 @@ impl Survey {
             .clone()
             .or_else(|| ds.as_ref().and_then(|d| d.sources.clone()));
         let truth = truth_path.as_deref().map(read_sources).transpose()?;
-        let mut cut = None;
-        let (doas_deg, doa_source) = if let Some(given) = doas {
-            given
+        let (doas_deg, doa_source, cut) = if let Some((table, from)) = doas {
+            (table, from, None)
         } else if let (Some(rec), Some(timed)) = (&inputs.recording, &timed) {
-            let audio = read_recording(rec, settings.channels.as_deref())?;
-            let array = settings.mic_array()?;
-            let times: Vec<f64> = timed.iter().map(|p| p.0).collect();
-            let windows = cut_windows(&audio, &times, inputs.window_s).with_context(|| {
-                format!(
-                    "cutting {} at the times of {}",
-                    rec.display(),
-                    pose_path.display()
-                )
-            })?;
-            let rows = localise_audio(
-                &windows,
-                &array,
-                settings.channels.as_deref(),
-                &settings.ssl,
-                RobotNoise::of(settings)?.as_ref(),
-            )
-            .with_context(|| format!("localising {}", rec.display()))?;
-            let names: Vec<String> = (1..=rows.len()).map(|k| format!("window {k}")).collect();
-            let faults: Vec<Vec<FaultyChannel>> = rows
-                .iter()
-                .map(|r| FaultyChannel::of(r, array.len()))
-                .collect();
-            for w in faulty_channel_warnings(
-                names.iter().zip(&faults).map(|(n, f)| (n.as_str(), &f[..])),
-            ) {
-                eprintln!("{}: {w}", rec.display());
-            }
-            cut = Some(rows.iter().map(|r| r.cut).collect());
-            (
-                mapped_table(
-                    rows.iter().map(|r| (&r.doas[..], &r.extra[..])),
-                    settings.ssl.num_peaks,
-                ),
-                format!("ssl:{}", settings.ssl.method),
-            )
+            localise_recording(rec, timed, &pose_path, inputs.window_s, settings)?
         } else if let Some(t) = &inputs.doas {
             (
                 first_columns(read_table(t)?, settings.iasm.num_doas, t),
                 t.display().to_string(),
+                None,
             )
         } else {
-            let (files, folder) = match (&inputs.audio, &ds) {
-                (Some(dir), _) => (list_files(dir, "wav")?, dir.clone()),
-                (None, Some(d)) => (d.audio.clone(), d.root.join("audio")),
-                (None, None) => bail!("give --doas TABLE, --audio DIR or --dataset DIR"),
-            };
-            ensure!(
-                !files.is_empty(),
-                "{}: no WAV file to localise",
-                folder.display()
-            );
-            ensure!(
-                files.len() == poses.len(),
-                "{} recordings but {} poses in {}: they must match one to one",
-                files.len(),
-                poses.len(),
-                pose_path.display()
-            );
-            let rows = localise_files(
-                &files,
-                &settings.mic_array()?,
-                settings.channels.as_deref(),
-                &settings.ssl,
-                RobotNoise::of(settings)?.as_ref(),
-            )?;
-            warn_recordings(&rows);
-            cut = Some(rows.iter().map(|r| r.cut).collect());
-            (
-                mapped_table(
-                    rows.iter().map(|r| (&r.doas[..], &r.extra[..])),
-                    settings.ssl.num_peaks,
-                ),
-                format!("ssl:{}", settings.ssl.method),
-            )
+            localise_folder(inputs, ds.as_ref(), poses.len(), &pose_path, settings)?
         };
         let (map, open_margin_m) = match map {
             Some(map) => (map, None),
@@ -328,4 +263,98 @@ pub fn first_columns(mut table: Table, n: usize, path: &std::path::Path) -> Tabl
         table.iter_mut().for_each(|row| row.truncate(n));
     }
     table
+}
+
+/// A survey's DoAs: the table (degrees, array frame), where it came from, and which rows
+/// the SSL cut at `N` (`None` for a table read, whose rows say nothing of it).
+type Doas = (Table, String, Option<Vec<bool>>);
+
+/// The DoAs of windows of `window_s` seconds cut from the continuous recording `rec` at
+/// the times of the timed poses (from `pose_path`), localised with `settings`; a faulty
+/// channel said on stderr.
+fn localise_recording(
+    rec: &Path,
+    timed: &[(f64, Pose)],
+    pose_path: &Path,
+    window_s: f64,
+    settings: &Settings,
+) -> Result<Doas> {
+    let audio = read_recording(rec, settings.channels.as_deref())?;
+    let array = settings.mic_array()?;
+    let times: Vec<f64> = timed.iter().map(|p| p.0).collect();
+    let windows = cut_windows(&audio, &times, window_s).with_context(|| {
+        format!(
+            "cutting {} at the times of {}",
+            rec.display(),
+            pose_path.display()
+        )
+    })?;
+    let rows = localise_audio(
+        &windows,
+        &array,
+        settings.channels.as_deref(),
+        &settings.ssl,
+        RobotNoise::of(settings)?.as_ref(),
+    )
+    .with_context(|| format!("localising {}", rec.display()))?;
+    let names: Vec<String> = (1..=rows.len()).map(|k| format!("window {k}")).collect();
+    let faults: Vec<Vec<FaultyChannel>> = rows
+        .iter()
+        .map(|r| FaultyChannel::of(r, array.len()))
+        .collect();
+    for w in faulty_channel_warnings(names.iter().zip(&faults).map(|(n, f)| (n.as_str(), &f[..]))) {
+        eprintln!("{}: {w}", rec.display());
+    }
+    Ok((
+        mapped_table(
+            rows.iter().map(|r| (&r.doas[..], &r.extra[..])),
+            settings.ssl.num_peaks,
+        ),
+        format!("ssl:{}", settings.ssl.method),
+        Some(rows.iter().map(|r| r.cut).collect()),
+    ))
+}
+
+/// The DoAs of a folder of recordings, one per stop (`--audio`, or the data set's
+/// `audio/`), localised with `settings`: as many as the `stops` of `pose_path`.
+fn localise_folder(
+    inputs: &SurveyInputs,
+    ds: Option<&Dataset>,
+    stops: usize,
+    pose_path: &Path,
+    settings: &Settings,
+) -> Result<Doas> {
+    let (files, folder) = match (&inputs.audio, ds) {
+        (Some(dir), _) => (list_files(dir, "wav")?, dir.clone()),
+        (None, Some(d)) => (d.audio.clone(), d.root.join("audio")),
+        (None, None) => bail!("give --doas TABLE, --audio DIR or --dataset DIR"),
+    };
+    ensure!(
+        !files.is_empty(),
+        "{}: no WAV file to localise",
+        folder.display()
+    );
+    ensure!(
+        files.len() == stops,
+        "{} recordings but {} poses in {}: they must match one to one",
+        files.len(),
+        stops,
+        pose_path.display()
+    );
+    let rows = localise_files(
+        &files,
+        &settings.mic_array()?,
+        settings.channels.as_deref(),
+        &settings.ssl,
+        RobotNoise::of(settings)?.as_ref(),
+    )?;
+    warn_recordings(&rows);
+    Ok((
+        mapped_table(
+            rows.iter().map(|r| (&r.doas[..], &r.extra[..])),
+            settings.ssl.num_peaks,
+        ),
+        format!("ssl:{}", settings.ssl.method),
+        Some(rows.iter().map(|r| r.cut).collect()),
+    ))
 }
