@@ -1,8 +1,6 @@
 //! What the analytic DoA tests share: plane waves delayed exactly (a fractional delay
 //! applied as a phase ramp in the frequency domain) to the microphones of an array, from
-//! known directions, and the localizer run on them. Each test file uses some of it.
-
-#![allow(dead_code)]
+//! known directions, and the localizer run on them. Each module uses some of it.
 
 use iasm_ssl::{Audio, Localizer, Method, MicArray, SslConfig, wrap_deg};
 use sim::farfield::{self, PlaneWave};

@@ -2,9 +2,7 @@
 //! ramp in the frequency domain) to the microphones of an array, from known directions.
 //! Every case runs with every method and reports all failures in one table.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use iasm_ssl::{ElevationRange, Localizer, Method, MicArray, SslConfig, wrap_deg};
 use proptest::prelude::*;
 use sim::signal::Signal;

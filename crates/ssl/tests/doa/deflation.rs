@@ -2,9 +2,7 @@
 //! talkers at known azimuths; on a compact array by default, only where the row explains
 //! the field.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use iasm_ssl::{Audio, Localizer, Method, MicArray, SslConfig, wrap_deg};
 
 /// The row (N = 2, GCC-PHAT) that `array` gives for `audio` of two talkers, deflated or

@@ -1,9 +1,7 @@
 //! Faulty microphones: a dead or disconnected channel is left out, but only where the
 //! others can localise by themselves.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use iasm_ssl::{Audio, Localizer, Method, MicArray, Scratch, SslConfig, wrap_deg};
 
 /// A dead microphone (a channel of zeros) or a disconnected one (its own noise at the

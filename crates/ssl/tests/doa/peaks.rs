@@ -2,9 +2,7 @@
 //! nothing where nothing sounds, the significance of a weak wave, an array pattern's
 //! sidelobes, a third source an octave hears beyond N, and a linear array's two sides.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use iasm_ssl::{Audio, ElevationRange, Localizer, Method, MicArray, SslConfig, wrap_deg};
 use sim::signal::Signal;
 

@@ -3,9 +3,7 @@
 //! source that dominates a few blocks, a decay that dominates none, a DoA placed from its
 //! best blocks, and the mean for a steady recording against the max for one that pauses.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use iasm_ssl::{
     Audio, ElevationRange, Localizer, Method, MicArray, Pooling, Scratch, SslConfig, wrap_deg,
 };
