@@ -332,24 +332,29 @@ impl Mapper {
         let poses = stops.poses();
         let a = &sources[i];
         let a_stops = stops_of(&a.rays);
+        // Each of a's DoAs mirrored about its stop's heading: 2 theta - bearing.
+        let mirrored: Vec<Ray> = a
+            .rays
+            .iter()
+            .map(|r| Ray {
+                bearing: 2.0 * poses[r.stop].theta - r.bearing,
+                ..*r
+            })
+            .collect();
+        let others: Vec<[f64; 2]> = (0..sources.len())
+            .filter(|&k| k != i)
+            .map(|k| [sources[k].x, sources[k].y])
+            .collect();
         sources.iter().enumerate().any(|(j, b)| {
             if j == i || stops_of(&b.rays).len() <= a_stops.len() {
                 return false;
             }
-            // Each of a's DoAs mirrored about its stop's heading: 2 theta - bearing.
-            let mirrored: Vec<Ray> = a
-                .rays
-                .iter()
-                .map(|r| Ray {
-                    bearing: 2.0 * poses[r.stop].theta - r.bearing,
-                    ..*r
-                })
-                .collect();
             // A mirror is heard in the same recording as its source: at b's own stops.
             let b_stops = stops_of(&b.rays);
             let fitting: Vec<Ray> = mirrored
-                .into_iter()
+                .iter()
                 .filter(|r| r.miss([b.x, b.y]) <= gate && b_stops.binary_search(&r.stop).is_ok())
+                .copied()
                 .collect();
             if fitting.len() + 1 < a.rays.len() {
                 return false;
@@ -357,14 +362,13 @@ impl Mapper {
             // Where those mirrored DoAs meet: at b, as a's own meet at a.
             let meets = fit_bearings([b.x, b.y], &fitting, self.sigma, Trim::OFF)
                 .is_some_and(|(p, _)| (p[0] - b.x).hypot(p[1] - b.y) <= self.config.merge_dist_m);
+            if !meets {
+                return false;
+            }
             // And after the robot turned from every heading at which a mirrored b, b was
             // still heard and a was not: nothing towards a there but the walls'
             // reflections of the other sources.
             let headings: Vec<f64> = fitting.iter().map(|r| poses[r.stop].theta).collect();
-            let others: Vec<[f64; 2]> = (0..sources.len())
-                .filter(|&k| k != i)
-                .map(|k| [sources[k].x, sources[k].y])
-                .collect();
             let silent = b_stops
                 .iter()
                 .filter(|&&k| {
@@ -374,7 +378,7 @@ impl Mapper {
                         && self.silent_towards([a.x, a.y], k, stops, &others)
                 })
                 .count();
-            meets && silent >= 2
+            silent >= 2
         })
     }
 
