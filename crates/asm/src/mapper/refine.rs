@@ -199,8 +199,9 @@ pub(super) fn fit_within(
     }
 }
 
-/// The fit `s` of the `kept` rays again without those [`Trim`] leaves out, from `s`, until
-/// it keeps the same rays (at most three refits). `s` itself when nothing is trimmed, when
+/// The fit `s` of the `kept` rays again without those [`Trim`] leaves out: judged first
+/// from where most of them meet ([`unmasked`]), else from `s`, until it keeps the same
+/// rays (at most three refits). `s` itself when nothing is trimmed, when
 /// fewer than four rays are kept, when the trimmed fit fails, or when a kept ray misses
 /// the trimmed fit by more than `gate` (the `2 sigma` that kept it): the rays left out
 /// then carried the geometry (the only ones across a line of nearly collinear rays, which
@@ -217,6 +218,9 @@ pub(super) fn trimmed(
     if trim.mads <= 0.0 || kept.len() < 4 {
         return s;
     }
+    if let Some(p) = unmasked(s, kept, rays, (trim, gate), &solve) {
+        return p;
+    }
     let mut p = s;
     let mut misses: Vec<f64> = Vec::with_capacity(kept.len());
     for _ in 0..3 {
@@ -224,11 +228,7 @@ pub(super) fn trimmed(
         misses.extend(kept.iter().map(|&i| rays[i].miss(p)));
         misses.sort_by(f64::total_cmp);
         let cut = (trim.mads * 1.4826 * misses[misses.len() / 2]).max(trim.floor);
-        let inliers: Vec<usize> = kept
-            .iter()
-            .copied()
-            .filter(|&i| rays[i].miss(p) <= cut)
-            .collect();
+        let inliers = within(kept, rays, p, cut);
         if inliers.len() == kept.len() {
             break;
         }
@@ -242,6 +242,147 @@ pub(super) fn trimmed(
     } else {
         s
     }
+}
+
+/// The `kept` rays that miss `at` by `cut` (rad) or less.
+fn within(kept: &[usize], rays: &[Ray], at: [f64; 2], cut: f64) -> Vec<usize> {
+    kept.iter()
+        .copied()
+        .filter(|&i| rays[i].miss(at) <= cut)
+        .collect()
+}
+
+/// The trim of [`trimmed`] judged from where the median miss is least (Rousseeuw's least
+/// median of squares, over the points where two of the `kept` rays cross), not from the
+/// least-squares fit `s`: a few rays a reflection bent pull least squares off the rest,
+/// so that every ray misses it by a little and none stands out (masking); from where most
+/// rays meet, the bent ones do. `None` when no crossing has a smaller median miss than
+/// `s`, or its fit is not taken (every ray let back in, the `gate` or
+/// [`KEPT_INFORMATION`] not met): the trim from `s` then judges.
+fn unmasked(
+    s: [f64; 2],
+    kept: &[usize],
+    rays: &[Ray],
+    (trim, gate): (Trim, f64),
+    solve: &impl Fn(&[usize], [f64; 2]) -> Option<[f64; 2]>,
+) -> Option<[f64; 2]> {
+    // Rays that all meet the fit more closely than the DoAs can be told apart hide nothing.
+    if kept.iter().all(|&i| rays[i].miss(s) <= trim.floor) {
+        return None;
+    }
+    // The median by 1 - cos of each miss (as the misses order, with no arctangent per
+    // ray and point), turned into an angle once.
+    let heads: Vec<([f64; 2], [f64; 2])> = kept
+        .iter()
+        .map(|&i| (rays[i].from, [rays[i].bearing.cos(), rays[i].bearing.sin()]))
+        .collect();
+    let mut misses: Vec<f64> = Vec::with_capacity(kept.len());
+    let mut median_miss = |at: [f64; 2]| {
+        misses.clear();
+        misses.extend(heads.iter().map(|(from, d)| {
+            let v = [at[0] - from[0], at[1] - from[1]];
+            let norm = v[0].hypot(v[1]).max(1e-12);
+            1.0 - (d[0] * v[0] + d[1] * v[1]) / norm
+        }));
+        let half = misses.len() / 2;
+        let one_less_cos = *misses.select_nth_unstable_by(half, f64::total_cmp).1;
+        (1.0 - one_less_cos).clamp(-1.0, 1.0).acos()
+    };
+    let (mut at, mut least) = (s, median_miss(s));
+    for q in crossings(kept, rays) {
+        let m = median_miss(q);
+        if m < least {
+            (at, least) = (q, m);
+        }
+    }
+    if at == s {
+        return None;
+    }
+    // The least median of a few misses understates their spread: Rousseeuw's small-sample
+    // factor, 1 + 5 / (n - 2) for a position fitted to n rays; from the fit on, the rays'
+    // own median judges, and a clean ray the first point missed by a hair is let back in.
+    let mut spread = 1.4826 * (1.0 + 5.0 / (kept.len() - 2) as f64) * least;
+    let mut used: Vec<usize> = Vec::new();
+    let mut p = s;
+    for _ in 0..3 {
+        let cut = (trim.mads * spread).max(trim.floor);
+        let inliers = within(kept, rays, at, cut);
+        if inliers.len() == kept.len() {
+            return None;
+        }
+        if inliers == used {
+            break;
+        }
+        p = solve(&inliers, at)?;
+        (at, used) = (p, inliers);
+        spread = 1.4826 * median_miss(p);
+    }
+    let weakest = |set: &[usize]| weakest_information(p, set.iter().map(|&i| &rays[i]));
+    (kept.iter().all(|&i| rays[i].miss(p) <= gate)
+        && weakest(&used) >= KEPT_INFORMATION * weakest(kept))
+    .then_some(p)
+}
+
+/// A trimmed fit must keep this share of the information that all the source's rays give
+/// on its position in the direction they fix worst (the least eigenvalue of the sum of
+/// the bearings' gradients' outer products): its standard deviation there may grow by
+/// at most 1 / sqrt(1/2), 41 %. Rays that agree closely because their stops lie on one
+/// line towards the source say nothing about its range; the few from elsewhere that fix
+/// it are not to be trimmed as the ones that disagree.
+const KEPT_INFORMATION: f64 = 0.5;
+
+/// The least eigenvalue of the Fisher information (up to the DoA variance) that `rays`
+/// give on a source at `p` (1/m^2).
+fn weakest_information<'a>(p: [f64; 2], rays: impl Iterator<Item = &'a Ray>) -> f64 {
+    let (mut a11, mut a12, mut a22) = (0.0, 0.0, 0.0);
+    for r in rays {
+        let (dx, dy) = (p[0] - r.from[0], p[1] - r.from[1]);
+        let d2 = (dx * dx + dy * dy).max(1e-6);
+        let (jx, jy) = (-dy / d2, dx / d2);
+        a11 += jx * jx;
+        a12 += jx * jy;
+        a22 += jy * jy;
+    }
+    let (mean, half) = ((a11 + a22) / 2.0, ((a11 - a22) / 2.0).hypot(a12));
+    mean - half
+}
+
+/// Up to this many rays, every pair's crossing is a candidate of [`unmasked`].
+const ALL_PAIRS: usize = 12;
+
+/// Where pairs of the `kept` rays cross ahead of both stops: the candidates of the least
+/// median of the misses. Every pair up to 12 rays; beyond, each ray with four others, from
+/// its neighbours' stops to those half the run away (the subsets of Rousseeuw's estimator
+/// need not be all: one pair of clean rays is enough), so that the cost stays linear.
+fn crossings<'a>(kept: &'a [usize], rays: &'a [Ray]) -> impl Iterator<Item = [f64; 2]> + 'a {
+    let n = kept.len();
+    let offsets: Vec<usize> = if n <= ALL_PAIRS {
+        (1..n).collect()
+    } else {
+        (1..=4).map(|k| k * n / 9).collect()
+    };
+    (0..n)
+        .flat_map(move |i| offsets.clone().into_iter().map(move |d| (i, (i + d) % n)))
+        .filter(move |&(i, j)| n > ALL_PAIRS || i < j)
+        .filter_map(|(i, j)| crossing(&rays[kept[i]], &rays[kept[j]]))
+}
+
+/// Where two rays cross, if ahead of both stops and not (nearly) parallel.
+fn crossing(a: &Ray, b: &Ray) -> Option<[f64; 2]> {
+    let (da, db) = (
+        [a.bearing.cos(), a.bearing.sin()],
+        [b.bearing.cos(), b.bearing.sin()],
+    );
+    let det = da[0] * db[1] - da[1] * db[0];
+    if det.abs() < 1e-3 {
+        return None;
+    }
+    let (wx, wy) = (b.from[0] - a.from[0], b.from[1] - a.from[1]);
+    let (ta, tb) = (
+        (wx * db[1] - wy * db[0]) / det,
+        (wx * da[1] - wy * da[0]) / det,
+    );
+    (ta > 0.0 && tb > 0.0).then(|| [a.from[0] + ta * da[0], a.from[1] + ta * da[1]])
 }
 
 /// Repeatedly merges the closest pair of sources nearer than `dist` into their mean;

@@ -500,6 +500,65 @@ fn a_trim_that_loses_the_geometry_is_not_taken() {
     assert_eq!(p, plain);
 }
 
+/// The far stops of an L's wing hear its talker and its image in the wall behind it as
+/// one peak, bent 6 degrees towards the image; the near stops hear it to a few tenths. Least
+/// squares spreads the two bent rays' pull over all six, so that each misses its fit by
+/// 1-3 degrees and none stands out: judged from where most rays meet (the least median
+/// of the misses), the bent two are trimmed and the fit lands on the talker.
+#[test]
+fn two_rays_a_reflection_bent_do_not_hide_behind_least_squares() {
+    // `l_wing`: the talker at (7.2, 6.0), the robot driving north along x = 6.
+    let truth = [7.2f64, 6.0];
+    let sigma = 5f64.to_radians();
+    let offs = [6.0, 0.2, 6.2, -0.4, 0.1, -0.1];
+    let rays: Vec<Ray> = offs
+        .iter()
+        .enumerate()
+        .map(|(i, &off)| ray_towards(i, [6.0, 2.3 + 0.5 * i as f64], truth, off))
+        .collect();
+    let err = |p: [f64; 2]| (p[0] - truth[0]).hypot(p[1] - truth[1]);
+    let (plain, kept) = fit_bearings([7.0, 5.7], &rays, sigma, Trim::OFF).unwrap();
+    assert_eq!(kept.len(), 6, "the bent rays are inside the gate");
+    assert!(err(plain) > 0.2, "least squares is pulled: {plain:?}");
+    // No ray misses the least-squares fit by three of the rays' robust deviations there.
+    let mut misses: Vec<f64> = rays.iter().map(|r| r.miss(plain)).collect();
+    misses.sort_by(f64::total_cmp);
+    assert!(misses[5] < 3.0 * 1.4826 * misses[3], "{misses:?}");
+    let (p, kept) =
+        fit_bearings([7.0, 5.7], &rays, sigma, Trim::of(&IasmConfig::default())).unwrap();
+    assert_eq!(kept.len(), 6, "a trimmed ray is still the source's");
+    assert!(err(p) < 0.03, "{p:?}");
+}
+
+/// Where the rays most agree is not taken when they agree for want of geometry: four
+/// stops on a line towards a source meet, to a hair, 0.8 m beyond it, and the two rays
+/// from the side that fix its range miss that point by 6-8 degrees, inside the `2 sigma`
+/// gate. Trimmed from there, the fit would rest on rays that say nothing of the range;
+/// the source's position from the side rays stands.
+#[test]
+fn a_trim_that_leaves_the_range_unfixed_is_not_taken() {
+    let (truth, beyond) = ([4.0f64, 2.0], [4.7f64, 2.35]);
+    let sigma = 5f64.to_radians();
+    let mut rays: Vec<Ray> = (0..4)
+        .map(|i| ray_towards(i, [0.4 * i as f64, 0.0], beyond, 0.0))
+        .collect();
+    rays.push(ray_towards(4, [4.0, -3.0], truth, 0.0));
+    rays.push(ray_towards(5, [6.5, -2.0], truth, 0.0));
+    let misses: Vec<f64> = rays.iter().map(|r| r.miss(beyond).to_degrees()).collect();
+    assert!(
+        misses[4..].iter().all(|&m| (5.0..10.0).contains(&m)),
+        "{misses:?}"
+    );
+    let (p, kept) =
+        fit_bearings([4.2, 2.1], &rays, sigma, Trim::of(&IasmConfig::default())).unwrap();
+    assert_eq!(kept.len(), 6);
+    let (to_truth, to_beyond) = (
+        (p[0] - truth[0]).hypot(p[1] - truth[1]),
+        (p[0] - beyond[0]).hypot(p[1] - beyond[1]),
+    );
+    assert!(to_truth < 0.5 * to_beyond, "{p:?}");
+}
+
 #[test]
 fn refinement_sharpens_an_exact_map() {
     let truth = [[1.5, 1.5], [4.0, -1.2], [5.5, 2.0]];
