@@ -158,10 +158,8 @@ pub(super) fn fit_within(
         for _ in 0..20 {
             let (mut a11, mut a12, mut a22, mut b1, mut b2) = (0.0, 0.0, 0.0, 0.0, 0.0);
             for ray in kept.iter().map(|&i| &rays[i]) {
-                let (dx, dy) = (s[0] - ray.from[0], s[1] - ray.from[1]);
-                let d2 = (dx * dx + dy * dy).max(1e-6);
-                let e = wrap_rad(dy.atan2(dx) - ray.bearing);
-                let (jx, jy) = (-dy / d2, dx / d2);
+                let e = wrap_rad((s[1] - ray.from[1]).atan2(s[0] - ray.from[0]) - ray.bearing);
+                let [jx, jy] = bearing_gradient(s, ray.from);
                 a11 += jx * jx;
                 a12 += jx * jy;
                 a22 += jy * jy;
@@ -289,7 +287,7 @@ fn unmasked(
         (1.0 - one_less_cos).clamp(-1.0, 1.0).acos()
     };
     let (mut at, mut least) = (s, median_miss(s));
-    for q in crossings(kept, rays) {
+    for q in crossings(&heads) {
         let m = median_miss(q);
         if m < least {
             (at, least) = (q, m);
@@ -336,9 +334,7 @@ const KEPT_INFORMATION: f64 = 0.5;
 fn weakest_information<'a>(p: [f64; 2], rays: impl Iterator<Item = &'a Ray>) -> f64 {
     let (mut a11, mut a12, mut a22) = (0.0, 0.0, 0.0);
     for r in rays {
-        let (dx, dy) = (p[0] - r.from[0], p[1] - r.from[1]);
-        let d2 = (dx * dx + dy * dy).max(1e-6);
-        let (jx, jy) = (-dy / d2, dx / d2);
+        let [jx, jy] = bearing_gradient(p, r.from);
         a11 += jx * jx;
         a12 += jx * jy;
         a22 += jy * jy;
@@ -347,15 +343,24 @@ fn weakest_information<'a>(p: [f64; 2], rays: impl Iterator<Item = &'a Ray>) -> 
     mean - half
 }
 
+/// The gradient (1/m) of the bearing from `from` to `p` with respect to `p`.
+fn bearing_gradient(p: [f64; 2], from: [f64; 2]) -> [f64; 2] {
+    let (dx, dy) = (p[0] - from[0], p[1] - from[1]);
+    let d2 = (dx * dx + dy * dy).max(1e-6);
+    [-dy / d2, dx / d2]
+}
+
 /// Up to this many rays, every pair's crossing is a candidate of [`unmasked`].
 const ALL_PAIRS: usize = 12;
 
-/// Where pairs of the `kept` rays cross ahead of both stops: the candidates of the least
-/// median of the misses. Every pair up to 12 rays; beyond, each ray with four others, from
-/// its neighbours' stops to those half the run away (the subsets of Rousseeuw's estimator
-/// need not be all: one pair of clean rays is enough), so that the cost stays linear.
-fn crossings<'a>(kept: &'a [usize], rays: &'a [Ray]) -> impl Iterator<Item = [f64; 2]> + 'a {
-    let n = kept.len();
+/// Where pairs of the rays `heads` (each a stop and the unit vector of its bearing) cross
+/// ahead of both stops, at an angle whose sine is 0.001 or more: the candidates of the
+/// least median of the misses. Every pair up to 12 rays; beyond, each ray with four
+/// others, from its neighbours' stops to those half the run away (the subsets of
+/// Rousseeuw's estimator need not be all: one pair of clean rays is enough), so that the
+/// cost stays linear.
+fn crossings(heads: &[([f64; 2], [f64; 2])]) -> impl Iterator<Item = [f64; 2]> + '_ {
+    let n = heads.len();
     let offsets: Vec<usize> = if n <= ALL_PAIRS {
         (1..n).collect()
     } else {
@@ -364,25 +369,9 @@ fn crossings<'a>(kept: &'a [usize], rays: &'a [Ray]) -> impl Iterator<Item = [f6
     (0..n)
         .flat_map(move |i| offsets.clone().into_iter().map(move |d| (i, (i + d) % n)))
         .filter(move |&(i, j)| n > ALL_PAIRS || i < j)
-        .filter_map(|(i, j)| crossing(&rays[kept[i]], &rays[kept[j]]))
-}
-
-/// Where two rays cross, if ahead of both stops and not (nearly) parallel.
-fn crossing(a: &Ray, b: &Ray) -> Option<[f64; 2]> {
-    let (da, db) = (
-        [a.bearing.cos(), a.bearing.sin()],
-        [b.bearing.cos(), b.bearing.sin()],
-    );
-    let det = da[0] * db[1] - da[1] * db[0];
-    if det.abs() < 1e-3 {
-        return None;
-    }
-    let (wx, wy) = (b.from[0] - a.from[0], b.from[1] - a.from[1]);
-    let (ta, tb) = (
-        (wx * db[1] - wy * db[0]) / det,
-        (wx * da[1] - wy * da[0]) / det,
-    );
-    (ta > 0.0 && tb > 0.0).then(|| [a.from[0] + ta * da[0], a.from[1] + ta * da[1]])
+        .filter_map(|(i, j)| crossing_of(heads[i], heads[j], 1e-3))
+        .filter(|&(_, t, u)| t > 0.0 && u > 0.0)
+        .map(|(q, _, _)| q)
 }
 
 /// Repeatedly merges the closest pair of sources nearer than `dist` into their mean;

@@ -344,8 +344,18 @@ pub(super) struct Plausible<'a> {
 /// less than 10 degrees, where the crossing is ill-conditioned.
 pub(super) fn crossing(pa: [f64; 2], a: f64, pb: [f64; 2], b: f64) -> Option<([f64; 2], f64, f64)> {
     let (ua, ub) = ([a.cos(), a.sin()], [b.cos(), b.sin()]);
+    crossing_of((pa, ua), (pb, ub), 10f64.to_radians().sin())
+}
+
+/// [`crossing`] of the lines from `a.0` along the unit vector `a.1` and from `b.0` along
+/// `b.1`; `None` when the sine of the angle between them is below `min_sin`.
+pub(super) fn crossing_of(
+    (pa, ua): ([f64; 2], [f64; 2]),
+    (pb, ub): ([f64; 2], [f64; 2]),
+    min_sin: f64,
+) -> Option<([f64; 2], f64, f64)> {
     let cross = ua[0] * ub[1] - ua[1] * ub[0];
-    if cross.abs() < 10f64.to_radians().sin() {
+    if cross.abs() < min_sin {
         return None;
     }
     let (dx, dy) = (pb[0] - pa[0], pb[1] - pa[1]);
