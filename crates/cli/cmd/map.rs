@@ -423,7 +423,7 @@ fn refusal(rule: &asm::Refusal) -> String {
                 .to_owned()
         }
         asm::Refusal::Reflection => {
-            "heard only by reflection: its DoAs are another source's reflections in the map's walls (reflections)"
+            "heard only by reflection: its DoAs are another source's reflections in the map's walls, or that source and its reflection heard as one peak (reflections)"
                 .to_owned()
         }
         asm::Refusal::OutsideRoom => {

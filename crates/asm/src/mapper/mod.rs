@@ -189,8 +189,9 @@ pub enum Refusal {
     /// the stops after the robot turned heard nothing towards it
     /// ([`IasmConfig::array_mirror`]).
     ArrayMirror,
-    /// Its DoAs are another mapped source's reflections in the map's walls (or that
-    /// source's own bearing), each but one ([`IasmConfig::reflections`]).
+    /// Its DoAs are another mapped source's reflections in the map's walls, blends of that
+    /// source with its reflection, or that source's own bearing, each but one
+    /// ([`IasmConfig::reflections`]).
     Reflection,
 }
 

@@ -18,13 +18,28 @@
 //!   map hides the source from it: a reflection is weaker than its direct sound and never
 //!   heard without it in plain view.
 //!
-//! A source whose rays are, all but one, another's reflections or its direct bearing, as
-//! many reflections as a source needs stops and half of its rays or more, is removed,
-//! provided that other source is not itself explained so (two sources explaining each
-//! other are both kept: the rule does not choose).
+//! A reflection can also be heard blended with its direct sound: a robot's array is small
+//! against speech's wavelengths, and when a source stands near a wall its image is close
+//! enough in bearing and strength that both make one peak between them
+//! ([`Mapper::blends`]: within 60 degrees of each other, the reflected path at most twice
+//! the direct one). From stops on one side such peaks all point between the source and
+//! the wall, and they cross near the wall: MVDR hears `corridor_alcoves`' talker, 1 m
+//! from an alcove's side wall, that way from four stops, and a source stood in the
+//! alcove's corner. A ray is such a blend of a mapped source when it lies between the
+//! source's bearing and its image's, more than a `sigma` from each (nearer, it is the
+//! source's own DoA or a plain reflection), the map shows the source to the stop and the
+//! wall where the reflection meets it, and the source that took the ray stands no farther
+//! from that wall than the mapped one.
+//!
+//! A source whose rays are, all but one, another's reflections or blends or its direct
+//! bearing, or come from stops the map hides the source from (no direct sound of it can
+//! reach them), as many reflections and blends as a source needs stops and half of its
+//! rays or more, is removed, provided that other source is not itself explained so (two
+//! sources explaining each other are both kept: the rule does not choose).
 
 use super::rules::principal_axis;
 use super::*;
+use std::cell::OnceCell;
 
 /// How far around the point where a DoA's ray meets a wall the wall's cells are taken to
 /// say which way it runs (m): twice a wall's thickness on a map, short enough that a
@@ -57,6 +72,50 @@ struct Leg {
     /// Its own length, to the next wall or the map's end (m).
     len: f64,
 }
+
+/// The widest angle at a stop between a source and its image in a wall that the SSL is
+/// taken to hear as one peak between them (a blend, [`Mapper::blends`]): rad. Why 60
+/// degrees: a robot's array is small against speech's wavelengths, and two coherent
+/// arrivals closer than its main lobe's half-width merge into one peak, placed between
+/// them by their strengths and phases. The paper's array (0.235 m) has a main lobe 60
+/// degrees from peak to first null at 2 kHz (asin(1.22 lambda / D)), wider below; in
+/// `corridor_alcoves` MVDR hears the talker 1 m from an alcove's side wall, 26-42 degrees
+/// from its image, as one peak half-way between them from four stops.
+const BLEND_WEDGE: f64 = std::f64::consts::FRAC_PI_3;
+
+/// The longest reflected path, against the direct path, of a reflection that blends with
+/// its direct sound ([`Mapper::blends`]): twice, the image within 6 dB of the direct sound
+/// before the wall takes its share. A weaker reflection moves the peak of the two by
+/// little, and a source far from its wall (a ghost in the corridor, a wall 1.8 m behind
+/// it) has no blend of it between itself and the wall.
+const BLEND_PATH_RATIO: f64 = 2.0;
+
+/// A wall a source is mirrored in: the source's image, a point of the wall, and the
+/// wall's unit normal towards the source.
+#[derive(Clone, Copy, Debug)]
+struct Mirror {
+    image: [f64; 2],
+    wall: [f64; 2],
+    normal: [f64; 2],
+}
+
+impl Mirror {
+    /// How far `q` stands from the wall, on the source's side (m).
+    fn off(&self, q: [f64; 2]) -> f64 {
+        (q[0] - self.wall[0]) * self.normal[0] + (q[1] - self.wall[1]) * self.normal[1]
+    }
+}
+
+/// How many directions around a source are searched for the walls it is mirrored in
+/// ([`Mapper::mirrors`]): every 10 degrees, so that a wall 2 m long seen from 3 m away
+/// is met by two of them or more.
+const MIRROR_DIRECTIONS: usize = 36;
+
+/// How far from a source its walls are searched for (m): a room's half-width (as the
+/// search margin without a map, `--open-margin`). A wall farther off mirrors the source
+/// more than 6 m behind it, and its reflection reaches the stops with the reverberation,
+/// not as a peak beside the direct sound.
+const MIRROR_REACH_M: f64 = 3.0;
 
 impl Leg {
     /// The angle at the stop between the ray and a source at `s` mirrored through the
@@ -114,6 +173,77 @@ impl Mapper {
         legs
     }
 
+    /// The walls around `s` that mirror it: the first wall met in each of
+    /// [`MIRROR_DIRECTIONS`] directions within [`MIRROR_REACH_M`], its line from its
+    /// cells around the point met (as [`Mapper::reflected_legs`] takes it), each line once.
+    fn mirrors(&self, s: [f64; 2]) -> Vec<Mirror> {
+        let mut out: Vec<Mirror> = Vec::new();
+        let same_line = 10f64.to_radians().cos();
+        for k in 0..MIRROR_DIRECTIONS {
+            let a = std::f64::consts::TAU * k as f64 / MIRROR_DIRECTIONS as f64;
+            let end = [
+                s[0] + MIRROR_REACH_M * a.cos(),
+                s[1] + MIRROR_REACH_M * a.sin(),
+            ];
+            let Some(wall) = self.map.first_occupied(s, end) else {
+                continue;
+            };
+            let Some(mut normal) = line_normal(&self.map.occupied_within(wall, WALL_REACH_M))
+            else {
+                continue;
+            };
+            let mut off = (s[0] - wall[0]) * normal[0] + (s[1] - wall[1]) * normal[1];
+            if off < 0.0 {
+                (normal, off) = ([-normal[0], -normal[1]], -off);
+            }
+            let image = [s[0] - 2.0 * off * normal[0], s[1] - 2.0 * off * normal[1]];
+            let mirror = Mirror {
+                image,
+                wall,
+                normal,
+            };
+            // One line once: the wall met nearest the source, where the cells around it
+            // are the farthest from the wall's ends.
+            let near = |m: &Mirror| (m.wall[0] - s[0]).hypot(m.wall[1] - s[1]);
+            match out.iter_mut().find(|m| {
+                m.normal[0] * normal[0] + m.normal[1] * normal[1] > same_line
+                    && (m.off(s) - off).abs() <= WALL_REACH_M / 2.0
+            }) {
+                Some(m) if near(&mirror) < near(m) => *m = mirror,
+                Some(_) => {}
+                None => out.push(mirror),
+            }
+        }
+        out
+    }
+
+    /// Whether ray `r` is heard between a source at `s` and its image in `m`'s wall, as
+    /// one peak of both ([`BLEND_WEDGE`], [`BLEND_PATH_RATIO`]), by a stop on the room's
+    /// side of that wall with the point of reflection on it, and a source at `g` that took
+    /// the ray no farther from the wall than `s`: rays that blend a source's direct sound
+    /// with its reflection point between them, and cross near the wall.
+    fn blends(&self, m: &Mirror, r: &Ray, s: [f64; 2], g: [f64; 2]) -> bool {
+        let (to_s, to_p) = (m.off(s), m.off(r.from));
+        if m.off(g) > to_s || to_p <= 0.0 {
+            return false;
+        }
+        let bearing = |q: [f64; 2]| (q[1] - r.from[1]).atan2(q[0] - r.from[0]);
+        let dist = |q: [f64; 2]| (q[0] - r.from[0]).hypot(q[1] - r.from[1]);
+        let (direct, mirrored) = (bearing(s), bearing(m.image));
+        let wedge = wrap_rad(mirrored - direct).abs();
+        let t = to_p / (to_p + to_s);
+        let at = [
+            r.from[0] + t * (m.image[0] - r.from[0]),
+            r.from[1] + t * (m.image[1] - r.from[1]),
+        ];
+        wedge <= BLEND_WEDGE
+            && dist(m.image) <= BLEND_PATH_RATIO * dist(s)
+            && wrap_rad(r.bearing - mirrored).abs() > self.sigma
+            && wrap_rad(r.bearing - direct).abs() + wrap_rad(r.bearing - mirrored).abs()
+                <= wedge + 1e-9
+            && !self.map.occupied_within(at, WALL_REACH_M / 2.0).is_empty()
+    }
+
     /// Whether stop `k` heard nothing towards `at` but the reflections of `others` in the
     /// map's walls (each DoA within the vote's gate, 2 `sigma`, of the bearing to `at`
     /// traced through the wall it meets passes one of them within the gate), and the map
@@ -158,12 +288,21 @@ impl Mapper {
             .is_some()
     }
 
-    /// Whether the rays of `g` (their reflected legs in `legs`) are the direct sound or
-    /// the reflections of `s`: each but one, as many reflections as a source needs stops
-    /// ([`IasmConfig::min_observations`]) and half of them or more (see the module docs).
-    fn echoes(&self, g: &Source, legs: &[Vec<Leg>], s: &Source, stops: &Stops) -> bool {
+    /// Whether the rays of `g` (their reflected legs in `legs`) are the direct sound, the
+    /// reflections or the blends of `s` (its walls in `mirrors`), or come from stops the
+    /// map hides `g` from: each but one, as many reflections and blends as a source needs
+    /// stops ([`IasmConfig::min_observations`]) and half of them or more (see the module
+    /// docs).
+    fn echoes(
+        &self,
+        g: &Source,
+        legs: &[Vec<Leg>],
+        s: &Source,
+        mirrors: &OnceCell<Vec<Mirror>>,
+        stops: &Stops,
+    ) -> bool {
         let (at, own, gate) = ([s.x, s.y], [g.x, g.y], 2.0 * self.sigma);
-        let (mut direct, mut reflected) = (0, 0);
+        let (mut direct, mut reflected, mut unexplained) = (0, 0, 0);
         let slack = self.config.room_margin_m;
         for (r, legs) in g.rays.iter().zip(legs) {
             let pose = &stops.poses()[r.stop];
@@ -175,11 +314,28 @@ impl Mapper {
                         .any(|&h| h != r.bearing && wrap_rad(h - to).abs() <= gate)
             };
             let image = nearest_image(legs, at, slack);
-            if image.is_some_and(|m| m <= gate && m <= r.miss(own) + self.sigma) && heard_directly()
-            {
+            let reflection = || {
+                image.is_some_and(|m| m <= gate && m <= r.miss(own) + self.sigma)
+                    && heard_directly()
+            };
+            let blend = || {
+                r.miss(at) > self.sigma
+                    && r.miss(at) <= BLEND_WEDGE
+                    && !self.hidden(r.from, at)
+                    && mirrors
+                        .get_or_init(|| self.mirrors(at))
+                        .iter()
+                        .any(|m| self.blends(m, r, at, own))
+            };
+            if reflection() || blend() {
                 reflected += 1;
-            } else if r.miss(at) <= gate {
+            } else if r.miss(at) <= gate || self.hidden(r.from, own) {
                 direct += 1;
+            } else {
+                unexplained += 1;
+                if unexplained > 1 {
+                    return false;
+                }
             }
         }
         let n = g.rays.len();
@@ -202,6 +358,9 @@ impl Mapper {
             return false;
         }
         let standing: Vec<usize> = (0..sources.len()).filter(|&i| why[i].is_none()).collect();
+        // Each standing source's walls, found when a ray first needs them.
+        let mirrors: Vec<OnceCell<Vec<Mirror>>> =
+            standing.iter().map(|_| OnceCell::new()).collect();
         // For each standing source, the standing sources whose reflections it is.
         let of: Vec<Vec<usize>> = standing
             .iter()
@@ -211,7 +370,7 @@ impl Mapper {
                 (0..standing.len())
                     .filter(|&k| {
                         let j = standing[k];
-                        j != i && self.echoes(g, &legs, &sources[j], stops)
+                        j != i && self.echoes(g, &legs, &sources[j], &mirrors[k], stops)
                     })
                     .collect()
             })

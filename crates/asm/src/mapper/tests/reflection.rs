@@ -201,3 +201,88 @@ fn a_talker_where_the_reflections_cross_stays() {
     assert!(refused.is_empty(), "{refused:?}");
     assert_eq!(sources.len(), 2);
 }
+
+/// The bearing half-way between the talker and its image in the alcove's west wall
+/// (face x = 3, image at (2, 1.5)) from stop `p`: one peak of the direct sound and its
+/// reflection, 1 m apart, as a small array hears them.
+fn blend_of_west_image(p: &Pose) -> f64 {
+    let (direct, image) = (p.bearing_to(TALKER), p.bearing_to([2.0, TALKER[1]]));
+    direct + wrap_rad(image - direct) / 2.0
+}
+
+#[test]
+fn a_peak_between_a_talker_and_its_reflection_is_no_source() {
+    // The stops at x = 4, 5 and 6 see the talker and, 30-45 degrees beside it, its image
+    // in the alcove's west wall 1 m away; each hears one peak half-way between them as
+    // well as the talker (`corridor_alcoves`, MVDR). Those peaks meet near the west wall,
+    // in the alcove: a source there is their blend, not a second talker.
+    let (mapper, poses) = alcove(IasmConfig::default());
+    let blended = [4, 5, 6];
+    let mut rows: Vec<Vec<f64>> = poses.iter().map(|_| Vec::new()).collect();
+    for k in 2..=6 {
+        rows[k].push(poses[k].bearing_to(TALKER));
+    }
+    let rays: Vec<Ray> = blended
+        .iter()
+        .map(|&k| {
+            let b = blend_of_west_image(&poses[k]);
+            rows[k].push(b);
+            Ray {
+                stop: k,
+                from: poses[k].position(),
+                bearing: b,
+                twin: None,
+                shared: false,
+            }
+        })
+        .collect();
+    let at = least_squares_crossing(&rays).expect("the peaks cross");
+    assert!(
+        (3.0..3.5).contains(&at[0]) && (1.2..1.8).contains(&at[1]),
+        "{at:?}"
+    );
+    // Each peak misses the talker and its image by 9-23 degrees, more than a sigma: no
+    // direct sound of it, and no reflection the first-order rule takes.
+    let sigma = 5f64.to_radians();
+    for r in &rays {
+        let image = poses[r.stop].bearing_to([2.0, TALKER[1]]);
+        assert!(r.miss(TALKER) > sigma, "stop {}", r.stop);
+        assert!(wrap_rad(r.bearing - image).abs() > sigma, "stop {}", r.stop);
+    }
+    let judge = |config: IasmConfig| {
+        let mapper = Mapper {
+            config,
+            ..mapper.clone()
+        };
+        let mut ghost = heard_from(at, &poses, &[]);
+        ghost.observations = rays.len();
+        ghost.rays = rays.clone();
+        let mut sources = vec![heard_from(TALKER, &poses, &[2, 3, 4, 5, 6]), ghost];
+        // The SSL cut the rows of stops 2 and 3 at N (the corridor's stops before an
+        // alcove hear more peaks than N): their silence towards the blend says nothing,
+        // and the rule that weighs silence (absence_ratio) is not what is judged here.
+        let mut complete = mapper.complete_by_length(&rows);
+        let mut cut = vec![false; poses.len()];
+        for k in [2, 3] {
+            (complete[k], cut[k]) = (false, true);
+        }
+        let stops = stops_with(&poses, &rows, &complete, &cut);
+        let mut left = vec![Vec::new(); poses.len()];
+        let refused = mapper.drop_implausible(&mut sources, &stops, &mut left);
+        (sources, refused)
+    };
+    let (kept, refused) = judge(IasmConfig::default());
+    assert_eq!(
+        kept.iter().map(|s| [s.x, s.y]).collect::<Vec<_>>(),
+        vec![TALKER]
+    );
+    assert_eq!(refused.len(), 1, "{refused:?}");
+    assert_eq!(refused[0].rule, Refusal::Reflection);
+    // Without the rule the blend stands as a source.
+    let (kept, refused) = judge(IasmConfig {
+        reflections: false,
+        ..IasmConfig::default()
+    });
+    assert!(refused.is_empty(), "{refused:?}");
+    assert_eq!(kept.len(), 2);
+}
