@@ -50,6 +50,17 @@ fn reflections(mapper: &Mapper, p: &Pose) -> Vec<f64> {
         .collect()
 }
 
+/// The ray of a DoA at `bearing` (world frame) heard at stop `k`.
+fn ray(poses: &[Pose], k: usize, bearing: f64) -> Ray {
+    Ray {
+        stop: k,
+        from: poses[k].position(),
+        bearing,
+        twin: None,
+        shared: false,
+    }
+}
+
 fn lerp(a: [f64; 2], b: [f64; 2], t: f64) -> [f64; 2] {
     [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])]
 }
@@ -86,13 +97,7 @@ fn talker_and_crossing(mapper: &Mapper, poses: &[Pose], heard: &[Vec<f64>]) -> V
         .enumerate()
         .flat_map(|(k, row)| {
             let skip = usize::from(sees.contains(&k));
-            row.iter().skip(skip).map(move |&b| Ray {
-                stop: k,
-                from: poses[k].position(),
-                bearing: b,
-                twin: None,
-                shared: false,
-            })
+            row.iter().skip(skip).map(move |&b| ray(poses, k, b))
         })
         .collect();
     let start = least_squares_crossing(&rays).expect("the reflections cross");
@@ -227,13 +232,7 @@ fn a_peak_between_a_talker_and_its_reflection_is_no_source() {
         .map(|&k| {
             let b = blend_of_west_image(&poses[k]);
             rows[k].push(b);
-            Ray {
-                stop: k,
-                from: poses[k].position(),
-                bearing: b,
-                twin: None,
-                shared: false,
-            }
+            ray(&poses, k, b)
         })
         .collect();
     let at = least_squares_crossing(&rays).expect("the peaks cross");
