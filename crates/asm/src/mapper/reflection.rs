@@ -100,6 +100,19 @@ struct Mirror {
 }
 
 impl Mirror {
+    /// A source at `s` mirrored in the wall through `wall` whose unit normal, towards
+    /// `s`, is `normal`.
+    fn of(s: [f64; 2], wall: [f64; 2], normal: [f64; 2]) -> Self {
+        let mut m = Mirror {
+            image: s,
+            wall,
+            normal,
+        };
+        let off = m.off(s);
+        m.image = [s[0] - 2.0 * off * normal[0], s[1] - 2.0 * off * normal[1]];
+        m
+    }
+
     /// How far `q` stands from the wall, on the source's side (m).
     fn off(&self, q: [f64; 2]) -> f64 {
         (q[0] - self.wall[0]) * self.normal[0] + (q[1] - self.wall[1]) * self.normal[1]
@@ -155,13 +168,10 @@ impl Mapper {
             let Some(hit) = hit.filter(|_| order < MAX_ORDER) else {
                 break;
             };
-            let Some(mut normal) = line_normal(&self.map.occupied_within(hit, WALL_REACH_M)) else {
+            // The normal towards the side the ray came from.
+            let Some(normal) = self.wall_normal(hit, [-dir[0], -dir[1]]) else {
                 break;
             };
-            // The normal towards the side the ray came from.
-            if normal[0] * dir[0] + normal[1] * dir[1] > 0.0 {
-                normal = [-normal[0], -normal[1]];
-            }
             let dot = dir[0] * normal[0] + dir[1] * normal[1];
             dir = [
                 dir[0] - 2.0 * dot * normal[0],
@@ -171,6 +181,18 @@ impl Mapper {
             from = [hit[0] + step_off * normal[0], hit[1] + step_off * normal[1]];
         }
         legs
+    }
+
+    /// The unit normal of the wall met at `hit` (the line of its cells within
+    /// [`WALL_REACH_M`]), on the side `towards` points to; `None` where the cells do not
+    /// run along one line (a corner).
+    fn wall_normal(&self, hit: [f64; 2], towards: [f64; 2]) -> Option<[f64; 2]> {
+        let n = line_normal(&self.map.occupied_within(hit, WALL_REACH_M))?;
+        Some(if n[0] * towards[0] + n[1] * towards[1] < 0.0 {
+            [-n[0], -n[1]]
+        } else {
+            n
+        })
     }
 
     /// The walls around `s` that mirror it: the first wall met in each of
@@ -188,20 +210,11 @@ impl Mapper {
             let Some(wall) = self.map.first_occupied(s, end) else {
                 continue;
             };
-            let Some(mut normal) = line_normal(&self.map.occupied_within(wall, WALL_REACH_M))
-            else {
+            let Some(normal) = self.wall_normal(wall, [s[0] - wall[0], s[1] - wall[1]]) else {
                 continue;
             };
-            let mut off = (s[0] - wall[0]) * normal[0] + (s[1] - wall[1]) * normal[1];
-            if off < 0.0 {
-                (normal, off) = ([-normal[0], -normal[1]], -off);
-            }
-            let image = [s[0] - 2.0 * off * normal[0], s[1] - 2.0 * off * normal[1]];
-            let mirror = Mirror {
-                image,
-                wall,
-                normal,
-            };
+            let mirror = Mirror::of(s, wall, normal);
+            let off = mirror.off(s);
             // One line once: the wall met nearest the source, where the cells around it
             // are the farthest from the wall's ends.
             let near = |m: &Mirror| (m.wall[0] - s[0]).hypot(m.wall[1] - s[1]);
@@ -305,22 +318,20 @@ impl Mapper {
         let (mut direct, mut reflected, mut unexplained) = (0, 0, 0);
         let slack = self.config.room_margin_m;
         for (r, legs) in g.rays.iter().zip(legs) {
-            let pose = &stops.poses()[r.stop];
-            let heard_directly = || {
-                let to = pose.bearing_to(at);
-                self.hidden(r.from, at)
-                    || stops.heard()[r.stop]
-                        .iter()
-                        .any(|&h| h != r.bearing && wrap_rad(h - to).abs() <= gate)
-            };
-            let image = nearest_image(legs, at, slack);
+            let miss = r.miss(at);
+            // A reflection, with the source's direct sound heard at its stop too (or hidden).
             let reflection = || {
-                image.is_some_and(|m| m <= gate && m <= r.miss(own) + self.sigma)
-                    && heard_directly()
+                let to = stops.poses()[r.stop].bearing_to(at);
+                nearest_image(legs, at, slack)
+                    .is_some_and(|m| m <= gate && m <= r.miss(own) + self.sigma)
+                    && (self.hidden(r.from, at)
+                        || stops.heard()[r.stop]
+                            .iter()
+                            .any(|&h| h != r.bearing && wrap_rad(h - to).abs() <= gate))
             };
             let blend = || {
-                r.miss(at) > self.sigma
-                    && r.miss(at) <= BLEND_WEDGE
+                miss > self.sigma
+                    && miss <= BLEND_WEDGE
                     && !self.hidden(r.from, at)
                     && mirrors
                         .get_or_init(|| self.mirrors(at))
@@ -329,7 +340,7 @@ impl Mapper {
             };
             if reflection() || blend() {
                 reflected += 1;
-            } else if r.miss(at) <= gate || self.hidden(r.from, own) {
+            } else if miss <= gate || self.hidden(r.from, own) {
                 direct += 1;
             } else {
                 unexplained += 1;
