@@ -268,31 +268,8 @@ fn unmasked(
     if kept.iter().all(|&i| rays[i].miss(s) <= trim.floor) {
         return None;
     }
-    // The median by 1 - cos of each miss (as the misses order, with no arctangent per
-    // ray and point), turned into an angle once.
-    let heads: Vec<([f64; 2], [f64; 2])> = kept
-        .iter()
-        .map(|&i| (rays[i].from, [rays[i].bearing.cos(), rays[i].bearing.sin()]))
-        .collect();
-    let mut misses: Vec<f64> = Vec::with_capacity(kept.len());
-    let mut median_miss = |at: [f64; 2]| {
-        misses.clear();
-        misses.extend(heads.iter().map(|(from, d)| {
-            let v = [at[0] - from[0], at[1] - from[1]];
-            let norm = v[0].hypot(v[1]).max(1e-12);
-            1.0 - (d[0] * v[0] + d[1] * v[1]) / norm
-        }));
-        let half = misses.len() / 2;
-        let one_less_cos = *misses.select_nth_unstable_by(half, f64::total_cmp).1;
-        (1.0 - one_less_cos).clamp(-1.0, 1.0).acos()
-    };
-    let (mut at, mut least) = (s, median_miss(s));
-    for q in crossings(&heads) {
-        let m = median_miss(q);
-        if m < least {
-            (at, least) = (q, m);
-        }
-    }
+    let mut medians = Medians::of(kept.iter().map(|&i| &rays[i]));
+    let (mut at, least) = medians.least(s);
     if at == s {
         return None;
     }
@@ -313,12 +290,62 @@ fn unmasked(
         }
         p = solve(&inliers, at)?;
         (at, used) = (p, inliers);
-        spread = 1.4826 * median_miss(p);
+        spread = 1.4826 * medians.at(p);
     }
     let weakest = |set: &[usize]| weakest_information(p, set.iter().map(|&i| &rays[i]));
     (kept.iter().all(|&i| rays[i].miss(p) <= gate)
         && weakest(&used) >= KEPT_INFORMATION * weakest(kept))
     .then_some(p)
+}
+
+/// The median miss of a set of rays at a point, and the point of [`crossings`] where it
+/// is least: where most of the rays meet (Rousseeuw's least median of squares).
+pub(super) struct Medians {
+    /// Each ray's stop and the unit vector of its bearing.
+    heads: Vec<([f64; 2], [f64; 2])>,
+    misses: Vec<f64>,
+}
+
+impl Medians {
+    pub(super) fn of<'a>(rays: impl Iterator<Item = &'a Ray>) -> Self {
+        let heads: Vec<_> = rays
+            .map(|r| (r.from, [r.bearing.cos(), r.bearing.sin()]))
+            .collect();
+        let misses = Vec::with_capacity(heads.len());
+        Medians { heads, misses }
+    }
+
+    /// The rays' median miss at `q` (rad; the upper median of an even count).
+    pub(super) fn at(&mut self, q: [f64; 2]) -> f64 {
+        median_miss(&self.heads, &mut self.misses, q)
+    }
+
+    /// Of `s` and the points where two of the rays cross, the one with the least median
+    /// miss, and that miss (rad): `s` unless a crossing has a smaller one.
+    pub(super) fn least(&mut self, s: [f64; 2]) -> ([f64; 2], f64) {
+        let (mut at, mut least) = (s, self.at(s));
+        for q in crossings(&self.heads) {
+            let m = median_miss(&self.heads, &mut self.misses, q);
+            if m < least {
+                (at, least) = (q, m);
+            }
+        }
+        (at, least)
+    }
+}
+
+/// [`Medians::at`], by 1 - cos of each miss (as the misses order, with no arctangent per
+/// ray and point), turned into an angle once; `misses` is scratch.
+fn median_miss(heads: &[([f64; 2], [f64; 2])], misses: &mut Vec<f64>, q: [f64; 2]) -> f64 {
+    misses.clear();
+    misses.extend(heads.iter().map(|(from, d)| {
+        let v = [q[0] - from[0], q[1] - from[1]];
+        let norm = v[0].hypot(v[1]).max(1e-12);
+        1.0 - (d[0] * v[0] + d[1] * v[1]) / norm
+    }));
+    let half = misses.len() / 2;
+    let one_less_cos = *misses.select_nth_unstable_by(half, f64::total_cmp).1;
+    (1.0 - one_less_cos).clamp(-1.0, 1.0).acos()
 }
 
 /// A trimmed fit must keep this share of the information that all the source's rays give
@@ -327,11 +354,11 @@ fn unmasked(
 /// at most 1 / sqrt(1/2), 41 %. Rays that agree closely because their stops lie on one
 /// line towards the source say nothing about its range; the few from elsewhere that fix
 /// it are not to be trimmed as the ones that disagree.
-const KEPT_INFORMATION: f64 = 0.5;
+pub(super) const KEPT_INFORMATION: f64 = 0.5;
 
 /// The least eigenvalue of the Fisher information (up to the DoA variance) that `rays`
 /// give on a source at `p` (1/m^2).
-fn weakest_information<'a>(p: [f64; 2], rays: impl Iterator<Item = &'a Ray>) -> f64 {
+pub(super) fn weakest_information<'a>(p: [f64; 2], rays: impl Iterator<Item = &'a Ray>) -> f64 {
     let (mut a11, mut a12, mut a22) = (0.0, 0.0, 0.0);
     for r in rays {
         let [jx, jy] = bearing_gradient(p, r.from);
