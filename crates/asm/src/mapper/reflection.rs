@@ -36,7 +36,21 @@
 //! reach them), as many reflections and blends as a source needs stops and half of its
 //! rays or more, is removed, provided that other source is not itself explained so (two
 //! sources explaining each other are both kept: the rule does not choose).
+//!
+//! A source's own rays can be such blends too, of its direct sound and its image in a wall
+//! near it: from the stops that see it with its image close beside, its peak is pulled
+//! towards the image, and the bearing fit of all its rays towards the wall (MVDR hears
+//! `l_wing`'s wing talker, 0.8 m from the wing's east wall, 7-9 degrees towards its image
+//! from two stops of six, and mapped it 1 m off, in the wing's corner). The robust trim
+//! cannot see it: a ray within the gate, it pulls the fit until it misses it by no more
+//! than the others. Where most of a source's rays meet ([`Medians::least`]), the blends
+//! stand out as rays between the source and its image; the source then stands where its
+//! other rays meet ([`Mapper::unblend`]), if that explains all its rays better under the
+//! mapper's DoA model ([`Mapper::cost`]: a blend is taken as a peak anywhere between the
+//! source and its image) and the rays kept still fix the position
+//! ([`KEPT_INFORMATION`]).
 
+use super::refine::{KEPT_INFORMATION, Medians, weakest_information};
 use super::rules::principal_axis;
 use super::*;
 use std::cell::OnceCell;
@@ -236,9 +250,15 @@ impl Mapper {
     /// the ray no farther from the wall than `s`: rays that blend a source's direct sound
     /// with its reflection point between them, and cross near the wall.
     fn blends(&self, m: &Mirror, r: &Ray, s: [f64; 2], g: [f64; 2]) -> bool {
+        self.blend_wedge(m, r, s, g).is_some()
+    }
+
+    /// [`Mapper::blends`], with the angle at the stop between the source and its image
+    /// (rad) when `r` is such a blend.
+    fn blend_wedge(&self, m: &Mirror, r: &Ray, s: [f64; 2], g: [f64; 2]) -> Option<f64> {
         let (to_s, to_p) = (m.off(s), m.off(r.from));
         if m.off(g) > to_s || to_p <= 0.0 {
-            return false;
+            return None;
         }
         let bearing = |q: [f64; 2]| (q[1] - r.from[1]).atan2(q[0] - r.from[0]);
         let dist = |q: [f64; 2]| (q[0] - r.from[0]).hypot(q[1] - r.from[1]);
@@ -249,12 +269,92 @@ impl Mapper {
             r.from[0] + t * (m.image[0] - r.from[0]),
             r.from[1] + t * (m.image[1] - r.from[1]),
         ];
-        wedge <= BLEND_WEDGE
+        (wedge <= BLEND_WEDGE
             && dist(m.image) <= BLEND_PATH_RATIO * dist(s)
             && wrap_rad(r.bearing - mirrored).abs() > self.sigma
             && wrap_rad(r.bearing - direct).abs() + wrap_rad(r.bearing - mirrored).abs()
                 <= wedge + 1e-9
-            && !self.map.occupied_within(at, WALL_REACH_M / 2.0).is_empty()
+            && !self.map.occupied_within(at, WALL_REACH_M / 2.0).is_empty())
+        .then_some(wedge)
+    }
+
+    /// Each refined source whose own rays include blends of its direct sound and its
+    /// image in a wall near it ([`Mapper::blends`]), judged from where most of its rays
+    /// meet ([`Medians::least`]), moved to the fit of its other rays ([`Mapper::unblended`]).
+    /// Nothing on a map without walls, or with [`IasmConfig::reflections`] or
+    /// [`IasmConfig::refine`] off.
+    pub(super) fn unblend(&self, sources: &mut [Source]) {
+        if !self.config.reflections || !self.config.refine || !self.surveyed {
+            return;
+        }
+        for s in sources.iter_mut() {
+            if let Some(p) = self.unblended(s) {
+                (s.x, s.y) = (p[0], p[1]);
+            }
+        }
+    }
+
+    /// Where `s` stands without the rays that blend it with its own image: the bearing fit
+    /// of its other rays, from where most of its rays meet. `None` when it has fewer than
+    /// four rays, none blends there, or the fit is not taken: a ray left out no longer a
+    /// blend at the fit, less than [`KEPT_INFORMATION`] of the information on the position
+    /// kept, or the rays explained no better than where `s` stands ([`Mapper::cost`]).
+    fn unblended(&self, s: &Source) -> Option<[f64; 2]> {
+        let rays = &s.rays;
+        if !s.refined || rays.len() < 4 {
+            return None;
+        }
+        let here = [s.x, s.y];
+        let (at, _) = Medians::of(rays.iter()).least(here);
+        let (_, out) = self.cost(at, rays);
+        if !out.contains(&true) {
+            return None;
+        }
+        let own: Vec<Ray> = rays
+            .iter()
+            .zip(&out)
+            .filter(|(_, b)| !**b)
+            .map(|(r, _)| *r)
+            .collect();
+        let (p, _) = fit_bearings(at, &own, self.sigma, self.trim)?;
+        let (cost, still) = self.cost(p, rays);
+        let weakest = |set: &[Ray]| weakest_information(p, set.iter());
+        (out.iter().zip(&still).all(|(was, is)| !was || *is)
+            && weakest(&own) >= KEPT_INFORMATION * weakest(rays)
+            && cost < self.cost(here, rays).0)
+            .then_some(p)
+    }
+
+    /// How well a source at `q` explains `rays` (-2 log-likelihood, up to a constant), and
+    /// which of them it explains as blends with its image: each ray's squared miss in
+    /// `sigma`s (the mapper's Gaussian DoA model), or for a blend ([`Mapper::blends`])
+    /// `2 ln(w / (sqrt(2 pi) sigma))` where that is less (a peak anywhere between the
+    /// source and its image, `w` apart), at most 4 (beyond the `2 sigma` gate, another
+    /// sound's).
+    fn cost(&self, q: [f64; 2], rays: &[Ray]) -> (f64, Vec<bool>) {
+        let mirrors = self.mirrors(q);
+        let uniform = (std::f64::consts::TAU.sqrt() * self.sigma).ln();
+        let mut total = 0.0;
+        let blends = rays
+            .iter()
+            .map(|r| {
+                let miss = r.miss(q);
+                let direct = (miss / self.sigma).powi(2);
+                let blend = (miss > self.sigma && miss <= BLEND_WEDGE && !self.hidden(r.from, q))
+                    .then(|| {
+                        mirrors
+                            .iter()
+                            .filter_map(|m| self.blend_wedge(m, r, q, q))
+                            .map(|w| 2.0 * (w.ln() - uniform))
+                            .min_by(f64::total_cmp)
+                    })
+                    .flatten()
+                    .filter(|&b| b < direct);
+                total += blend.unwrap_or(direct).min(4.0);
+                blend.is_some()
+            })
+            .collect();
+        (total, blends)
     }
 
     /// Whether stop `k` heard nothing towards `at` but the reflections of `others` in the

@@ -40,7 +40,10 @@ impl Mapper {
             removed.extend(self.drop_implausible(sources, stops, pool));
         }
         self.merge(sources);
-        // A merged source stands at its sources' refitted crossing: into the room again.
+        // A source its own reflection's blends pulled towards a wall stands where its
+        // other rays meet (reflection.rs).
+        self.unblend(sources);
+        // A merged or unblended source stands at a refitted crossing: into the room again.
         removed.extend(self.keep_in_room(sources, pool));
         removed
     }
