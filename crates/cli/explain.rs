@@ -27,6 +27,9 @@ pub struct RayNote {
     pub azimuth_deg: f64,
     /// How far the DoA misses the bearing from its stop to the source (degrees).
     pub miss_deg: f64,
+    /// Whether the source takes it as one peak of its direct sound and its image in a wall
+    /// near it, which does not move it ([`asm::Source::blends`]).
+    pub blend: bool,
 }
 
 /// A mapped source and the DoAs it explains.
@@ -140,6 +143,7 @@ pub fn explain(
                     stop: r.stop,
                     azimuth_deg: azimuth(r.stop, r.bearing),
                     miss_deg: r.miss([s.x, s.y]).to_degrees(),
+                    blend: s.blends.contains(&r.stop),
                 })
                 .collect(),
         })
@@ -384,7 +388,23 @@ mod tests {
         assert_eq!(e.sources.len(), 1);
         let stops: Vec<usize> = e.sources[0].rays.iter().map(|r| r.stop).collect();
         assert_eq!(stops, vec![0, 1, 2, 3, 4, 5]);
-        assert!(e.sources[0].rays.iter().all(|r| r.miss_deg < 0.1));
+        assert!(
+            e.sources[0]
+                .rays
+                .iter()
+                .all(|r| r.miss_deg < 0.1 && !r.blend)
+        );
+        // A DoA the source takes as a blend with its image is noted so.
+        let mut blended = result.clone();
+        blended.sources[0].blends = vec![2];
+        let e2 = explain(&blended, &poses, &doas, None, Some(&sources), 1.0, 5.0);
+        let noted: Vec<usize> = e2.sources[0]
+            .rays
+            .iter()
+            .filter(|r| r.blend)
+            .map(|r| r.stop)
+            .collect();
+        assert_eq!(noted, vec![2]);
         // The two DoAs of source 1 are left, at the azimuths the table holds.
         let left: Vec<(usize, Vec<f64>)> = e
             .unexplained

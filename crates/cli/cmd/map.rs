@@ -340,7 +340,17 @@ fn print_explanation(e: &Explanation, c: f64) {
         let rays: Vec<String> = s
             .rays
             .iter()
-            .map(|r| format!("{}: {:.1} ({:.1})", r.stop, r.azimuth_deg, r.miss_deg))
+            .map(|r| {
+                let blend = if r.blend {
+                    ", a blend with its image"
+                } else {
+                    ""
+                };
+                format!(
+                    "{}: {:.1} ({:.1}{blend})",
+                    r.stop, r.azimuth_deg, r.miss_deg
+                )
+            })
             .collect();
         println!("  source {} explains {}", s.source, rays.join(", "));
     }

@@ -143,6 +143,11 @@ pub struct Source {
     /// source may be there instead. `None` otherwise.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub mirror: Option<[f64; 2]>,
+    /// The stops whose DoAs it explains as one peak of its direct sound and its image in a
+    /// wall near it (with [`IasmConfig::reflections`]): they do not move it, and miss it
+    /// towards the wall by more than the others. Empty for most sources.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub blends: Vec<usize>,
 }
 
 /// A source the mapper found and did not keep ([`MapResult::refused`]): where it was, the

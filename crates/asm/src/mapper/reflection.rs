@@ -288,18 +288,20 @@ impl Mapper {
             return;
         }
         for s in sources.iter_mut() {
-            if let Some(p) = self.unblended(s) {
+            if let Some((p, blends)) = self.unblended(s) {
                 (s.x, s.y) = (p[0], p[1]);
+                s.blends = blends;
             }
         }
     }
 
     /// Where `s` stands without the rays that blend it with its own image: the bearing fit
-    /// of its other rays, from where most of its rays meet. `None` when it has fewer than
+    /// of its other rays, from where most of its rays meet, and the stops of the rays left
+    /// out. `None` when it has fewer than
     /// four rays, none blends there, or the fit is not taken: a ray left out no longer a
     /// blend at the fit, less than [`KEPT_INFORMATION`] of the information on the position
     /// kept, or the rays explained no better than where `s` stands ([`Mapper::cost`]).
-    fn unblended(&self, s: &Source) -> Option<[f64; 2]> {
+    fn unblended(&self, s: &Source) -> Option<([f64; 2], Vec<usize>)> {
         let rays = &s.rays;
         if !s.refined || rays.len() < 4 {
             return None;
@@ -322,7 +324,10 @@ impl Mapper {
         (out.iter().zip(&still).all(|(was, is)| !was || *is)
             && weakest(&own) >= KEPT_INFORMATION * weakest(rays)
             && cost < self.cost(here, rays).0)
-            .then_some(p)
+            .then(|| {
+                let stops = rays.iter().zip(&out).filter(|(_, b)| **b);
+                (p, stops.map(|(r, _)| r.stop).collect())
+            })
     }
 
     /// How well a source at `q` explains `rays` (-2 log-likelihood, up to a constant), and

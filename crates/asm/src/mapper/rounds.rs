@@ -223,6 +223,7 @@ impl Mapper {
             rays,
             refined,
             mirror: None,
+            blends: Vec::new(),
         })
     }
 

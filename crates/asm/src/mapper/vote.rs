@@ -95,6 +95,7 @@ impl Mapper {
             rays,
             refined: true,
             mirror: None,
+            blends: Vec::new(),
         })
     }
 }

@@ -114,6 +114,7 @@ pub(super) fn heard_from(q: [f64; 2], poses: &[Pose], stops: &[usize]) -> Source
         rays,
         refined: true,
         mirror: None,
+        blends: Vec::new(),
     }
 }
 

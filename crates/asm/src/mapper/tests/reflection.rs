@@ -349,13 +349,14 @@ fn a_talker_behind_a_source_far_from_its_wall_is_no_blend_of_it() {
 /// The alcove's talker heard directly from the stops `direct` and from the stops
 /// `blended` as one peak `share` of the way to its image in the alcove's west wall: where
 /// the bearing fit of all those rays (trimmed as the rounds trim it, every ray kept)
-/// places it, and where [`Mapper::unblend`] then places it under `config`.
+/// places it, and where [`Mapper::unblend`] then places it under `config`, with the stops
+/// it takes as blends.
 fn unblended_talker(
     direct: &[usize],
     blended: &[usize],
     share: f64,
     config: IasmConfig,
-) -> ([f64; 2], [f64; 2]) {
+) -> ([f64; 2], [f64; 2], Vec<usize>) {
     let (mapper, poses) = alcove(config);
     let sigma = 5f64.to_radians();
     let mut talker = heard_from(TALKER, &poses, direct);
@@ -373,7 +374,8 @@ fn unblended_talker(
     (talker.x, talker.y) = (fit[0], fit[1]);
     let mut sources = vec![talker];
     mapper.unblend(&mut sources);
-    (fit, [sources[0].x, sources[0].y])
+    let s = &sources[0];
+    (fit, [s.x, s.y], s.blends.clone())
 }
 
 fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
@@ -389,17 +391,18 @@ fn a_talker_heard_blended_with_its_image_stands_where_its_own_rays_meet() {
     // the wall: the blend, within the gate, bends it and misses it by too little to be
     // trimmed. Judged from where most rays meet, it is a blend, and the talker stands
     // where its own four rays meet.
-    let (fit, at) = unblended_talker(&[2, 3, 4, 6], &[5], 0.5, IasmConfig::default());
+    let (fit, at, blends) = unblended_talker(&[2, 3, 4, 6], &[5], 0.5, IasmConfig::default());
     let pulled = dist(fit, TALKER);
     assert!(pulled > 0.25, "{fit:?}");
     assert!(dist(at, TALKER) < 1e-6, "{at:?}, {pulled:.3} m off before");
+    assert_eq!(blends, vec![5], "the blend is named (--explain says so)");
     // Without the rule the fit of all five stays.
     let off = IasmConfig {
         reflections: false,
         ..IasmConfig::default()
     };
-    let (_, at) = unblended_talker(&[2, 3, 4, 6], &[5], 0.5, off);
-    assert_eq!(at, fit);
+    let (_, at, blends) = unblended_talker(&[2, 3, 4, 6], &[5], 0.5, off);
+    assert_eq!((at, blends), (fit, vec![]));
 }
 
 #[test]
@@ -411,7 +414,7 @@ fn a_talker_stays_where_its_blends_explain_its_rays_no_better() {
     // off, explains them within a sigma or two (the squared misses sum to 3.2 sigma^2,
     // the blends' share 3.4): the mapper does not know how far towards its image a
     // blend lies, and keeps the fit. Without that comparison it would move.
-    let (fit, at) = unblended_talker(&[2, 3, 5], &[4, 6], 0.4, IasmConfig::default());
+    let (fit, at, blends) = unblended_talker(&[2, 3, 5], &[4, 6], 0.4, IasmConfig::default());
     assert!(dist(fit, TALKER) > 0.3, "{fit:?}");
-    assert_eq!(at, fit);
+    assert_eq!((at, blends), (fit, vec![]));
 }

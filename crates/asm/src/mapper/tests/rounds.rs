@@ -389,6 +389,7 @@ fn close_estimates_merge_into_their_mean() {
         rays: vec![],
         refined: false,
         mirror: None,
+        blends: Vec::new(),
     };
     let mut v = vec![s(0.0, 0.0), s(0.3, 0.0), s(3.0, 0.0)];
     merge_close(&mut v, 0.5);
