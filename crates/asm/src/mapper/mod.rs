@@ -124,7 +124,10 @@ pub struct Source {
     pub observations: usize,
     /// Particles in its cluster.
     pub particles: usize,
-    /// Covariance of its cluster's particles (m^2): an uncertainty ellipse.
+    /// Covariance of its cluster's particles (m^2): an uncertainty ellipse. For a source
+    /// the vote made (no particles), of the crossings of its DoAs' rays near it, or, with
+    /// fewer than two there, the spread its DoAs allow at `sigma` (the bearing fit's
+    /// Cramer-Rao bound), never a point's zero.
     pub covariance: [[f64; 2]; 2],
     /// The filtering round (from 1) that found it.
     pub round: usize,

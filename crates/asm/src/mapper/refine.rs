@@ -370,6 +370,28 @@ pub(super) fn weakest_information<'a>(p: [f64; 2], rays: impl Iterator<Item = &'
     mean - half
 }
 
+/// The covariance (m^2) of a position at `p` fitted to `rays` whose DoAs err by `sigma`
+/// (rad): the inverse of their Fisher information, `sigma^2 (sum g g^T)^-1` with `g` each
+/// bearing's gradient (the Cramer-Rao bound of the bearing fit). `None` when the rays fix
+/// no position (parallel lines, or fewer than two).
+pub(super) fn bearing_covariance(p: [f64; 2], rays: &[Ray], sigma: f64) -> Option<[[f64; 2]; 2]> {
+    let (mut a11, mut a12, mut a22) = (0.0, 0.0, 0.0);
+    for r in rays {
+        let [jx, jy] = bearing_gradient(p, r.from);
+        a11 += jx * jx;
+        a12 += jx * jy;
+        a22 += jy * jy;
+    }
+    let det = a11 * a22 - a12 * a12;
+    let s2 = sigma * sigma;
+    (det > 1e-12 * (a11 + a22).powi(2) && det > 0.0).then(|| {
+        [
+            [s2 * a22 / det, -s2 * a12 / det],
+            [-s2 * a12 / det, s2 * a11 / det],
+        ]
+    })
+}
+
 /// The gradient (1/m) of the bearing from `from` to `p` with respect to `p`.
 fn bearing_gradient(p: [f64; 2], from: [f64; 2]) -> [f64; 2] {
     let (dx, dy) = (p[0] - from[0], p[1] - from[1]);

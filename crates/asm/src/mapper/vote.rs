@@ -81,6 +81,13 @@ impl Mapper {
                 }
             }
         }
+        // With fewer than two crossings near it (its rays meet far from each other around
+        // a fit they all miss a little), the spread its DoAs allow, not one point's zero.
+        let spread = if cloud.len() < 2 {
+            bearing_covariance(est, &rays, self.sigma).unwrap_or_default()
+        } else {
+            covariance(&cloud)
+        };
         if cloud.is_empty() {
             cloud.push(est);
         }
@@ -89,7 +96,7 @@ impl Mapper {
             y: est[1],
             observations: rays.len(),
             particles: 0,
-            covariance: covariance(&cloud),
+            covariance: spread,
             round,
             cluster: cloud,
             rays,

@@ -639,3 +639,29 @@ fn a_map_larger_than_a_hall_spreads_the_most_particles_thinner_and_still_finds_t
     let s = &r.sources[0];
     assert!((s.x - 3.0).hypot(s.y - 1.5) < 0.05, "{s:?}");
 }
+
+#[test]
+fn a_fit_of_two_crossing_bearings_is_as_uncertain_as_the_doas_make_it() {
+    // Two stops 2 m from a source, at right angles: each bearing fixes the source across
+    // its ray to `sigma` times the range and says nothing along it, so the fit's
+    // covariance is `(sigma d)^2` on both axes (the Cramer-Rao bound), 0.17 m at 5 degrees.
+    use std::f64::consts::PI;
+    let (sigma, d) = (5f64.to_radians(), 2.0);
+    let ray = |from: [f64; 2], bearing: f64| Ray {
+        stop: 0,
+        from,
+        bearing,
+        twin: None,
+        shared: false,
+    };
+    let rays = [ray([d, 0.0], PI), ray([0.0, d], -PI / 2.0)];
+    let c = bearing_covariance([0.0, 0.0], &rays, sigma).expect("the rays cross");
+    let v = (sigma * d).powi(2);
+    approx::assert_abs_diff_eq!(c[0][0], v, epsilon = 1e-12);
+    approx::assert_abs_diff_eq!(c[1][1], v, epsilon = 1e-12);
+    approx::assert_abs_diff_eq!(c[0][1], 0.0, epsilon = 1e-12);
+    approx::assert_abs_diff_eq!(c[1][0], 0.0, epsilon = 1e-12);
+    // Rays along one line fix no position.
+    let along = [ray([d, 0.0], PI), ray([2.0 * d, 0.0], PI)];
+    assert_eq!(bearing_covariance([0.0, 0.0], &along, sigma), None);
+}
