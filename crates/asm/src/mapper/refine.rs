@@ -359,15 +359,19 @@ pub(super) const KEPT_INFORMATION: f64 = 0.5;
 /// The least eigenvalue of the Fisher information (up to the DoA variance) that `rays`
 /// give on a source at `p` (1/m^2).
 pub(super) fn weakest_information<'a>(p: [f64; 2], rays: impl Iterator<Item = &'a Ray>) -> f64 {
-    let (mut a11, mut a12, mut a22) = (0.0, 0.0, 0.0);
-    for r in rays {
-        let [jx, jy] = bearing_gradient(p, r.from);
-        a11 += jx * jx;
-        a12 += jx * jy;
-        a22 += jy * jy;
-    }
+    let [a11, a12, a22] = information(p, rays);
     let (mean, half) = ((a11 + a22) / 2.0, ((a11 - a22) / 2.0).hypot(a12));
     mean - half
+}
+
+/// The Fisher information (up to the DoA variance) that `rays` give on a source at `p`:
+/// the sum of their bearings' gradients' outer products, as its entries `[xx, xy, yy]`
+/// (1/m^2).
+fn information<'a>(p: [f64; 2], rays: impl Iterator<Item = &'a Ray>) -> [f64; 3] {
+    rays.fold([0.0; 3], |[a11, a12, a22], r| {
+        let [jx, jy] = bearing_gradient(p, r.from);
+        [a11 + jx * jx, a12 + jx * jy, a22 + jy * jy]
+    })
 }
 
 /// The covariance (m^2) of a position at `p` fitted to `rays` whose DoAs err by `sigma`
@@ -375,13 +379,7 @@ pub(super) fn weakest_information<'a>(p: [f64; 2], rays: impl Iterator<Item = &'
 /// bearing's gradient (the Cramer-Rao bound of the bearing fit). `None` when the rays fix
 /// no position (parallel lines, or fewer than two).
 pub(super) fn bearing_covariance(p: [f64; 2], rays: &[Ray], sigma: f64) -> Option<[[f64; 2]; 2]> {
-    let (mut a11, mut a12, mut a22) = (0.0, 0.0, 0.0);
-    for r in rays {
-        let [jx, jy] = bearing_gradient(p, r.from);
-        a11 += jx * jx;
-        a12 += jx * jy;
-        a22 += jy * jy;
-    }
+    let [a11, a12, a22] = information(p, rays.iter());
     let det = a11 * a22 - a12 * a12;
     let s2 = sigma * sigma;
     (det > 1e-12 * (a11 + a22).powi(2) && det > 0.0).then(|| {
