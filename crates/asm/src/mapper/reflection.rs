@@ -248,14 +248,9 @@ impl Mapper {
     /// one peak of both ([`BLEND_WEDGE`], [`BLEND_PATH_RATIO`]), by a stop on the room's
     /// side of that wall with the point of reflection on it, and a source at `g` that took
     /// the ray no farther from the wall than `s`: rays that blend a source's direct sound
-    /// with its reflection point between them, and cross near the wall.
-    fn blends(&self, m: &Mirror, r: &Ray, s: [f64; 2], g: [f64; 2]) -> bool {
-        self.blend_wedge(m, r, s, g).is_some()
-    }
-
-    /// [`Mapper::blends`], with the angle at the stop between the source and its image
-    /// (rad) when `r` is such a blend.
-    fn blend_wedge(&self, m: &Mirror, r: &Ray, s: [f64; 2], g: [f64; 2]) -> Option<f64> {
+    /// with its reflection point between them, and cross near the wall. The angle at the
+    /// stop between the source and its image (rad) when it is; `None` otherwise.
+    fn blends(&self, m: &Mirror, r: &Ray, s: [f64; 2], g: [f64; 2]) -> Option<f64> {
         let (to_s, to_p) = (m.off(s), m.off(r.from));
         if m.off(g) > to_s || to_p <= 0.0 {
             return None;
@@ -330,6 +325,28 @@ impl Mapper {
             })
     }
 
+    /// Whether ray `r`, taken by a source at `g`, blends a source at `s` with its image in
+    /// one of the walls `mirrors` gives ([`Mapper::blends`]), missing `s` by more than a
+    /// `sigma` and within [`BLEND_WEDGE`], from a stop the map shows `s` to: the narrowest
+    /// angle between `s` and such an image (rad), or `None`. The walls are asked for only
+    /// once the miss and the sight tell nothing against a blend.
+    fn blend_of<'m>(
+        &self,
+        r: &Ray,
+        s: [f64; 2],
+        g: [f64; 2],
+        mirrors: impl FnOnce() -> &'m [Mirror],
+    ) -> Option<f64> {
+        let miss = r.miss(s);
+        if miss <= self.sigma || miss > BLEND_WEDGE || self.hidden(r.from, s) {
+            return None;
+        }
+        mirrors()
+            .iter()
+            .filter_map(|m| self.blends(m, r, s, g))
+            .min_by(f64::total_cmp)
+    }
+
     /// How well a source at `q` explains `rays` (-2 log-likelihood, up to a constant), and
     /// which of them it explains as blends with its image: each ray's squared miss in
     /// `sigma`s (the mapper's Gaussian DoA model), or for a blend ([`Mapper::blends`])
@@ -345,15 +362,9 @@ impl Mapper {
             .map(|r| {
                 let miss = r.miss(q);
                 let direct = (miss / self.sigma).powi(2);
-                let blend = (miss > self.sigma && miss <= BLEND_WEDGE && !self.hidden(r.from, q))
-                    .then(|| {
-                        mirrors
-                            .iter()
-                            .filter_map(|m| self.blend_wedge(m, r, q, q))
-                            .map(|w| 2.0 * (w.ln() - uniform))
-                            .min_by(f64::total_cmp)
-                    })
-                    .flatten()
+                let blend = self
+                    .blend_of(r, q, q, || &mirrors)
+                    .map(|w| 2.0 * (w.ln() - uniform))
                     .filter(|&b| b < direct);
                 total += blend.unwrap_or(direct).min(4.0);
                 blend.is_some()
@@ -435,13 +446,8 @@ impl Mapper {
                             .any(|&h| h != r.bearing && wrap_rad(h - to).abs() <= gate))
             };
             let blend = || {
-                miss > self.sigma
-                    && miss <= BLEND_WEDGE
-                    && !self.hidden(r.from, at)
-                    && mirrors
-                        .get_or_init(|| self.mirrors(at))
-                        .iter()
-                        .any(|m| self.blends(m, r, at, own))
+                self.blend_of(r, at, own, || mirrors.get_or_init(|| self.mirrors(at)))
+                    .is_some()
             };
             if reflection() || blend() {
                 reflected += 1;
