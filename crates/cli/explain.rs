@@ -30,6 +30,9 @@ pub struct RayNote {
     /// Whether the source takes it as one peak of its direct sound and its image in a wall
     /// near it, which does not move it ([`asm::Source::blends`]).
     pub blend: bool,
+    /// Whether the source takes it as its image in a wall near it, heard instead of its
+    /// direct sound: the DoA passes the image ([`asm::Source::images`]).
+    pub image: bool,
 }
 
 /// A mapped source and the DoAs it explains.
@@ -144,6 +147,7 @@ pub fn explain(
                     azimuth_deg: azimuth(r.stop, r.bearing),
                     miss_deg: r.miss([s.x, s.y]).to_degrees(),
                     blend: s.blends.contains(&r.stop),
+                    image: s.images.contains(&r.stop),
                 })
                 .collect(),
         })
@@ -392,7 +396,7 @@ mod tests {
             e.sources[0]
                 .rays
                 .iter()
-                .all(|r| r.miss_deg < 0.1 && !r.blend)
+                .all(|r| r.miss_deg < 0.1 && !r.blend && !r.image)
         );
         // A DoA the source takes as a blend with its image is noted so.
         let mut blended = result.clone();
@@ -405,6 +409,17 @@ mod tests {
             .map(|r| r.stop)
             .collect();
         assert_eq!(noted, vec![2]);
+        // And one it takes as its image.
+        let mut imaged = result.clone();
+        imaged.sources[0].images = vec![4];
+        let e3 = explain(&imaged, &poses, &doas, None, Some(&sources), 1.0, 5.0);
+        let noted: Vec<usize> = e3.sources[0]
+            .rays
+            .iter()
+            .filter(|r| r.image)
+            .map(|r| r.stop)
+            .collect();
+        assert_eq!(noted, vec![4]);
         // The two DoAs of source 1 are left, at the azimuths the table holds.
         let left: Vec<(usize, Vec<f64>)> = e
             .unexplained

@@ -343,6 +343,8 @@ fn print_explanation(e: &Explanation, c: f64) {
             .map(|r| {
                 let blend = if r.blend {
                     ", a blend with its image"
+                } else if r.image {
+                    ", its image in a wall"
                 } else {
                     ""
                 };

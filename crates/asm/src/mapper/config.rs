@@ -488,7 +488,7 @@ pub struct IasmConfig {
     /// twice the direct one, the source no farther from that wall than the other), and a
     /// DoA from a stop the map hides the source from is no evidence for it. Only on a
     /// surveyed map (one with occupied cells). Not in the paper. Default: on (the paper
-    /// profile: off). See `mapper/reflection.rs`.
+    /// profile: off). See `mapper/reflection/`.
     ///
     /// Why: a talker in an alcove is heard from the corridor's far stops only by its
     /// reflections in the alcove's side walls, and those heard from either side cross at
@@ -502,23 +502,18 @@ pub struct IasmConfig {
     /// talker whose own rays fitted it within 0.6 degrees, its "images" 9 off;
     /// `sparse_eight_speech`: a talker heard from three stops, two of them near images),
     /// and a ghost of reflections is made of as many reflections as a source of stops.
-    /// Measured (`docs/decisions/0010`; with the room rule's face step in both):
-    /// `corridor_alcoves` GCC-PHAT 0.186 -> 0.159 m (the right count in 67 -> 80 % of
-    /// maps), MVDR 0.231 -> 0.187 (60 -> 70 %); `l_west_wing` (held out) MVDR 0.197 ->
-    /// 0.139 (63 -> 90 %); every other scene of the suite and `fixtures/heldout`, and
-    /// arrangement II (50 runs, ours and the authors' tables), unchanged. Blends (session
-    /// 46): `corridor_alcoves` GCC-PHAT 0.162 -> 0.140 m (80 -> 90 %), MVDR 0.182 -> 0.146
-    /// (73 -> 90 %), `dogleg_uma8` (held out) GCC-PHAT 0.339 -> 0.327 (63 -> 73 %), the
-    /// rest of both suites unchanged; the authors' MVDR table 0.160 -> 0.157 m.
     ///
     /// A source's own DoAs that blend it with its image in a wall near it, judged from
     /// where most of its DoAs meet, do not move it: it stands where its other DoAs meet
     /// when that explains all of them better (a blend taken as a peak anywhere between the
-    /// source and its image) and those DoAs still fix its position. Measured (session 47,
-    /// 3 renderings x 10 maps per method, GCC-PHAT / MVDR): `l_wing` MVDR 0.173 -> 0.088
-    /// m, `corridor_alcoves` 0.140 / 0.146 -> 0.136 / 0.140, `t_junction_respeaker4` MVDR
-    /// 0.104 -> 0.100, `reverberant_low_snr` MVDR 0.072 -> 0.061; no right count changed in
-    /// either suite; arrangement II (50 runs, ours and the authors' tables) unchanged.
+    /// source and its image) and those DoAs still fix its position. And a source heard
+    /// from some stops by its image in a wall near it instead of its direct sound stands
+    /// where its other DoAs and those, unfolded in the wall, meet, when that explains all
+    /// of them better by the Bayesian information criterion (each DoA taken as the image
+    /// one more parameter) and moves it away from the wall more than along it.
+    ///
+    /// Measured, rule by rule (the suite, `fixtures/heldout` and arrangement II):
+    /// `docs/decisions/0010`.
     pub reflections: bool,
     /// For DoAs from a linear array: the azimuth of its line (degrees, array frame; the
     /// `ssl` crate's `MicArray::mirror_axis_deg`). Such an array hears the angle to its

@@ -12,7 +12,7 @@
 //! | `rules.rs` | what cannot be a source ([`Mapper::drop_implausible`]), thin sources, merging |
 //! | `reassociation.rs` | each DoA to the source it fits best ([`Mapper::reassociate`]) |
 //! | `room.rs` | the map is the room: no source behind a wall ([`IasmConfig::room_margin_m`]) |
-//! | `reflection.rs` | a source's reflections in the map's walls are no source ([`IasmConfig::reflections`]) |
+//! | `reflection/` | a source's reflections in the map's walls are no source ([`IasmConfig::reflections`]); `own.rs`: its own blends and its image place it where its direct sound is heard |
 //! | `refine.rs` | bearing least squares with trimmed rays ([`refine_by_bearings`], [`fit_bearings`]) |
 //! | `tests/` | the claims, on scenes whose answer is known |
 //!
@@ -151,6 +151,11 @@ pub struct Source {
     /// towards the wall by more than the others. Empty for most sources.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub blends: Vec<usize>,
+    /// The stops whose DoAs it explains as its image in a wall near it, heard instead of
+    /// its direct sound (with [`IasmConfig::reflections`]): it stands where their rays,
+    /// unfolded in that wall, meet its others. Empty for most sources.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub images: Vec<usize>,
 }
 
 /// A source the mapper found and did not keep ([`MapResult::refused`]): where it was, the

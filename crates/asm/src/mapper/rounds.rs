@@ -224,6 +224,7 @@ impl Mapper {
             refined,
             mirror: None,
             blends: Vec::new(),
+            images: Vec::new(),
         })
     }
 

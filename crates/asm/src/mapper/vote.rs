@@ -103,6 +103,7 @@ impl Mapper {
             refined: true,
             mirror: None,
             blends: Vec::new(),
+            images: Vec::new(),
         })
     }
 }

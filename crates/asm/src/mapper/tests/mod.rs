@@ -115,6 +115,7 @@ pub(super) fn heard_from(q: [f64; 2], poses: &[Pose], stops: &[usize]) -> Source
         refined: true,
         mirror: None,
         blends: Vec::new(),
+        images: Vec::new(),
     }
 }
 

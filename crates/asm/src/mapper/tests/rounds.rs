@@ -390,6 +390,7 @@ fn close_estimates_merge_into_their_mean() {
         refined: false,
         mirror: None,
         blends: Vec::new(),
+        images: Vec::new(),
     };
     let mut v = vec![s(0.0, 0.0), s(0.3, 0.0), s(3.0, 0.0)];
     merge_close(&mut v, 0.5);

@@ -37,23 +37,13 @@
 //! rays or more, is removed, provided that other source is not itself explained so (two
 //! sources explaining each other are both kept: the rule does not choose).
 //!
-//! A source's own rays can be such blends too, of its direct sound and its image in a wall
-//! near it: from the stops that see it with its image close beside, its peak is pulled
-//! towards the image, and the bearing fit of all its rays towards the wall (MVDR hears
-//! `l_wing`'s wing talker, 0.8 m from the wing's east wall, 7-9 degrees towards its image
-//! from two stops of six, and mapped it 1 m off, in the wing's corner). The robust trim
-//! cannot see it: a ray within the gate, it pulls the fit until it misses it by no more
-//! than the others. Where most of a source's rays meet ([`Medians::least`]), the blends
-//! stand out as rays between the source and its image; the source then stands where its
-//! other rays meet ([`Mapper::unblend`]), if that explains all its rays better under the
-//! mapper's DoA model ([`Mapper::cost`]: a blend is taken as a peak anywhere between the
-//! source and its image) and the rays kept still fix the position
-//! ([`KEPT_INFORMATION`]).
+//! A source's own rays can be its blends or its image in a wall near it too: see [`own`].
 
-use super::refine::{KEPT_INFORMATION, Medians, weakest_information};
 use super::rules::principal_axis;
 use super::*;
 use std::cell::OnceCell;
+
+mod own;
 
 /// How far around the point where a DoA's ray meets a wall the wall's cells are taken to
 /// say which way it runs (m): twice a wall's thickness on a map, short enough that a
@@ -244,6 +234,34 @@ impl Mapper {
         out
     }
 
+    /// The bearings from `from` of a source at `s` and of its image in `m`'s wall (rad),
+    /// and where the reflection meets the wall's line, where a stop there may hear the
+    /// image beside the source: on the room's side of the wall, the image within
+    /// [`BLEND_WEDGE`] of the source and its path at most [`BLEND_PATH_RATIO`] times the
+    /// direct one. Whether the wall is there is [`Mapper::on_wall`]'s to say.
+    fn image_beside(m: &Mirror, from: [f64; 2], s: [f64; 2]) -> Option<(f64, f64, [f64; 2])> {
+        let (to_s, to_p) = (m.off(s), m.off(from));
+        if to_s <= 0.0 || to_p <= 0.0 {
+            return None;
+        }
+        let bearing = |q: [f64; 2]| (q[1] - from[1]).atan2(q[0] - from[0]);
+        let dist = |q: [f64; 2]| (q[0] - from[0]).hypot(q[1] - from[1]);
+        let (direct, mirrored) = (bearing(s), bearing(m.image));
+        let t = to_p / (to_p + to_s);
+        let at = [
+            from[0] + t * (m.image[0] - from[0]),
+            from[1] + t * (m.image[1] - from[1]),
+        ];
+        (wrap_rad(mirrored - direct).abs() <= BLEND_WEDGE
+            && dist(m.image) <= BLEND_PATH_RATIO * dist(s))
+        .then_some((direct, mirrored, at))
+    }
+
+    /// Whether the map holds a wall at `at` (within half [`WALL_REACH_M`]).
+    fn on_wall(&self, at: [f64; 2]) -> bool {
+        !self.map.occupied_within(at, WALL_REACH_M / 2.0).is_empty()
+    }
+
     /// Whether ray `r` is heard between a source at `s` and its image in `m`'s wall, as
     /// one peak of both ([`BLEND_WEDGE`], [`BLEND_PATH_RATIO`]), by a stop on the room's
     /// side of that wall with the point of reflection on it, and a source at `g` that took
@@ -251,78 +269,16 @@ impl Mapper {
     /// with its reflection point between them, and cross near the wall. The angle at the
     /// stop between the source and its image (rad) when it is; `None` otherwise.
     fn blends(&self, m: &Mirror, r: &Ray, s: [f64; 2], g: [f64; 2]) -> Option<f64> {
-        let (to_s, to_p) = (m.off(s), m.off(r.from));
-        if m.off(g) > to_s || to_p <= 0.0 {
+        if m.off(g) > m.off(s) {
             return None;
         }
-        let bearing = |q: [f64; 2]| (q[1] - r.from[1]).atan2(q[0] - r.from[0]);
-        let dist = |q: [f64; 2]| (q[0] - r.from[0]).hypot(q[1] - r.from[1]);
-        let (direct, mirrored) = (bearing(s), bearing(m.image));
+        let (direct, mirrored, at) = Self::image_beside(m, r.from, s)?;
         let wedge = wrap_rad(mirrored - direct).abs();
-        let t = to_p / (to_p + to_s);
-        let at = [
-            r.from[0] + t * (m.image[0] - r.from[0]),
-            r.from[1] + t * (m.image[1] - r.from[1]),
-        ];
-        (wedge <= BLEND_WEDGE
-            && dist(m.image) <= BLEND_PATH_RATIO * dist(s)
-            && wrap_rad(r.bearing - mirrored).abs() > self.sigma
+        (wrap_rad(r.bearing - mirrored).abs() > self.sigma
             && wrap_rad(r.bearing - direct).abs() + wrap_rad(r.bearing - mirrored).abs()
                 <= wedge + 1e-9
-            && !self.map.occupied_within(at, WALL_REACH_M / 2.0).is_empty())
+            && self.on_wall(at))
         .then_some(wedge)
-    }
-
-    /// Each refined source whose own rays include blends of its direct sound and its
-    /// image in a wall near it ([`Mapper::blends`]), judged from where most of its rays
-    /// meet ([`Medians::least`]), moved to the fit of its other rays ([`Mapper::unblended`]).
-    /// Nothing on a map without walls, or with [`IasmConfig::reflections`] or
-    /// [`IasmConfig::refine`] off.
-    pub(super) fn unblend(&self, sources: &mut [Source]) {
-        if !self.config.reflections || !self.config.refine || !self.surveyed {
-            return;
-        }
-        for s in sources.iter_mut() {
-            if let Some((p, blends)) = self.unblended(s) {
-                (s.x, s.y) = (p[0], p[1]);
-                s.blends = blends;
-            }
-        }
-    }
-
-    /// Where `s` stands without the rays that blend it with its own image: the bearing fit
-    /// of its other rays, from where most of its rays meet, and the stops of the rays left
-    /// out. `None` when it has fewer than
-    /// four rays, none blends there, or the fit is not taken: a ray left out no longer a
-    /// blend at the fit, less than [`KEPT_INFORMATION`] of the information on the position
-    /// kept, or the rays explained no better than where `s` stands ([`Mapper::cost`]).
-    fn unblended(&self, s: &Source) -> Option<([f64; 2], Vec<usize>)> {
-        let rays = &s.rays;
-        if !s.refined || rays.len() < 4 {
-            return None;
-        }
-        let here = [s.x, s.y];
-        let (at, _) = Medians::of(rays.iter()).least(here);
-        let (_, out) = self.cost(at, rays);
-        if !out.contains(&true) {
-            return None;
-        }
-        let own: Vec<Ray> = rays
-            .iter()
-            .zip(&out)
-            .filter(|(_, b)| !**b)
-            .map(|(r, _)| *r)
-            .collect();
-        let (p, _) = fit_bearings(at, &own, self.sigma, self.trim)?;
-        let (cost, still) = self.cost(p, rays);
-        let weakest = |set: &[Ray]| weakest_information(p, set.iter());
-        (out.iter().zip(&still).all(|(was, is)| !was || *is)
-            && weakest(&own) >= KEPT_INFORMATION * weakest(rays)
-            && cost < self.cost(here, rays).0)
-            .then(|| {
-                let stops = rays.iter().zip(&out).filter(|(_, b)| **b);
-                (p, stops.map(|(r, _)| r.stop).collect())
-            })
     }
 
     /// Whether ray `r`, taken by a source at `g`, blends a source at `s` with its image in
@@ -345,32 +301,6 @@ impl Mapper {
             .iter()
             .filter_map(|m| self.blends(m, r, s, g))
             .min_by(f64::total_cmp)
-    }
-
-    /// How well a source at `q` explains `rays` (-2 log-likelihood, up to a constant), and
-    /// which of them it explains as blends with its image: each ray's squared miss in
-    /// `sigma`s (the mapper's Gaussian DoA model), or for a blend ([`Mapper::blends`])
-    /// `2 ln(w / (sqrt(2 pi) sigma))` where that is less (a peak anywhere between the
-    /// source and its image, `w` apart), at most 4 (beyond the `2 sigma` gate, another
-    /// sound's).
-    fn cost(&self, q: [f64; 2], rays: &[Ray]) -> (f64, Vec<bool>) {
-        let mirrors = self.mirrors(q);
-        let uniform = (std::f64::consts::TAU.sqrt() * self.sigma).ln();
-        let mut total = 0.0;
-        let blends = rays
-            .iter()
-            .map(|r| {
-                let miss = r.miss(q);
-                let direct = (miss / self.sigma).powi(2);
-                let blend = self
-                    .blend_of(r, q, q, || &mirrors)
-                    .map(|w| 2.0 * (w.ln() - uniform))
-                    .filter(|&b| b < direct);
-                total += blend.unwrap_or(direct).min(4.0);
-                blend.is_some()
-            })
-            .collect();
-        (total, blends)
     }
 
     /// Whether stop `k` heard nothing towards `at` but the reflections of `others` in the

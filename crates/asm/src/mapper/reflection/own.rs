@@ -1,0 +1,268 @@
+//! A source's own reflections ([`IasmConfig::reflections`]): its blends with its image in
+//! a wall near it, and its image heard instead of its direct sound, place it where its
+//! direct sound is heard.
+//!
+//! A source's rays can be blends of its direct sound and its image in a wall near it:
+//! from the stops that see it with its image close beside, its peak is pulled
+//! towards the image, and the bearing fit of all its rays towards the wall (MVDR hears
+//! `l_wing`'s wing talker, 0.8 m from the wing's east wall, 7-9 degrees towards its image
+//! from two stops of six, and mapped it 1 m off, in the wing's corner). The robust trim
+//! cannot see it: a ray within the gate, it pulls the fit until it misses it by no more
+//! than the others. Where most of a source's rays meet ([`Medians::least`]), the blends
+//! stand out as rays between the source and its image; the source then stands where its
+//! other rays meet ([`Mapper::unblended`]), if that explains all its rays better under the
+//! mapper's DoA model ([`Mapper::cost`]: a blend is taken as a peak anywhere between the
+//! source and its image) and the rays kept still fix the position
+//! ([`KEPT_INFORMATION`]).
+//!
+//! And a source can be heard from some stops by its image instead of its direct sound:
+//! two coherent arrivals closer than the array's main lobe make one apparent direction,
+//! between them or beyond by their relative phase at each frequency (radar's glint), and
+//! it often stands at the image. `corridor_alcoves`' second alcove talker, 0.4 m from the
+//! alcove's back wall, is heard at its image, 7-10 degrees beside it, from four stops of
+//! seven by both methods, even with the floor's reflection taken away; its bearing fit
+//! stood 0.3 m towards the wall. For each wall near where most of a source's rays meet
+//! (where they meet behind a wall, the source is that point's mirror in it), the rays that
+//! pass the source's image nearer than the source are unfolded in the wall (the stop and
+//! the ray mirrored: a ray through the image then passes the source) and fitted with the
+//! others, again from that fit until those rays settle ([`Mapper::image_fit`]). The
+//! source moves there ([`Mapper::imaged`]) when that explains its rays better by the
+//! Bayesian information criterion with the DoA error unknown, `n ln(RSS / RSS_0) + k ln
+//! n < 0` over its `n` rays, `k` of them taken as the image (each such choice one more
+//! parameter: with five to eight rays, choosing freely between two bearings per ray fits
+//! the noise), and moves it away from the wall at least as far as along it (an image
+//! pulls the rays towards its wall, not along it).
+
+use super::*;
+use crate::mapper::refine::{KEPT_INFORMATION, Medians, weakest_information};
+
+/// How many times a source heard by its image is refitted, each time with the rays that
+/// pass its image nearer than itself from where the last fit stands
+/// ([`Mapper::image_fit`]): the rays so taken settle in one or two.
+const IMAGE_FIT_ROUNDS: usize = 4;
+
+impl Mirror {
+    /// Ray `r` unfolded in the wall: from its stop's image along its reflected bearing.
+    /// A ray that points at a source's image points from the stop's image at the source.
+    fn unfold(&self, r: &Ray) -> Ray {
+        let off = self.off(r.from);
+        let n = self.normal;
+        let (c, s) = (r.bearing.cos(), r.bearing.sin());
+        let dot = c * n[0] + s * n[1];
+        Ray {
+            from: [r.from[0] - 2.0 * off * n[0], r.from[1] - 2.0 * off * n[1]],
+            bearing: (s - 2.0 * dot * n[1]).atan2(c - 2.0 * dot * n[0]),
+            ..*r
+        }
+    }
+}
+
+impl Mapper {
+    /// Each refined source placed where its direct sound is heard: moved to the fit of
+    /// its other rays where some of its own rays blend its direct sound with its image in
+    /// a wall near it ([`Mapper::unblended`]), or else to where its direct rays and those
+    /// that are its image, unfolded in the wall, meet ([`Mapper::imaged`]). Nothing on a
+    /// map without walls, or with [`IasmConfig::reflections`] or [`IasmConfig::refine`]
+    /// off.
+    pub(in crate::mapper) fn place_by_own_reflections(&self, sources: &mut [Source]) {
+        if !self.config.reflections || !self.config.refine || !self.surveyed {
+            return;
+        }
+        for s in sources.iter_mut() {
+            if let Some((p, blends)) = self.unblended(s) {
+                (s.x, s.y) = (p[0], p[1]);
+                s.blends = blends;
+            } else if let Some((p, images)) = self.imaged(s) {
+                (s.x, s.y) = (p[0], p[1]);
+                s.images = images;
+            }
+        }
+    }
+
+    /// Where `s` stands without the rays that blend it with its own image: the bearing fit
+    /// of its other rays, from where most of its rays meet, and the stops of the rays left
+    /// out. `None` when it has fewer than
+    /// four rays, none blends there, or the fit is not taken: a ray left out no longer a
+    /// blend at the fit, less than [`KEPT_INFORMATION`] of the information on the position
+    /// kept, or the rays explained no better than where `s` stands ([`Mapper::cost`]).
+    fn unblended(&self, s: &Source) -> Option<([f64; 2], Vec<usize>)> {
+        let rays = &s.rays;
+        if !s.refined || rays.len() < 4 {
+            return None;
+        }
+        let here = [s.x, s.y];
+        let (at, _) = Medians::of(rays.iter()).least(here);
+        let (_, out) = self.cost(at, rays);
+        if !out.contains(&true) {
+            return None;
+        }
+        let own: Vec<Ray> = rays
+            .iter()
+            .zip(&out)
+            .filter(|(_, b)| !**b)
+            .map(|(r, _)| *r)
+            .collect();
+        let (p, _) = fit_bearings(at, &own, self.sigma, self.trim)?;
+        let (cost, still) = self.cost(p, rays);
+        let weakest = |set: &[Ray]| weakest_information(p, set.iter());
+        (out.iter().zip(&still).all(|(was, is)| !was || *is)
+            && weakest(&own) >= KEPT_INFORMATION * weakest(rays)
+            && cost < self.cost(here, rays).0)
+            .then(|| {
+                let stops = rays.iter().zip(&out).filter(|(_, b)| **b);
+                (p, stops.map(|(r, _)| r.stop).collect())
+            })
+    }
+
+    /// Where `s` stands if some of its rays are its image in one wall near it, and the
+    /// stops of those rays (see the module docs): of the walls around where most of its
+    /// rays meet, the one whose fit ([`Mapper::image_fit`]) explains its rays best by the
+    /// Bayesian information criterion, if that explains them better than where `s` stands
+    /// and moves it away from the wall more than along it. `None` for a source with fewer
+    /// than four rays or with blends ([`Mapper::unblended`] has placed it).
+    fn imaged(&self, s: &Source) -> Option<([f64; 2], Vec<usize>)> {
+        let rays = &s.rays;
+        if !s.refined || rays.len() < 4 || !s.blends.is_empty() {
+            return None;
+        }
+        let n = rays.len() as f64;
+        let here = [s.x, s.y];
+        let direct = self.squared_misses(rays.iter().map(|r| r.miss(here)));
+        let (at, _) = Medians::of(rays.iter()).least(here);
+        let behind = !matches!(self.map.cell_at(at), Some(Cell::Free));
+        let score = |(p, images, misses): &([f64; 2], Vec<bool>, f64), wall: &Mirror| {
+            let k = images.iter().filter(|&&b| b).count() as f64;
+            let d = [p[0] - here[0], p[1] - here[1]];
+            let away = d[0] * wall.normal[0] + d[1] * wall.normal[1];
+            let along = (d[0] * wall.normal[1] - d[1] * wall.normal[0]).abs();
+            let bic = n * (misses / direct).ln() + k * n.ln();
+            (bic < 0.0 && away >= along).then_some(bic)
+        };
+        self.mirrors(at)
+            .into_iter()
+            .filter_map(|m| {
+                // Where most rays meet behind a wall, the source is that point's mirror.
+                let (start, wall) = if behind {
+                    let normal = [-m.normal[0], -m.normal[1]];
+                    (m.image, Mirror::of(m.image, m.wall, normal))
+                } else {
+                    (at, m)
+                };
+                let fit = self.image_fit(rays, start, &wall)?;
+                Some((score(&fit, &wall)?, fit))
+            })
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+            .map(|(_, (p, images, _))| {
+                let stops = rays.iter().zip(&images).filter(|(_, b)| **b);
+                let mut stops: Vec<usize> = stops.map(|(r, _)| r.stop).collect();
+                stops.sort_unstable();
+                (p, stops)
+            })
+    }
+
+    /// The bearing fit of `rays` from `start` with those that pass a source's image in
+    /// `wall` nearer than the source itself ([`Mapper::image_miss`]) unfolded in the wall,
+    /// taken again from the fit until the rays so taken no longer change
+    /// ([`IMAGE_FIT_ROUNDS`] at most): the fit, which rays are images there, and their
+    /// squared misses ([`Mapper::squared_misses`]; an image ray's at the image). `None`
+    /// when fewer than two rays are images, or the fit leaves the room's free cells.
+    fn image_fit(
+        &self,
+        rays: &[Ray],
+        start: [f64; 2],
+        wall: &Mirror,
+    ) -> Option<([f64; 2], Vec<bool>, f64)> {
+        // Each ray's miss at `c`, at `c`'s image where that is nearer, and whether it is.
+        let misses = |c: [f64; 2]| -> Option<Vec<(f64, bool)>> {
+            let m = Mirror::of(c, wall.wall, wall.normal);
+            (m.off(c) > 0.0).then(|| {
+                rays.iter()
+                    .map(|r| {
+                        let direct = r.miss(c);
+                        match self.image_miss(&m, r, c) {
+                            Some(image) if image < direct => (image, true),
+                            _ => (direct, false),
+                        }
+                    })
+                    .collect()
+            })
+        };
+        let images = |v: &[(f64, bool)]| v.iter().map(|x| x.1).collect::<Vec<bool>>();
+        let (mut c, mut taken) = (start, misses(start)?);
+        let mut fit = None;
+        for _ in 0..IMAGE_FIT_ROUNDS {
+            if taken.iter().filter(|x| x.1).count() < 2 {
+                break;
+            }
+            let m = Mirror::of(c, wall.wall, wall.normal);
+            let unfolded: Vec<Ray> = rays
+                .iter()
+                .zip(&taken)
+                .map(|(r, x)| if x.1 { m.unfold(r) } else { *r })
+                .collect();
+            let Some((p, _)) = fit_bearings(c, &unfolded, self.sigma, self.trim) else {
+                break;
+            };
+            let Some(there) = misses(p) else {
+                fit = None;
+                break;
+            };
+            let settled = images(&there) == images(&taken);
+            fit = (there.iter().filter(|x| x.1).count() >= 2
+                && matches!(self.map.cell_at(p), Some(Cell::Free)))
+            .then(|| {
+                (
+                    p,
+                    images(&there),
+                    self.squared_misses(there.iter().map(|x| x.0)),
+                )
+            });
+            (c, taken) = (p, there);
+            if settled {
+                break;
+            }
+        }
+        fit
+    }
+
+    /// The sum of the squared `misses` (rad), each at most the vote's gate (2 `sigma`:
+    /// beyond it, another sound's), never zero.
+    fn squared_misses(&self, misses: impl Iterator<Item = f64>) -> f64 {
+        let gate = 2.0 * self.sigma;
+        misses.map(|m| m.min(gate).powi(2)).sum::<f64>().max(1e-12)
+    }
+
+    /// The miss (rad) of ray `r` at the image of a source at `s` in `m`'s wall, where its
+    /// stop may hear that image ([`Mapper::image_beside`], the point of reflection on the
+    /// wall) and sees `s`.
+    fn image_miss(&self, m: &Mirror, r: &Ray, s: [f64; 2]) -> Option<f64> {
+        let (_, mirrored, at) = Self::image_beside(m, r.from, s)?;
+        (self.on_wall(at) && !self.hidden(r.from, s)).then(|| wrap_rad(r.bearing - mirrored).abs())
+    }
+
+    /// How well a source at `q` explains `rays` (-2 log-likelihood, up to a constant), and
+    /// which of them it explains as blends with its image: each ray's squared miss in
+    /// `sigma`s (the mapper's Gaussian DoA model), or for a blend ([`Mapper::blends`])
+    /// `2 ln(w / (sqrt(2 pi) sigma))` where that is less (a peak anywhere between the
+    /// source and its image, `w` apart), at most 4 (beyond the `2 sigma` gate, another
+    /// sound's).
+    fn cost(&self, q: [f64; 2], rays: &[Ray]) -> (f64, Vec<bool>) {
+        let mirrors = self.mirrors(q);
+        let uniform = (std::f64::consts::TAU.sqrt() * self.sigma).ln();
+        let mut total = 0.0;
+        let blends = rays
+            .iter()
+            .map(|r| {
+                let miss = r.miss(q);
+                let direct = (miss / self.sigma).powi(2);
+                let blend = self
+                    .blend_of(r, q, q, || &mirrors)
+                    .map(|w| 2.0 * (w.ln() - uniform))
+                    .filter(|&b| b < direct);
+                total += blend.unwrap_or(direct).min(4.0);
+                blend.is_some()
+            })
+            .collect();
+        (total, blends)
+    }
+}
