@@ -112,9 +112,17 @@ impl Mirror {
             wall,
             normal,
         };
-        let off = m.off(s);
-        m.image = [s[0] - 2.0 * off * normal[0], s[1] - 2.0 * off * normal[1]];
+        m.image = m.reflect(s);
         m
+    }
+
+    /// The point `q` mirrored in the wall.
+    fn reflect(&self, q: [f64; 2]) -> [f64; 2] {
+        let off = self.off(q);
+        [
+            q[0] - 2.0 * off * self.normal[0],
+            q[1] - 2.0 * off * self.normal[1],
+        ]
     }
 
     /// How far `q` stands from the wall, on the source's side (m).
@@ -176,11 +184,7 @@ impl Mapper {
             let Some(normal) = self.wall_normal(hit, [-dir[0], -dir[1]]) else {
                 break;
             };
-            let dot = dir[0] * normal[0] + dir[1] * normal[1];
-            dir = [
-                dir[0] - 2.0 * dot * normal[0],
-                dir[1] - 2.0 * dot * normal[1],
-            ];
+            dir = reflect_direction(dir, normal);
             before += len;
             from = [hit[0] + step_off * normal[0], hit[1] + step_off * normal[1]];
         }
@@ -436,6 +440,15 @@ impl Mapper {
         }
         marked
     }
+}
+
+/// The direction `dir` reflected specularly by a wall whose unit normal is `normal`.
+fn reflect_direction(dir: [f64; 2], normal: [f64; 2]) -> [f64; 2] {
+    let dot = dir[0] * normal[0] + dir[1] * normal[1];
+    [
+        dir[0] - 2.0 * dot * normal[0],
+        dir[1] - 2.0 * dot * normal[1],
+    ]
 }
 
 /// The least angle at the stop between a ray and the image of a source at `s` along one

@@ -45,20 +45,18 @@ impl Mirror {
     /// Ray `r` unfolded in the wall: from its stop's image along its reflected bearing.
     /// A ray that points at a source's image points from the stop's image at the source.
     fn unfold(&self, r: &Ray) -> Ray {
-        let off = self.off(r.from);
-        let n = self.normal;
-        let (c, s) = (r.bearing.cos(), r.bearing.sin());
-        let dot = c * n[0] + s * n[1];
+        let [x, y] = reflect_direction([r.bearing.cos(), r.bearing.sin()], self.normal);
         Ray {
-            from: [r.from[0] - 2.0 * off * n[0], r.from[1] - 2.0 * off * n[1]],
-            bearing: (s - 2.0 * dot * n[1]).atan2(c - 2.0 * dot * n[0]),
+            from: self.reflect(r.from),
+            bearing: y.atan2(x),
             ..*r
         }
     }
 }
 
 impl Mapper {
-    /// Each refined source placed where its direct sound is heard: moved to the fit of
+    /// Each refined source with four rays or more placed where its direct sound is heard,
+    /// its rays judged from where most of them meet ([`Medians::least`]): moved to the fit of
     /// its other rays where some of its own rays blend its direct sound with its image in
     /// a wall near it ([`Mapper::unblended`]), or else to where its direct rays and those
     /// that are its image, unfolded in the wall, meet ([`Mapper::imaged`]). Nothing on a
@@ -68,11 +66,16 @@ impl Mapper {
         if !self.config.reflections || !self.config.refine || !self.surveyed {
             return;
         }
-        for s in sources.iter_mut() {
-            if let Some((p, blends)) = self.unblended(s) {
+        for s in sources
+            .iter_mut()
+            .filter(|s| s.refined && s.rays.len() >= 4)
+        {
+            // Where most of its rays meet: both rules judge its rays from there.
+            let (at, _) = Medians::of(s.rays.iter()).least([s.x, s.y]);
+            if let Some((p, blends)) = self.unblended(s, at) {
                 (s.x, s.y) = (p[0], p[1]);
                 s.blends = blends;
-            } else if let Some((p, images)) = self.imaged(s) {
+            } else if let Some((p, images)) = self.imaged(s, at) {
                 (s.x, s.y) = (p[0], p[1]);
                 s.images = images;
             }
@@ -80,18 +83,14 @@ impl Mapper {
     }
 
     /// Where `s` stands without the rays that blend it with its own image: the bearing fit
-    /// of its other rays, from where most of its rays meet, and the stops of the rays left
-    /// out. `None` when it has fewer than
-    /// four rays, none blends there, or the fit is not taken: a ray left out no longer a
-    /// blend at the fit, less than [`KEPT_INFORMATION`] of the information on the position
-    /// kept, or the rays explained no better than where `s` stands ([`Mapper::cost`]).
-    fn unblended(&self, s: &Source) -> Option<([f64; 2], Vec<usize>)> {
+    /// of its other rays, from `at`, where most of its rays meet, and the stops of the
+    /// rays left out. `None` when none blends there, or the fit is not taken: a ray left
+    /// out no longer a blend at the fit, less than [`KEPT_INFORMATION`] of the information
+    /// on the position kept, or the rays explained no better than where `s` stands
+    /// ([`Mapper::cost`]).
+    fn unblended(&self, s: &Source, at: [f64; 2]) -> Option<([f64; 2], Vec<usize>)> {
         let rays = &s.rays;
-        if !s.refined || rays.len() < 4 {
-            return None;
-        }
         let here = [s.x, s.y];
-        let (at, _) = Medians::of(rays.iter()).least(here);
         let (_, out) = self.cost(at, rays);
         if !out.contains(&true) {
             return None;
@@ -115,20 +114,19 @@ impl Mapper {
     }
 
     /// Where `s` stands if some of its rays are its image in one wall near it, and the
-    /// stops of those rays (see the module docs): of the walls around where most of its
-    /// rays meet, the one whose fit ([`Mapper::image_fit`]) explains its rays best by the
-    /// Bayesian information criterion, if that explains them better than where `s` stands
-    /// and moves it away from the wall more than along it. `None` for a source with fewer
-    /// than four rays or with blends ([`Mapper::unblended`] has placed it).
-    fn imaged(&self, s: &Source) -> Option<([f64; 2], Vec<usize>)> {
+    /// stops of those rays (see the module docs): of the walls around `at`, where most of
+    /// its rays meet, the one whose fit ([`Mapper::image_fit`]) explains its rays best by
+    /// the Bayesian information criterion, if that explains them better than where `s`
+    /// stands and moves it away from the wall more than along it. `None` for a source with
+    /// blends ([`Mapper::unblended`] has placed it).
+    fn imaged(&self, s: &Source, at: [f64; 2]) -> Option<([f64; 2], Vec<usize>)> {
         let rays = &s.rays;
-        if !s.refined || rays.len() < 4 || !s.blends.is_empty() {
+        if !s.blends.is_empty() {
             return None;
         }
         let n = rays.len() as f64;
         let here = [s.x, s.y];
         let direct = self.squared_misses(rays.iter().map(|r| r.miss(here)));
-        let (at, _) = Medians::of(rays.iter()).least(here);
         let behind = !matches!(self.map.cell_at(at), Some(Cell::Free));
         let score = |(p, images, misses): &([f64; 2], Vec<bool>, f64), wall: &Mirror| {
             let k = images.iter().filter(|&&b| b).count() as f64;
@@ -172,11 +170,13 @@ impl Mapper {
         start: [f64; 2],
         wall: &Mirror,
     ) -> Option<([f64; 2], Vec<bool>, f64)> {
-        // Each ray's miss at `c`, at `c`'s image where that is nearer, and whether it is.
-        let misses = |c: [f64; 2]| -> Option<Vec<(f64, bool)>> {
+        // `c` mirrored in the wall, and each ray's miss at `c`, at `c`'s image where that
+        // is nearer, and whether it is.
+        let misses = |c: [f64; 2]| -> Option<(Mirror, Vec<(f64, bool)>)> {
             let m = Mirror::of(c, wall.wall, wall.normal);
             (m.off(c) > 0.0).then(|| {
-                rays.iter()
+                let v = rays
+                    .iter()
                     .map(|r| {
                         let direct = r.miss(c);
                         match self.image_miss(&m, r, c) {
@@ -184,17 +184,17 @@ impl Mapper {
                             _ => (direct, false),
                         }
                     })
-                    .collect()
+                    .collect();
+                (m, v)
             })
         };
         let images = |v: &[(f64, bool)]| v.iter().map(|x| x.1).collect::<Vec<bool>>();
-        let (mut c, mut taken) = (start, misses(start)?);
+        let (mut c, (mut m, mut taken)) = (start, misses(start)?);
         let mut fit = None;
         for _ in 0..IMAGE_FIT_ROUNDS {
             if taken.iter().filter(|x| x.1).count() < 2 {
                 break;
             }
-            let m = Mirror::of(c, wall.wall, wall.normal);
             let unfolded: Vec<Ray> = rays
                 .iter()
                 .zip(&taken)
@@ -203,7 +203,7 @@ impl Mapper {
             let Some((p, _)) = fit_bearings(c, &unfolded, self.sigma, self.trim) else {
                 break;
             };
-            let Some(there) = misses(p) else {
+            let Some((at_p, there)) = misses(p) else {
                 fit = None;
                 break;
             };
@@ -217,7 +217,7 @@ impl Mapper {
                     self.squared_misses(there.iter().map(|x| x.0)),
                 )
             });
-            (c, taken) = (p, there);
+            (c, m, taken) = (p, at_p, there);
             if settled {
                 break;
             }
