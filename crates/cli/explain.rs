@@ -398,28 +398,19 @@ mod tests {
                 .iter()
                 .all(|r| r.miss_deg < 0.1 && !r.blend && !r.image)
         );
-        // A DoA the source takes as a blend with its image is noted so.
-        let mut blended = result.clone();
-        blended.sources[0].blends = vec![2];
-        let e2 = explain(&blended, &poses, &doas, None, Some(&sources), 1.0, 5.0);
-        let noted: Vec<usize> = e2.sources[0]
-            .rays
-            .iter()
-            .filter(|r| r.blend)
-            .map(|r| r.stop)
-            .collect();
-        assert_eq!(noted, vec![2]);
-        // And one it takes as its image.
-        let mut imaged = result.clone();
-        imaged.sources[0].images = vec![4];
-        let e3 = explain(&imaged, &poses, &doas, None, Some(&sources), 1.0, 5.0);
-        let noted: Vec<usize> = e3.sources[0]
-            .rays
-            .iter()
-            .filter(|r| r.image)
-            .map(|r| r.stop)
-            .collect();
-        assert_eq!(noted, vec![4]);
+        // A DoA the source takes as a blend with its image, or as its image, is noted so.
+        let noted = |mark: &dyn Fn(&mut asm::Source), is: fn(&RayNote) -> bool| {
+            let mut marked = result.clone();
+            mark(&mut marked.sources[0]);
+            let e = explain(&marked, &poses, &doas, None, Some(&sources), 1.0, 5.0);
+            let rays = &e.sources[0].rays;
+            rays.iter()
+                .filter(|r| is(r))
+                .map(|r| r.stop)
+                .collect::<Vec<usize>>()
+        };
+        assert_eq!(noted(&|s| s.blends = vec![2], |r| r.blend), vec![2]);
+        assert_eq!(noted(&|s| s.images = vec![4], |r| r.image), vec![4]);
         // The two DoAs of source 1 are left, at the azimuths the table holds.
         let left: Vec<(usize, Vec<f64>)> = e
             .unexplained
