@@ -43,7 +43,7 @@ impl Mapper {
         // A source its own reflection's blends pulled towards a wall stands where its
         // other rays meet; one heard by its image in a wall near it, where its direct rays
         // and its unfolded image rays meet (reflection/own.rs).
-        self.place_by_own_reflections(sources);
+        self.place_by_own_reflections(sources, stops, pool);
         // A merged or unblended source stands at a refitted crossing: into the room again.
         removed.extend(self.keep_in_room(sources, pool));
         removed

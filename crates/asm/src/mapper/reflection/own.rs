@@ -32,6 +32,17 @@
 //! parameter: with five to eight rays, choosing freely between two bearings per ray fits
 //! the noise), and moves it away from the wall at least as far as along it (an image
 //! pulls the rays towards its wall, not along it).
+//!
+//! A source's image is heard from stops that gave it no DoA, too: the source missed
+//! those stops' image DoAs by more than the gate where the rounds left it, and no other
+//! source took them (`corridor_alcoves`' second alcove talker, mapped by the vote from
+//! five DoAs, is heard at its image in the back wall from a sixth stop whose DoA stays
+//! unexplained; the T-junction's west talker, 0.6 m from the crossbar's north wall, from
+//! two). So the DoAs no source explains, at stops where the source has none, that pass
+//! its image nearer than itself and within the gate (from where its rays meet) join the
+//! fit as image rays. Under the rule against, each is another sound's, a miss at the gate
+//! in `RSS_0`; each one taken is a choice in `k`, as a source's own image rays are. A DoA
+//! so taken is the source's own from then on.
 
 use super::*;
 use crate::mapper::refine::{KEPT_INFORMATION, Medians, weakest_information};
@@ -62,7 +73,12 @@ impl Mapper {
     /// that are its image, unfolded in the wall, meet ([`Mapper::imaged`]). Nothing on a
     /// map without walls, or with [`IasmConfig::reflections`] or [`IasmConfig::refine`]
     /// off.
-    pub(in crate::mapper) fn place_by_own_reflections(&self, sources: &mut [Source]) {
+    pub(in crate::mapper) fn place_by_own_reflections(
+        &self,
+        sources: &mut [Source],
+        stops: &Stops,
+        pool: &mut [Vec<f64>],
+    ) {
         if !self.config.reflections || !self.config.refine || !self.surveyed {
             return;
         }
@@ -75,9 +91,24 @@ impl Mapper {
             if let Some((p, blends)) = self.unblended(s, at) {
                 (s.x, s.y) = (p[0], p[1]);
                 s.blends = blends;
-            } else if let Some((p, images)) = self.imaged(s, at) {
+            } else if let Some((p, images)) = self.imaged(s, at, &self.spare_rays(s, stops, pool)) {
                 (s.x, s.y) = (p[0], p[1]);
-                s.images = images;
+                // The spare DoAs taken as its image are its own now.
+                let claimed: Vec<Ray> = (images.iter())
+                    .filter(|r| !s.rays.iter().any(|o| o.stop == r.stop))
+                    .copied()
+                    .collect();
+                for r in claimed {
+                    let row = &mut pool[r.stop];
+                    if let Some(n) = row.iter().position(|&b| b == r.bearing) {
+                        row.swap_remove(n);
+                    }
+                    s.rays.push(r);
+                }
+                s.rays.sort_by_key(|r| r.stop);
+                s.observations = s.rays.len();
+                s.images = images.iter().map(|r| r.stop).collect();
+                s.images.sort_unstable();
             }
         }
     }
@@ -113,23 +144,31 @@ impl Mapper {
             })
     }
 
-    /// Where `s` stands if some of its rays are its image in one wall near it, and the
-    /// stops of those rays (see the module docs): of the walls around `at`, where most of
-    /// its rays meet, the one whose fit ([`Mapper::image_fit`]) explains its rays best by
-    /// the Bayesian information criterion, if that explains them better than where `s`
-    /// stands and moves it away from the wall more than along it. `None` for a source with
-    /// blends ([`Mapper::unblended`] has placed it).
-    fn imaged(&self, s: &Source, at: [f64; 2]) -> Option<([f64; 2], Vec<usize>)> {
-        let rays = &s.rays;
+    /// Where `s` stands if some of its rays are its image in one wall near it, and those
+    /// rays (see the module docs): of the walls around `at`, where most of its rays meet,
+    /// the one whose fit ([`Mapper::image_fit`]) explains its rays best by the Bayesian
+    /// information criterion, if that explains them better than where `s` stands and moves
+    /// it away from the wall more than along it. `spare` are DoAs no source explains, at
+    /// stops where `s` has none: those that pass its image in that wall from where its
+    /// rays meet are its image too, if the fit takes them (under the rule against, each is
+    /// another sound's, a miss at the gate). `None` for a source with blends
+    /// ([`Mapper::unblended`] has placed it).
+    fn imaged(&self, s: &Source, at: [f64; 2], spare: &[Ray]) -> Option<([f64; 2], Vec<Ray>)> {
         if !s.blends.is_empty() {
             return None;
         }
-        let n = rays.len() as f64;
         let here = [s.x, s.y];
-        let direct = self.squared_misses(rays.iter().map(|r| r.miss(here)));
         let behind = !matches!(self.map.cell_at(at), Some(Cell::Free));
-        let score = |(p, images, misses): &([f64; 2], Vec<bool>, f64), wall: &Mirror| {
+        let gate = 2.0 * self.sigma;
+        let score = |(p, images, misses): &([f64; 2], Vec<bool>, f64),
+                     wall: &Mirror,
+                     rays: &[Ray]| {
+            let n = rays.len() as f64;
             let k = images.iter().filter(|&&b| b).count() as f64;
+            let own = s.rays.len();
+            let direct = self.squared_misses(
+                (rays.iter().enumerate()).map(|(i, r)| if i < own { r.miss(here) } else { gate }),
+            );
             let d = [p[0] - here[0], p[1] - here[1]];
             let away = d[0] * wall.normal[0] + d[1] * wall.normal[1];
             let along = (d[0] * wall.normal[1] - d[1] * wall.normal[0]).abs();
@@ -146,15 +185,20 @@ impl Mapper {
                 } else {
                     (at, m)
                 };
-                let fit = self.image_fit(rays, start, &wall)?;
-                Some((score(&fit, &wall)?, fit))
+                // The spare DoAs through the image from where the rays meet.
+                let first = Mirror::of(start, wall.wall, wall.normal);
+                let mut rays = s.rays.clone();
+                rays.extend(spare.iter().filter(|r| {
+                    self.image_miss(&first, r, start)
+                        .is_some_and(|i| i < gate.min(r.miss(start)))
+                }));
+                let fit = self.image_fit(&rays, s.rays.len(), start, &wall)?;
+                Some((score(&fit, &wall, &rays)?, fit, rays))
             })
             .min_by(|a, b| a.0.total_cmp(&b.0))
-            .map(|(_, (p, images, _))| {
-                let stops = rays.iter().zip(&images).filter(|(_, b)| **b);
-                let mut stops: Vec<usize> = stops.map(|(r, _)| r.stop).collect();
-                stops.sort_unstable();
-                (p, stops)
+            .map(|(_, (p, images, _), rays)| {
+                let taken = rays.iter().zip(&images).filter(|(_, b)| **b);
+                (p, taken.map(|(r, _)| *r).collect())
             })
     }
 
@@ -162,23 +206,28 @@ impl Mapper {
     /// `wall` nearer than the source itself ([`Mapper::image_miss`]) unfolded in the wall,
     /// taken again from the fit until the rays so taken no longer change
     /// ([`IMAGE_FIT_ROUNDS`] at most): the fit, which rays are images there, and their
-    /// squared misses ([`Mapper::squared_misses`]; an image ray's at the image). `None`
-    /// when fewer than two rays are images, or the fit leaves the room's free cells.
+    /// squared misses ([`Mapper::squared_misses`]; an image ray's at the image). The rays
+    /// from `own` on are spare: the image's if they pass it within the gate, and left out
+    /// of the fit (a miss at the gate) if not. `None` when fewer than two rays are images,
+    /// or the fit leaves the room's free cells.
     fn image_fit(
         &self,
         rays: &[Ray],
+        own: usize,
         start: [f64; 2],
         wall: &Mirror,
     ) -> Option<([f64; 2], Vec<bool>, f64)> {
+        let gate = 2.0 * self.sigma;
         // `c` mirrored in the wall, and each ray's miss at `c`, at `c`'s image where that
-        // is nearer, and whether it is.
+        // is nearer, and whether it is (a spare ray's miss is at most the gate).
         let misses = |c: [f64; 2]| -> Option<(Mirror, Vec<(f64, bool)>)> {
             let m = Mirror::of(c, wall.wall, wall.normal);
             (m.off(c) > 0.0).then(|| {
                 let v = rays
                     .iter()
-                    .map(|r| {
-                        let direct = r.miss(c);
+                    .enumerate()
+                    .map(|(i, r)| {
+                        let direct = if i < own { r.miss(c) } else { gate };
                         match self.image_miss(&m, r, c) {
                             Some(image) if image < direct => (image, true),
                             _ => (direct, false),
@@ -198,7 +247,9 @@ impl Mapper {
             let unfolded: Vec<Ray> = rays
                 .iter()
                 .zip(&taken)
-                .map(|(r, x)| if x.1 { m.unfold(r) } else { *r })
+                .enumerate()
+                .filter(|(i, (_, x))| *i < own || x.1)
+                .map(|(_, (r, x))| if x.1 { m.unfold(r) } else { *r })
                 .collect();
             let Some((p, _)) = fit_bearings(c, &unfolded, self.sigma, self.trim) else {
                 break;
@@ -264,5 +315,27 @@ impl Mapper {
             })
             .collect();
         (total, blends)
+    }
+
+    /// The DoAs of `pool` (world bearings no source explains, by stop) at the stops where `s`
+    /// has no ray, as rays from those stops; none for a linear array's (each has a twin).
+    fn spare_rays(&self, s: &Source, stops: &Stops, pool: &[Vec<f64>]) -> Vec<Ray> {
+        if self.mirror.is_some() {
+            return Vec::new();
+        }
+        let poses = stops.poses();
+        pool.iter()
+            .enumerate()
+            .filter(|(k, _)| !s.rays.iter().any(|r| r.stop == *k))
+            .flat_map(|(k, row)| {
+                row.iter().map(move |&bearing| Ray {
+                    stop: k,
+                    from: poses[k].position(),
+                    bearing,
+                    twin: None,
+                    shared: false,
+                })
+            })
+            .collect()
     }
 }

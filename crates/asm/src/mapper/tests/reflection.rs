@@ -368,22 +368,36 @@ fn unblended_talker(
     for r in &talker.rays[direct.len()..] {
         assert!(r.miss(TALKER) > sigma, "stop {}", r.stop);
     }
-    let (fit, s) = fitted_and_placed(&mapper, talker, TALKER);
+    let none = vec![Vec::new(); poses.len()];
+    let (fit, s, _) = fitted_and_placed(&mapper, &poses, talker, TALKER, none);
     (fit, [s.x, s.y], s.blends)
 }
 
 /// Where the bearing fit of `source`'s rays from `start` places it (trimmed as the rounds
 /// trim it; every ray kept), and the source as [`Mapper::place_by_own_reflections`] then
-/// leaves it.
-fn fitted_and_placed(mapper: &Mapper, mut source: Source, start: [f64; 2]) -> ([f64; 2], Source) {
+/// leaves it, the stops `poses` having heard its rays and the DoAs of `pool` (world
+/// bearings by stop) that no source explains; and what `pool` holds after.
+fn fitted_and_placed(
+    mapper: &Mapper,
+    poses: &[Pose],
+    mut source: Source,
+    start: [f64; 2],
+    mut pool: Vec<Vec<f64>>,
+) -> ([f64; 2], Source, Vec<Vec<f64>>) {
     let trim = Trim::of(&IasmConfig::default());
     let sigma = 5f64.to_radians();
     let (fit, kept) = fit_bearings(start, &source.rays, sigma, trim).expect("a fit");
     assert_eq!(kept.len(), source.rays.len(), "the gate keeps every ray");
     (source.x, source.y) = (fit[0], fit[1]);
+    let mut heard = pool.clone();
+    for r in &source.rays {
+        heard[r.stop].push(r.bearing);
+    }
+    let n = poses.len();
+    let stops = stops_with(poses, &heard, &vec![true; n], &vec![false; n]);
     let mut sources = vec![source];
-    mapper.place_by_own_reflections(&mut sources);
-    (fit, sources.remove(0))
+    mapper.place_by_own_reflections(&mut sources, &stops, &mut pool);
+    (fit, sources.remove(0), pool)
 }
 
 fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
@@ -439,18 +453,37 @@ fn unmirrored(
     share: f64,
     off: f64,
 ) -> ([f64; 2], [f64; 2], Vec<usize>) {
+    let (fit, s, _) = unmirrored_with_spare(talker, direct, imaged, &[], share, off);
+    (fit, [s.x, s.y], s.images)
+}
+
+/// [`unmirrored`], with the stops `spare` having heard the talker's image too, at the same
+/// share of the way, in DoAs that no source explains: the fit, the talker placed, and
+/// what is left unexplained.
+fn unmirrored_with_spare(
+    talker: [f64; 2],
+    direct: &[usize],
+    imaged: &[usize],
+    spare: &[usize],
+    share: f64,
+    off: f64,
+) -> ([f64; 2], Source, Vec<Vec<f64>>) {
     let (mapper, poses) = alcove(IasmConfig::default());
     let image = [talker[0], 4.0 - talker[1]];
+    let heard_at_image = |k: usize| {
+        let (to, image) = (poses[k].bearing_to(talker), poses[k].bearing_to(image));
+        to + share * wrap_rad(image - to)
+    };
     let mut source = heard_from(talker, &poses, direct);
     for (i, r) in source.rays.iter_mut().enumerate() {
         r.bearing += if i % 2 == 0 { off } else { -off };
     }
-    source.rays.extend(imaged.iter().map(|&k| {
-        let (to, image) = (poses[k].bearing_to(talker), poses[k].bearing_to(image));
-        ray(&poses, k, to + share * wrap_rad(image - to))
-    }));
-    let (fit, s) = fitted_and_placed(&mapper, source, talker);
-    (fit, [s.x, s.y], s.images)
+    (source.rays).extend(imaged.iter().map(|&k| ray(&poses, k, heard_at_image(k))));
+    let mut pool = vec![Vec::new(); poses.len()];
+    for &k in spare {
+        pool[k].push(heard_at_image(k));
+    }
+    fitted_and_placed(&mapper, &poses, source, talker, pool)
 }
 
 #[test]
@@ -468,6 +501,50 @@ fn a_talker_heard_by_its_image_stands_where_its_unfolded_rays_meet() {
     assert!(pulled > 0.25, "{fit:?}");
     assert!(dist(at, TALKER) < 0.05, "{at:?}, {pulled:.3} m off before");
     assert!(images.contains(&3) && images.contains(&5), "{images:?}");
+}
+
+#[test]
+fn a_doa_no_source_explains_that_passes_a_talkers_image_is_its_image() {
+    // Stops every 0.5 m in front of the alcove (x = 2-6). The talker, 0.5 m from the
+    // alcove's back wall, heard directly from x = 2, 3.5, 4.5 and 6 (1.5 degrees off,
+    // alternately either side) and by its image from x = 2.5 only: one image ray is no
+    // evidence of an image (it may be the noise), and the talker stays where its five rays
+    // meet, 0.2 m or more towards the wall. The stop at x = 5.5 heard the image too, in a DoA the
+    // rounds left to no source. Taken with the talker's rays, it passes the talker's image
+    // as the ray from x = 2.5 does: both unfolded in the wall, the talker stands within the
+    // direct rays' error of the truth, and the DoA is its own now.
+    let (mapper, _) = alcove(IasmConfig::default());
+    let poses: Vec<Pose> = (0..9)
+        .map(|i| Pose::new(2.0 + 0.5 * f64::from(i), -0.5, 0.0))
+        .collect();
+    let image = [TALKER[0], 4.0 - TALKER[1]];
+    let mut talker = heard_from(TALKER, &poses, &[0, 3, 5, 8]);
+    for (i, r) in talker.rays.iter_mut().enumerate() {
+        r.bearing += 1.5f64.to_radians() * if i % 2 == 0 { 1.0 } else { -1.0 };
+    }
+    talker
+        .rays
+        .insert(1, ray(&poses, 1, poses[1].bearing_to(image)));
+    let place =
+        |pool: Vec<Vec<f64>>| fitted_and_placed(&mapper, &poses, talker.clone(), TALKER, pool);
+    let (fit, alone, _) = place(vec![Vec::new(); poses.len()]);
+    assert!(dist(fit, TALKER) > 0.2, "{fit:?}");
+    assert_eq!(([alone.x, alone.y], alone.images), (fit, vec![]));
+    let mut pool = vec![Vec::new(); poses.len()];
+    pool[7].push(poses[7].bearing_to(image));
+    let (_, s, pool) = place(pool);
+    assert!(
+        dist([s.x, s.y], TALKER) < 0.05,
+        "{:?} from {fit:?}",
+        [s.x, s.y]
+    );
+    assert_eq!(s.images, vec![1, 7]);
+    assert!(s.rays.iter().any(|r| r.stop == 7));
+    assert_eq!(
+        s.observations, 6,
+        "the talker's five DoAs and the one it took"
+    );
+    assert!(pool.iter().all(Vec::is_empty), "{pool:?}");
 }
 
 #[test]
