@@ -33,7 +33,9 @@ pub struct Ray {
     pub twin: Option<f64>,
     /// Whether the DoA is another source's too: the vote lets a DoA that a source already
     /// explains support a second one that lies as nearly on it (see
-    /// `IasmConfig::share_rate`). It stays with the first: never given back.
+    /// `IasmConfig::share_rate`). It stays with the first: never given back. Where the first
+    /// is removed and gives it back, it is this one's own once the rules are done (no
+    /// longer shared, out of the unexplained).
     pub shared: bool,
 }
 

@@ -46,6 +46,7 @@ impl Mapper {
         self.place_by_own_reflections(sources, stops, pool);
         // A merged or unblended source stands at a refitted crossing: into the room again.
         removed.extend(self.keep_in_room(sources, pool));
+        own_orphaned_shares(sources, pool);
         removed
     }
 
@@ -641,5 +642,26 @@ pub(super) fn principal_axis(points: &[[f64; 2]]) -> Axis {
         angle: 0.5 * (2.0 * c[0][1]).atan2(c[0][0] - c[1][1]),
         along,
         across: (c[0][0] + c[1][1] - along).max(0.0),
+    }
+}
+
+/// Makes each DoA that a source shares with another ([`Ray::shared`]) that source's own
+/// where no source explains it any more: the other was removed and gave it back, so it
+/// stood in `pool` (unexplained) and in the source's rays at once. It leaves `pool` (with
+/// its mirror image, for a linear array's) and is no longer marked shared; the first
+/// source to hold it takes it.
+pub(super) fn own_orphaned_shares(sources: &mut [Source], pool: &mut [Vec<f64>]) {
+    for r in (sources.iter_mut())
+        .flat_map(|s| s.rays.iter_mut())
+        .filter(|r| r.shared)
+    {
+        let row = &mut pool[r.stop];
+        if let Some(n) = row.iter().position(|&b| b == r.bearing) {
+            row.swap_remove(n);
+            if let Some(n) = r.twin.and_then(|t| row.iter().position(|&b| b == t)) {
+                row.swap_remove(n);
+            }
+            r.shared = false;
+        }
     }
 }

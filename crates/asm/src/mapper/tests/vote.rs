@@ -247,3 +247,32 @@ fn full_rows_that_n_did_not_cut_speak_against_a_ghost() {
         Err(Error::CutMismatch { poses: 14, cut: 13 })
     ));
 }
+
+/// A DoA that a vote's source shares with another (`share_gate_sigmas`) is another's
+/// too; once that other is removed and gives it back, it is the sharer's own: among its
+/// rays and no longer among the unexplained (the corridor's alcove talker held such a DoA
+/// that `--explain` listed under both). A second sharer still shares it with the first.
+#[test]
+fn a_shared_doa_whose_owner_is_gone_is_the_sharers_own() {
+    let poses: Vec<Pose> = (0..5).map(|i| Pose::new(f64::from(i), 0.0, 0.0)).collect();
+    let mut first = heard_from([2.0, 3.0], &poses, &[0, 1, 2, 3, 4]);
+    let mut second = heard_from([2.1, 3.0], &poses, &[0, 1, 2]);
+    first.rays[2].shared = true;
+    second.rays[2] = Ray {
+        shared: true,
+        ..first.rays[2]
+    };
+    // Given back by its owner, removed.
+    let mut pool = vec![Vec::new(); poses.len()];
+    pool[2].push(first.rays[2].bearing);
+    let mut sources = vec![first, second];
+    crate::mapper::rules::own_orphaned_shares(&mut sources, &mut pool);
+    assert!(pool.iter().all(Vec::is_empty), "{pool:?}");
+    assert!(!sources[0].rays[2].shared);
+    assert!(sources[1].rays[2].shared);
+    // Nothing else moves: a DoA that another source explains stays shared.
+    let mut again = vec![Vec::new(); poses.len()];
+    sources[0].rays[3].shared = true;
+    crate::mapper::rules::own_orphaned_shares(&mut sources, &mut again);
+    assert!(sources[0].rays[3].shared);
+}
