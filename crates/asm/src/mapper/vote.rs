@@ -134,112 +134,29 @@ impl Mapper {
         check: &Plausible,
         refused: &mut Vec<Refused>,
     ) -> Option<([f64; 2], Vec<Ray>)> {
-        // A quorum of `need` counted stops, at least `min_observations` of them; the
-        // sums carry a little slack for the weights' rounding (3 x 3/5 + ... ).
-        let min_obs = self.config.min_observations;
-        let quorum = |total: f64, stops: usize| total >= need as f64 - 1e-9 && stops >= min_obs;
-        // The most the stops could give: a remaining DoA counts in full, a DoA that may
-        // only be shared (`IasmConfig::share_gate_sigmas`) at the share rate.
-        let share = self.share_rate();
-        let (poses, heard, complete) = (
-            check.stops.poses(),
-            check.stops.heard(),
-            check.stops.complete(),
-        );
-        // A counted stop's strongest DoA counts in full, as in `Mapper::thinly_heard`.
-        let count = |k: usize, b: f64| {
-            let c = counts[k];
-            if c > 0.0 && self.strongest(&poses[k], &heard[k], b) {
-                1.0
-            } else {
-                c
-            }
+        let tally = Tally {
+            mapper: self,
+            check,
+            counts,
+            need,
+            share: self.share_rate(),
         };
-        let live: Vec<f64> = bearings
-            .iter()
-            .zip(counts)
-            .enumerate()
-            .filter_map(|(k, (r, &c))| {
-                let sharable = share > 0.0 && complete[k] && !heard[k].is_empty();
-                let most = r.iter().map(|&b| count(k, b)).fold(c, f64::max);
-                match (c > 0.0, r.is_empty()) {
-                    (true, false) => Some(most),
-                    (true, true) if sharable => Some(c * share),
-                    _ => None,
-                }
-            })
-            .collect();
-        if !quorum(live.iter().sum(), live.len()) {
+        if !tally.reachable(bearings) {
             return None;
-        }
-        let gate = 2.0 * self.sigma;
-        // The counted stops with a remaining DoA within the gate of the bearing to `q`, or
-        // (counted at the share rate) a DoA another source explains that may be shared
-        // with it (`IasmConfig::share_gate_sigmas`): their count, their total, and the sum
-        // of their likelihood weights.
-        let support = |q: [f64; 2]| -> (usize, f64, f64) {
-            let (mut n, mut total, mut weight) = (0, 0.0, 0.0);
-            for (k, ((p, row), &c)) in poses
-                .iter()
-                .zip(bearings.iter())
-                .zip(counts)
-                .enumerate()
-                .filter(|x| *x.1.1 > 0.0)
-            {
-                let to = p.bearing_to(q);
-                let nearest =
-                    |row: &[f64]| crate::assoc::nearest(row, to).map_or(f64::INFINITY, |n| n.1);
-                let (at, best) = crate::assoc::nearest(row, to).unwrap_or((0, f64::INFINITY));
-                if best < gate {
-                    n += 1;
-                    total += count(k, row[at]);
-                    weight += vote_weight(best, self.sigma);
-                } else if share > 0.0 {
-                    let taken = nearest(&heard[k]);
-                    if self.shares(taken, k, check) {
-                        n += 1;
-                        total += c * share;
-                        weight += share * vote_weight(taken, self.sigma);
-                    }
-                }
-            }
-            (n, total, weight)
-        };
-        let mut proposals: Vec<([f64; 2], f64)> = Vec::new();
-        for (i, &(pa, a, ka)) in rays.iter().enumerate() {
-            for &(pb, b, kb) in &rays[i + 1..] {
-                if ka == kb || counts[ka] <= 0.0 || counts[kb] <= 0.0 {
-                    continue;
-                }
-                let Some((q, t, u)) = crossing(pa, a, pb, b) else {
-                    continue;
-                };
-                if t < 0.3 || u < 0.3 {
-                    continue;
-                }
-                if !self.within_bounds(q, 0.0) {
-                    continue;
-                }
-                let (n, total, weight) = support(q);
-                if quorum(total, n) {
-                    proposals.push((q, weight));
-                }
-            }
         }
         // The most likely first (the first found among equals); a proposal whose refit
         // keeps too few marked stops, or that cannot be a source (see `Plausible`), gives
         // its DoAs back and the next is tried.
-        proposals.sort_by(|a, b| b.1.total_cmp(&a.1));
-        for &(q, _) in &proposals {
-            let mut rays = self.associate(q, poses, bearings);
+        for q in tally.proposals(rays, bearings) {
+            let mut rays = self.associate(q, check.stops.poses(), bearings);
             let est = refit(q, &mut rays, self.sigma, self.trim, bearings).unwrap_or(q);
-            if share > 0.0 {
+            if tally.share > 0.0 {
                 self.share_rays(est, check, &mut rays);
             }
             let kept = rays.iter().filter(|r| counts[r.stop] > 0.0);
-            let weight = |r: &Ray| count(r.stop, r.bearing) * if r.shared { share } else { 1.0 };
-            let enough = quorum(kept.clone().map(weight).sum(), kept.count());
-            if enough {
+            let weight =
+                |r: &Ray| tally.count(r.stop, r.bearing) * if r.shared { tally.share } else { 1.0 };
+            if tally.quorum(kept.clone().map(weight).sum(), kept.count()) {
                 match self.implausible(est, &rays, check) {
                     None => return Some((est, rays)),
                     Some(rule) => refused.push(Refused {
@@ -339,6 +256,119 @@ pub(super) fn stops_of(rays: &[Ray]) -> Vec<usize> {
     stops.sort_unstable();
     stops.dedup();
     stops
+}
+
+/// What one tier of the vote counts ([`Mapper::vote_among`]): the marked stops'
+/// weights (`counts`: 0 for a stop not counted), the quorum `need`, and the rate at which
+/// a DoA that may only be shared counts ([`IasmConfig::share_gate_sigmas`]).
+struct Tally<'a> {
+    mapper: &'a Mapper,
+    check: &'a Plausible<'a>,
+    counts: &'a [f64],
+    need: usize,
+    share: f64,
+}
+
+impl Tally<'_> {
+    /// A quorum of `need` counted stops, at least `min_observations` of them; the sums
+    /// carry a little slack for the weights' rounding (3 x 3/5 + ... ).
+    fn quorum(&self, total: f64, stops: usize) -> bool {
+        total >= self.need as f64 - 1e-9 && stops >= self.mapper.config.min_observations
+    }
+
+    /// What stop `k`'s DoA at `b` counts: its weight, or in full for a counted stop's
+    /// strongest DoA, as in `Mapper::thinly_heard`.
+    fn count(&self, k: usize, b: f64) -> f64 {
+        let c = self.counts[k];
+        let (poses, heard) = (self.check.stops.poses(), self.check.stops.heard());
+        if c > 0.0 && self.mapper.strongest(&poses[k], &heard[k], b) {
+            1.0
+        } else {
+            c
+        }
+    }
+
+    /// Whether the stops could reach the quorum at all: a remaining DoA counts in full, a
+    /// DoA that may only be shared at the share rate.
+    fn reachable(&self, bearings: &[Vec<f64>]) -> bool {
+        let (heard, complete) = (self.check.stops.heard(), self.check.stops.complete());
+        let live: Vec<f64> = bearings
+            .iter()
+            .zip(self.counts)
+            .enumerate()
+            .filter_map(|(k, (r, &c))| {
+                let sharable = self.share > 0.0 && complete[k] && !heard[k].is_empty();
+                let most = r.iter().map(|&b| self.count(k, b)).fold(c, f64::max);
+                match (c > 0.0, r.is_empty()) {
+                    (true, false) => Some(most),
+                    (true, true) if sharable => Some(c * self.share),
+                    _ => None,
+                }
+            })
+            .collect();
+        self.quorum(live.iter().sum(), live.len())
+    }
+
+    /// The counted stops with a remaining DoA (of `bearings`) within the gate (2 `sigma`)
+    /// of the bearing to `q`, or (counted at the share rate) a DoA another source explains
+    /// that may be shared with it (`IasmConfig::share_gate_sigmas`): their count, their
+    /// total, and the sum of their likelihood weights.
+    fn support(&self, q: [f64; 2], bearings: &[Vec<f64>]) -> (usize, f64, f64) {
+        let (mapper, sigma) = (self.mapper, self.mapper.sigma);
+        let (poses, heard) = (self.check.stops.poses(), self.check.stops.heard());
+        let gate = 2.0 * sigma;
+        let (mut n, mut total, mut weight) = (0, 0.0, 0.0);
+        for (k, ((p, row), &c)) in poses
+            .iter()
+            .zip(bearings)
+            .zip(self.counts)
+            .enumerate()
+            .filter(|x| *x.1.1 > 0.0)
+        {
+            let to = p.bearing_to(q);
+            let (at, best) = crate::assoc::nearest(row, to).unwrap_or((0, f64::INFINITY));
+            if best < gate {
+                n += 1;
+                total += self.count(k, row[at]);
+                weight += vote_weight(best, sigma);
+            } else if self.share > 0.0 {
+                let taken = crate::assoc::nearest(&heard[k], to).map_or(f64::INFINITY, |n| n.1);
+                if mapper.shares(taken, k, self.check) {
+                    n += 1;
+                    total += c * self.share;
+                    weight += self.share * vote_weight(taken, sigma);
+                }
+            }
+        }
+        (n, total, weight)
+    }
+
+    /// The crossings of two of `rays` (remaining DoAs of two different counted stops,
+    /// each at least 0.3 m along, within the map's bounds) that reach the quorum
+    /// ([`Tally::support`]), the most likely first (the first found among equals).
+    fn proposals(&self, rays: &[([f64; 2], f64, usize)], bearings: &[Vec<f64>]) -> Vec<[f64; 2]> {
+        let counts = self.counts;
+        let mut proposals: Vec<([f64; 2], f64)> = Vec::new();
+        for (i, &(pa, a, ka)) in rays.iter().enumerate() {
+            for &(pb, b, kb) in &rays[i + 1..] {
+                if ka == kb || counts[ka] <= 0.0 || counts[kb] <= 0.0 {
+                    continue;
+                }
+                let Some((q, t, u)) = crossing(pa, a, pb, b) else {
+                    continue;
+                };
+                if t < 0.3 || u < 0.3 || !self.mapper.within_bounds(q, 0.0) {
+                    continue;
+                }
+                let (n, total, weight) = self.support(q, bearings);
+                if self.quorum(total, n) {
+                    proposals.push((q, weight));
+                }
+            }
+        }
+        proposals.sort_by(|a, b| b.1.total_cmp(&a.1));
+        proposals.into_iter().map(|(q, _)| q).collect()
+    }
 }
 
 /// What the vote needs to tell whether a proposal can be a source: the stops (their DoAs
