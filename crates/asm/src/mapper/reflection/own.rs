@@ -185,12 +185,14 @@ impl Mapper {
                 } else {
                     (at, m)
                 };
-                // The spare DoAs through the image from where the rays meet.
+                // The spare DoAs through the image from where the rays meet (the angle
+                // first: the map is asked only for the few that pass).
                 let first = Mirror::of(start, wall.wall, wall.normal);
                 let mut rays = s.rays.clone();
                 rays.extend(spare.iter().filter(|r| {
-                    self.image_miss(&first, r, start)
-                        .is_some_and(|i| i < gate.min(r.miss(start)))
+                    let [x, y] = [first.image[0] - r.from[0], first.image[1] - r.from[1]];
+                    wrap_rad(r.bearing - y.atan2(x)).abs() < gate.min(r.miss(start))
+                        && self.image_miss(&first, r, start).is_some()
                 }));
                 let fit = self.image_fit(&rays, s.rays.len(), start, &wall)?;
                 Some((score(&fit, &wall, &rays)?, fit, rays))
