@@ -56,6 +56,20 @@ impl Ray {
         bearings[self.stop].push(self.bearing);
         bearings[self.stop].extend(self.twin);
     }
+
+    /// Takes the DoA (and its mirror image, if any) out of its stop's row of `bearings`,
+    /// where no source held it ([`Ray::give_back`] undone): whether it was there.
+    pub fn take_from(&self, bearings: &mut [Vec<f64>]) -> bool {
+        let row = &mut bearings[self.stop];
+        let Some(n) = row.iter().position(|&b| b == self.bearing) else {
+            return false;
+        };
+        row.swap_remove(n);
+        if let Some(n) = self.twin.and_then(|t| row.iter().position(|&b| b == t)) {
+            row.swap_remove(n);
+        }
+        true
+    }
 }
 
 /// The world bearing of the mirror image of the DoA at world bearing `bearing`, heard at

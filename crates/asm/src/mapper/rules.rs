@@ -655,12 +655,7 @@ pub(super) fn own_orphaned_shares(sources: &mut [Source], pool: &mut [Vec<f64>])
         .flat_map(|s| s.rays.iter_mut())
         .filter(|r| r.shared)
     {
-        let row = &mut pool[r.stop];
-        if let Some(n) = row.iter().position(|&b| b == r.bearing) {
-            row.swap_remove(n);
-            if let Some(n) = r.twin.and_then(|t| row.iter().position(|&b| b == t)) {
-                row.swap_remove(n);
-            }
+        if r.take_from(pool) {
             r.shared = false;
         }
     }

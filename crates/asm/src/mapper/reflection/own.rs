@@ -99,10 +99,7 @@ impl Mapper {
                     .copied()
                     .collect();
                 for r in claimed {
-                    let row = &mut pool[r.stop];
-                    if let Some(n) = row.iter().position(|&b| b == r.bearing) {
-                        row.swap_remove(n);
-                    }
+                    r.take_from(pool);
                     s.rays.push(r);
                 }
                 s.rays.sort_by_key(|r| r.stop);
