@@ -68,29 +68,7 @@ impl Mapper {
                     let need = need.max(c.min_observations);
                     self.vote_among(pool, &rays, &weights, need, &check, refused)
                 })?;
-        // The crossings of its rays near it stand for its cloud (the picture's particles
-        // and the covariance ellipse).
-        let mut cloud = Vec::new();
-        for (i, ra) in rays.iter().enumerate() {
-            for rb in &rays[i + 1..] {
-                let Some((q, _, _)) = crossing(ra.from, ra.bearing, rb.from, rb.bearing) else {
-                    continue;
-                };
-                if (q[0] - est[0]).hypot(q[1] - est[1]) < 1.0 {
-                    cloud.push(q);
-                }
-            }
-        }
-        // With fewer than two crossings near it (its rays meet far from each other around
-        // a fit they all miss a little), the spread its DoAs allow, not one point's zero.
-        let spread = if cloud.len() < 2 {
-            bearing_covariance(est, &rays, self.sigma).unwrap_or_default()
-        } else {
-            covariance(&cloud)
-        };
-        if cloud.is_empty() {
-            cloud.push(est);
-        }
+        let (cloud, spread) = self.crossing_cloud(est, &rays);
         Some(Source {
             x: est[0],
             y: est[1],
@@ -105,6 +83,34 @@ impl Mapper {
             blends: Vec::new(),
             images: Vec::new(),
         })
+    }
+
+    /// What stands for a vote's source at `est` with `rays` as its cloud (the picture's
+    /// particles) and covariance ellipse: the crossings of its rays within 1 m of it and
+    /// their covariance. With fewer than two such crossings (its rays meet far from each
+    /// other around a fit they all miss a little), the spread its DoAs allow
+    /// ([`bearing_covariance`]), not one point's zero; with none, `est` is the cloud.
+    fn crossing_cloud(&self, est: [f64; 2], rays: &[Ray]) -> (Vec<[f64; 2]>, [[f64; 2]; 2]) {
+        let mut cloud = Vec::new();
+        for (i, ra) in rays.iter().enumerate() {
+            for rb in &rays[i + 1..] {
+                let Some((q, _, _)) = crossing(ra.from, ra.bearing, rb.from, rb.bearing) else {
+                    continue;
+                };
+                if (q[0] - est[0]).hypot(q[1] - est[1]) < 1.0 {
+                    cloud.push(q);
+                }
+            }
+        }
+        let spread = if cloud.len() < 2 {
+            bearing_covariance(est, rays, self.sigma).unwrap_or_default()
+        } else {
+            covariance(&cloud)
+        };
+        if cloud.is_empty() {
+            cloud.push(est);
+        }
+        (cloud, spread)
     }
 }
 
