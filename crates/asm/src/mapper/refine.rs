@@ -323,8 +323,18 @@ impl Medians {
     /// Of `s` and the points where two of the rays cross, the one with the least median
     /// miss, and that miss (rad): `s` unless a crossing has a smaller one.
     pub(super) fn least(&mut self, s: [f64; 2]) -> ([f64; 2], f64) {
-        let (mut at, mut least) = (s, self.at(s));
-        for q in crossings(&self.heads) {
+        self.least_where(s, |_| true)
+    }
+
+    /// [`Medians::least`] over the points `keep` allows (`s` too only if it allows it):
+    /// `s` and an infinite miss when it allows none.
+    pub(super) fn least_where(
+        &mut self,
+        s: [f64; 2],
+        keep: impl Fn([f64; 2]) -> bool,
+    ) -> ([f64; 2], f64) {
+        let (mut at, mut least) = (s, if keep(s) { self.at(s) } else { f64::INFINITY });
+        for q in crossings(&self.heads).filter(|&q| keep(q)) {
             let m = median_miss(&self.heads, &mut self.misses, q);
             if m < least {
                 (at, least) = (q, m);

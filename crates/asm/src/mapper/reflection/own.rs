@@ -8,12 +8,16 @@
 //! `l_wing`'s wing talker, 0.8 m from the wing's east wall, 7-9 degrees towards its image
 //! from two stops of six, and mapped it 1 m off, in the wing's corner). The robust trim
 //! cannot see it: a ray within the gate, it pulls the fit until it misses it by no more
-//! than the others. Where most of a source's rays meet ([`Medians::least`]), the blends
-//! stand out as rays between the source and its image; the source then stands where its
-//! other rays meet ([`Mapper::unblended`]), if that explains all its rays better under the
-//! mapper's DoA model ([`Mapper::cost`]: a blend is taken as a peak anywhere between the
-//! source and its image) and the rays kept still fix the position
-//! ([`KEPT_INFORMATION`]).
+//! than the others. Where most of a source's rays meet in the room
+//! ([`Medians::least_where`]), the blends stand out as rays between the source and its
+//! image; the source then stands where its other rays meet ([`Mapper::unblended`]), if
+//! that explains all its rays better under the mapper's DoA model ([`Mapper::cost`]: a
+//! blend is taken as a peak anywhere between the source and its image) and the rays kept
+//! still fix the position ([`KEPT_INFORMATION`]). Why in the room: a source heard from
+//! stops in a line towards it has nearly parallel blends, which meet each other far off,
+//! and from there, beyond the walls, no ray lies between the source and its image
+//! (`l_wing`'s wing talker heard with MVDR at N = 4: three blends and a ray 3 degrees off
+//! meet beyond the wing's corner, and the talker stood in that corner, 1.1 m off).
 //!
 //! And a source can be heard from some stops by its image instead of its direct sound:
 //! two coherent arrivals closer than the array's main lobe make one apparent direction,
@@ -69,7 +73,8 @@ impl Mapper {
     /// Each refined source with four rays or more placed where its direct sound is heard,
     /// its rays judged from where most of them meet ([`Medians::least`]): moved to the fit of
     /// its other rays where some of its own rays blend its direct sound with its image in
-    /// a wall near it ([`Mapper::unblended`]), or else to where its direct rays and those
+    /// a wall near it, judged from where most meet in the room ([`Mapper::in_room`];
+    /// [`Mapper::unblended`]), or else to where its direct rays and those
     /// that are its image, unfolded in the wall, meet ([`Mapper::imaged`]). Nothing on a
     /// map without walls, or with [`IasmConfig::reflections`] or [`IasmConfig::refine`]
     /// off.
@@ -86,9 +91,13 @@ impl Mapper {
             .iter_mut()
             .filter(|s| s.refined && s.rays.len() >= 4)
         {
-            // Where most of its rays meet: both rules judge its rays from there.
-            let (at, _) = Medians::of(s.rays.iter()).least([s.x, s.y]);
-            if let Some((p, blends)) = self.unblended(s, at) {
+            // Where most of its rays meet: the image rule judges its rays from there
+            // (behind a wall, that point's mirror is the source); the blends from where
+            // most meet in the room, as a blend lies between the source and its image.
+            let mut medians = Medians::of(s.rays.iter());
+            let (at, _) = medians.least([s.x, s.y]);
+            let (in_room, _) = medians.least_where([s.x, s.y], |q| self.in_room(q));
+            if let Some((p, blends)) = self.unblended(s, in_room) {
                 (s.x, s.y) = (p[0], p[1]);
                 s.blends = blends;
             } else if let Some((p, images)) = self.imaged(s, at, &self.spare_rays(s, stops, pool)) {

@@ -428,6 +428,54 @@ fn a_talker_heard_blended_with_its_image_stands_where_its_own_rays_meet() {
 }
 
 #[test]
+fn blends_are_judged_from_where_the_rays_meet_in_the_room() {
+    // `l_wing` moved 4 m south: a hall x in [0, 8], y in [-4, -1], a wing x in [5, 8] up to
+    // y = 3, walls 0.15 m thick, the unknown beyond. The wing's talker at (7.2, 2), 0.8 m
+    // from its east wall, is heard by stops driving north along x = 6 (y = -2.2, -1.7,
+    // ...): from the first three as one peak with its image in that wall, 8-9.5 degrees
+    // towards it (MVDR at N = 4), and directly from the next four with the errors the
+    // renderings show (+3, +0.6, -0.3, +0.3 degrees). The bearing fit of all seven stands
+    // in the wing's corner, 1.3 m off. The three blends and the ray 3 degrees off meet
+    // beyond that corner: there the rays' median miss is least, and from there no ray
+    // lies between the talker and its image. From where they meet in the room, the blends
+    // stand out and the talker stands where its own four rays meet: 0.2 m off, the
+    // depth that four stops in a line towards it fix.
+    let talker = [7.2, 2.0];
+    let mapper = ghost_mapper_on(
+        |[x, y]| {
+            let hall = (0.0..8.0).contains(&x) && (-4.0..-1.0).contains(&y);
+            let wing = (5.0..8.0).contains(&x) && (-1.0..3.0).contains(&y);
+            let walls = (-0.15..8.15).contains(&x) && (-4.15..3.15).contains(&y);
+            match () {
+                _ if hall || wing => Cell::Free,
+                _ if walls && (y < -0.85 || x > 4.85) => Cell::Occupied,
+                _ => Cell::Unknown,
+            }
+        },
+        IasmConfig::default(),
+    );
+    let poses: Vec<Pose> = (0..7)
+        .map(|k| Pose::new(6.0, -2.2 + 0.5 * k as f64, std::f64::consts::FRAC_PI_2))
+        .collect();
+    let mut source = heard_from(talker, &poses, &[0, 1, 2, 3, 4, 5, 6]);
+    // Towards the image is clockwise from these stops.
+    let off = [-9.5f64, -8.0, -8.0, 3.0, 0.6, -0.3, 0.3];
+    for (r, off) in source.rays.iter_mut().zip(off) {
+        r.bearing += off.to_radians();
+    }
+    let (least, _) = crate::mapper::refine::Medians::of(source.rays.iter()).least(talker);
+    assert!(
+        least[0] > 8.15 && least[1] > 3.15,
+        "beyond the corner: {least:?}"
+    );
+    let none = vec![Vec::new(); poses.len()];
+    let (fit, placed, _) = fitted_and_placed(&mapper, &poses, source, talker, none);
+    assert!(dist(fit, talker) > 1.0, "the blends pull the fit: {fit:?}");
+    assert!(dist([placed.x, placed.y], talker) < 0.25, "{placed:?}");
+    assert_eq!(placed.blends, vec![0, 1, 2]);
+}
+
+#[test]
 fn a_talker_stays_where_its_blends_explain_its_rays_no_better() {
     // Two peaks of five blend the talker with its image, 40 % of the way to it (18
     // degrees off from the stop at x = 4, where the image is 45 degrees beside the
