@@ -16,8 +16,31 @@ fn out_of_range(name: &'static str, value: String, range: &'static str) -> Confi
 
 impl SslConfig {
     /// Every numeric setting against its range ([`ConfigError::OutOfRange`] for the first
-    /// outside it).
+    /// outside it): the real-valued ones, the counts, the band, the grid.
     pub(crate) fn check_ranges(&self) -> Result<(), ConfigError> {
+        for (name, v, lo, hi, range) in self.reals() {
+            if !(v.is_finite() && (lo..=hi).contains(&v)) {
+                // `{:?}` writes 5e-324 as such, not as 324 digits.
+                return Err(out_of_range(name, format!("{v:?}"), range));
+            }
+        }
+        for (name, v, lo, hi, range) in self.counts() {
+            if !(lo..=hi).contains(&v) {
+                return Err(out_of_range(name, v.to_string(), range));
+            }
+        }
+        if self.fmin_hz >= self.fmax_hz {
+            return Err(out_of_range(
+                "fmin_hz",
+                format!("{:?}", self.fmin_hz),
+                "below fmax_hz (the band from fmin_hz to fmax_hz must not be empty)",
+            ));
+        }
+        self.check_grid()
+    }
+
+    /// The real-valued settings with their ranges.
+    fn reals(&self) -> Vec<Real> {
         let mut reals: Vec<Real> = vec![
             (
                 "az_step_deg",
@@ -80,12 +103,11 @@ impl SslConfig {
         if let Some(e) = self.elevation {
             reals.push(("elevation.step_deg", e.step_deg, 0.1, 180.0, "0.1 to 180 degrees (no array on a robot resolves directions finer than a tenth of a degree)"));
         }
-        for (name, v, lo, hi, range) in reals {
-            if !(v.is_finite() && (lo..=hi).contains(&v)) {
-                // `{:?}` writes 5e-324 as such, not as 324 digits.
-                return Err(out_of_range(name, format!("{v:?}"), range));
-            }
-        }
+        reals
+    }
+
+    /// The counts (frames, peaks, bins) with their ranges.
+    fn counts(&self) -> Vec<Count> {
         let mut counts: Vec<Count> = vec![
             (
                 "num_peaks",
@@ -138,19 +160,11 @@ impl SslConfig {
                 "1 to 64 (at most the DoAs an array resolves)",
             ));
         }
-        for (name, v, lo, hi, range) in counts {
-            if !(lo..=hi).contains(&v) {
-                return Err(out_of_range(name, v.to_string(), range));
-            }
-        }
-        if self.fmin_hz >= self.fmax_hz {
-            return Err(out_of_range(
-                "fmin_hz",
-                format!("{:?}", self.fmin_hz),
-                "below fmax_hz (the band from fmin_hz to fmax_hz must not be empty)",
-            ));
-        }
-        // The grid: each direction costs a column of every block's spectrum.
+        counts
+    }
+
+    /// The grid's size: each direction costs a column of every block's spectrum.
+    fn check_grid(&self) -> Result<(), ConfigError> {
         let azimuths = (360.0 / self.az_step_deg).ceil();
         let elevations = self.elevation.map_or(1.0, |e| {
             ((e.max_deg - e.min_deg).max(0.0) / e.step_deg).floor() + 1.0
