@@ -68,78 +68,20 @@ impl Localizer {
                 *k = *k && blocks.binary_search(&b).is_ok();
             }
         }
-        let kept = keep.iter().filter(|&&k| k).count();
-        // Per azimuth cell, the blocks whose strongest direction lies there (see
-        // `SslConfig::dominance_blocks`). A block holding half the energy of the one before
-        // or less is the room's decay, and one more than `VOTE_QUIET_DB` below the
-        // recording's loudest is a pause or silence: neither votes.
-        let n_az = self.grid.num_azimuths();
-        let mut votes = vec![0u32; if dominance { n_az } else { 0 }];
+        let kept_blocks: Vec<usize> = (0..n_blocks).filter(|&b| keep[b]).collect();
+        let ranges: Vec<Range<usize>> = kept_blocks.iter().map(|&b| frames(b)).collect();
+        // A block holding half the energy of the one before or less is the room's decay,
+        // and one more than `VOTE_QUIET_DB` below the recording's loudest is a pause or
+        // silence: neither votes (see `SslConfig::dominance_blocks`).
         let loudest = energy.iter().copied().fold(0.0, f64::max);
         let quiet = loudest * 10f64.powf(-VOTE_QUIET_DB / 10.0);
         let votes_in = |b: usize| {
             dominance && energy[b] >= quiet && (b == 0 || energy[b] >= 0.5 * energy[b - 1])
         };
-        let mut pooled = vec![0.0f32; self.grid.len()];
+        let mut pooler = Pooler::new(self, kept_blocks.len(), pooling, dominance);
         let mut block = std::mem::take(&mut scratch.block);
         block.resize(self.grid.len(), 0.0);
-        // Max pooling keeps each direction's `k` largest block values, largest first (k = 1:
-        // the plain maximum), and pools their mean.
-        let k = self.config.pool_top.min(kept).max(1);
-        let max = pooling != Pooling::Mean;
-        let mut top = if max {
-            vec![f32::NEG_INFINITY; pooled.len() * k]
-        } else {
-            Vec::new()
-        };
-        // Each block's azimuth profile, for placing the DoAs (`SslConfig::placement_share`;
-        // the octaves' localizers have it off: their DoAs are block maxima).
-        let place = max && self.config.placement_share > 0.0;
-        let mut profiles: Vec<f32> = Vec::with_capacity(if place { kept * n_az } else { 0 });
-        let kept_blocks: Vec<usize> = (0..n_blocks).filter(|&b| keep[b]).collect();
-        let ranges: Vec<Range<usize>> = kept_blocks.iter().map(|&b| frames(b)).collect();
-        let mut sink = |i: usize, block: &[f32]| {
-            let b = kept_blocks[i];
-            if votes_in(b) {
-                let (mut best, mut at) = (f32::NEG_INFINITY, 0);
-                for (d, &v) in block.iter().enumerate() {
-                    if v > best {
-                        (best, at) = (v, d);
-                    }
-                }
-                votes[at % n_az] += 1;
-            }
-            if place {
-                let at = profiles.len();
-                profiles.extend_from_slice(&block[..n_az]);
-                for row in block.chunks_exact(n_az).skip(1) {
-                    profiles[at..]
-                        .iter_mut()
-                        .zip(row)
-                        .for_each(|(p, &v)| *p = p.max(v));
-                }
-            }
-            match (max, k) {
-                // The plain maximum as one vectorisable pass.
-                (true, 1) => top.iter_mut().zip(block).for_each(|(t, &v)| *t = t.max(v)),
-                (true, _) => {
-                    for (t, &v) in top.chunks_exact_mut(k).zip(block) {
-                        if v > t[k - 1] {
-                            let mut i = k - 1;
-                            while i > 0 && t[i - 1] < v {
-                                t[i] = t[i - 1];
-                                i -= 1;
-                            }
-                            t[i] = v;
-                        }
-                    }
-                }
-                (false, _) => pooled
-                    .iter_mut()
-                    .zip(block)
-                    .for_each(|(p, &v)| *p += v / kept as f32),
-            }
-        };
+        let mut sink = |i: usize, block: &[f32]| pooler.take(block, votes_in(kept_blocks[i]));
         match source {
             Blocks::Estimate => self
                 .estimator
@@ -167,17 +109,10 @@ impl Localizer {
                 }
             }
         }
-        if max {
-            for (p, t) in pooled.iter_mut().zip(top.chunks_exact(k)) {
-                *p = t.iter().sum::<f32>() / k as f32;
-            }
-        }
         scratch.block = block;
-        AngularSpectrum::new(self.grid.clone(), pooled)
-            .with_pooling(if max { Pooling::Max } else { Pooling::Mean })
-            .with_votes(votes)
+        pooler
+            .finish(self.grid.clone())
             .with_mirror_axis(self.mirror_axis_deg)
-            .with_block_profiles(profiles)
     }
 
     /// How `nf` frames split into blocks: their number, and each block's frames. Blocks
@@ -268,4 +203,119 @@ pub(super) fn block_energies(
             (heard - noise * frames(b).len() as f64).max(floor)
         })
         .collect()
+}
+
+/// The blocks' spectra pooled as they come ([`Localizer::pool`]): the maximum, the mean of
+/// the top few or the mean, per direction; with the dominance votes and each block's
+/// azimuth profile.
+struct Pooler {
+    /// Azimuth cells of the grid (a block's row of directions at one elevation).
+    n_az: usize,
+    /// Per azimuth cell, the blocks whose strongest direction lies there (empty when the
+    /// votes are off; `SslConfig::dominance_blocks`).
+    votes: Vec<u32>,
+    /// Whether each block's azimuth profile is kept, for placing the DoAs
+    /// (`SslConfig::placement_share`; the octaves' localizers have it off: their DoAs are
+    /// block maxima), and the profiles, block after block.
+    place: bool,
+    profiles: Vec<f32>,
+    /// Max pooling (else the mean), and each direction's `k` largest block values,
+    /// largest first (k = 1: the plain maximum), whose mean it pools.
+    max: bool,
+    k: usize,
+    top: Vec<f32>,
+    /// The mean so far (mean pooling), or the pooled spectrum once finished.
+    pooled: Vec<f32>,
+    /// How many blocks are pooled.
+    kept: usize,
+}
+
+impl Pooler {
+    fn new(l: &Localizer, kept: usize, pooling: Pooling, dominance: bool) -> Self {
+        let (n_az, len) = (l.grid.num_azimuths(), l.grid.len());
+        let k = l.config.pool_top.min(kept).max(1);
+        let max = pooling != Pooling::Mean;
+        let place = max && l.config.placement_share > 0.0;
+        Pooler {
+            n_az,
+            votes: vec![0u32; if dominance { n_az } else { 0 }],
+            place,
+            profiles: Vec::with_capacity(if place { kept * n_az } else { 0 }),
+            max,
+            k,
+            top: if max {
+                vec![f32::NEG_INFINITY; len * k]
+            } else {
+                Vec::new()
+            },
+            pooled: vec![0.0f32; len],
+            kept,
+        }
+    }
+
+    /// One block's spectrum, and whether it votes.
+    fn take(&mut self, block: &[f32], votes: bool) {
+        if votes {
+            let (mut best, mut at) = (f32::NEG_INFINITY, 0);
+            for (d, &v) in block.iter().enumerate() {
+                if v > best {
+                    (best, at) = (v, d);
+                }
+            }
+            self.votes[at % self.n_az] += 1;
+        }
+        if self.place {
+            let n_az = self.n_az;
+            let at = self.profiles.len();
+            self.profiles.extend_from_slice(&block[..n_az]);
+            for row in block.chunks_exact(n_az).skip(1) {
+                self.profiles[at..]
+                    .iter_mut()
+                    .zip(row)
+                    .for_each(|(p, &v)| *p = p.max(v));
+            }
+        }
+        let k = self.k;
+        match (self.max, k) {
+            // The plain maximum as one vectorisable pass.
+            (true, 1) => (self.top.iter_mut())
+                .zip(block)
+                .for_each(|(t, &v)| *t = t.max(v)),
+            (true, _) => {
+                for (t, &v) in self.top.chunks_exact_mut(k).zip(block) {
+                    if v > t[k - 1] {
+                        let mut i = k - 1;
+                        while i > 0 && t[i - 1] < v {
+                            t[i] = t[i - 1];
+                            i -= 1;
+                        }
+                        t[i] = v;
+                    }
+                }
+            }
+            (false, _) => {
+                let kept = self.kept as f32;
+                (self.pooled.iter_mut())
+                    .zip(block)
+                    .for_each(|(p, &v)| *p += v / kept)
+            }
+        }
+    }
+
+    /// The pooled spectrum on `grid`, with its votes and profiles.
+    fn finish(mut self, grid: DirectionGrid) -> AngularSpectrum {
+        if self.max {
+            for (p, t) in self.pooled.iter_mut().zip(self.top.chunks_exact(self.k)) {
+                *p = t.iter().sum::<f32>() / self.k as f32;
+            }
+        }
+        AngularSpectrum::new(grid, self.pooled)
+            .with_pooling(if self.max {
+                Pooling::Max
+            } else {
+                Pooling::Mean
+            })
+            .with_votes(self.votes)
+            .with_block_profiles(self.profiles)
+    }
 }
