@@ -118,46 +118,10 @@ impl Music {
         // the local maxima.
         let sum = zeroed(&mut s.coarse_sum, nc);
         self.sum_groups(&s.proj, nc_pad, nc, sum);
-        let at = |j: usize, i: usize| sum[j * caz + i];
-        let peaks = &mut s.peaks;
-        peaks.clear();
-        for j in 0..cel {
-            let (j0, j1) = (j.saturating_sub(1), (j + 1).min(cel - 1));
-            for i in 0..caz {
-                let v = at(j, i);
-                let (il, ir) = (
-                    if i == 0 { caz - 1 } else { i - 1 },
-                    if i + 1 == caz { 0 } else { i + 1 },
-                );
-                // A local maximum: nothing around it (azimuth wraps) is larger.
-                let top = (j0..=j1)
-                    .all(|jj| at(jj, il) <= v && at(jj, ir) <= v && (jj == j || at(jj, i) <= v));
-                if top {
-                    peaks.push((v, j, i));
-                }
-            }
-        }
-        peaks.sort_by(|a, b| b.0.total_cmp(&a.0));
-        peaks.truncate(c.candidates);
+        c.local_maxima(sum, &mut s.peaks);
         // The full grid within one coarse cell of each.
-        let n_el = c.el_bracket.len();
         let mark = zeroed(&mut s.fine_mark, self.n_dirs);
-        s.fine_dirs.clear();
-        for &(_, j, i) in peaks.iter() {
-            let e_lo = if j == 0 { 0 } else { c.els[j - 1] };
-            let e_hi = if j + 1 < cel { c.els[j + 1] } else { n_el - 1 };
-            let a0 = i * c.az_stride;
-            for e in e_lo..=e_hi {
-                for da in 0..=2 * c.az_stride {
-                    let a = (a0 + c.n_az + da - c.az_stride) % c.n_az;
-                    let d = e * c.n_az + a;
-                    if !mark[d] {
-                        mark[d] = true;
-                        s.fine_dirs.push(d);
-                    }
-                }
-            }
-        }
+        c.around(&s.peaks, mark, &mut s.fine_dirs);
         let nf = s.fine_dirs.len();
         self.gather_into(&s.fine_dirs, &mut s.fine_tables);
         let [fr, fi, sr, si] = &s.fine_tables;
@@ -200,26 +164,86 @@ impl Music {
                 *o += v * scale;
             }
         }
-        // Everywhere: linear in azimuth along each coarse elevation, then in elevation.
-        let rows = zeroed(&mut s.rows, cel * c.n_az);
-        for (j, row) in rows.chunks_exact_mut(c.n_az).enumerate() {
-            let cs = &sum[j * caz..(j + 1) * caz];
-            for (o, &(i0, i1, u)) in row.iter_mut().zip(&c.az_bracket) {
-                *o = cs[i0] + (cs[i1] - cs[i0]) * u;
-            }
-        }
-        for (e, &(lo, hi, t)) in c.el_bracket.iter().enumerate() {
-            let (rl, rh) = (
-                &rows[lo * c.n_az..(lo + 1) * c.n_az],
-                &rows[hi * c.n_az..(hi + 1) * c.n_az],
-            );
-            for ((o, &l), &h) in out[e * c.n_az..(e + 1) * c.n_az].iter_mut().zip(rl).zip(rh) {
-                *o = l + (h - l) * t;
-            }
-        }
+        // Everywhere: interpolated from the coarse directions.
+        c.interpolate(sum, zeroed(&mut s.rows, cel * c.n_az), out);
         // Where refined: the values themselves.
         for (&d, &v) in s.fine_dirs.iter().zip(fine_sum.iter()) {
             out[d] = v;
+        }
+    }
+}
+
+impl Coarse {
+    /// The local maxima of the coarse spectrum `sum` (coarse-elevation-major; nothing
+    /// around one, azimuth wrapping, is larger), strongest first, at most
+    /// [`Coarse::candidates`] of them: `(value, coarse elevation, coarse azimuth)`.
+    fn local_maxima(&self, sum: &[f32], peaks: &mut Vec<(f32, usize, usize)>) {
+        let (caz, cel) = (self.n_az / self.az_stride, self.els.len());
+        let at = |j: usize, i: usize| sum[j * caz + i];
+        peaks.clear();
+        for j in 0..cel {
+            let (j0, j1) = (j.saturating_sub(1), (j + 1).min(cel - 1));
+            for i in 0..caz {
+                let v = at(j, i);
+                let (il, ir) = (
+                    if i == 0 { caz - 1 } else { i - 1 },
+                    if i + 1 == caz { 0 } else { i + 1 },
+                );
+                let top = (j0..=j1)
+                    .all(|jj| at(jj, il) <= v && at(jj, ir) <= v && (jj == j || at(jj, i) <= v));
+                if top {
+                    peaks.push((v, j, i));
+                }
+            }
+        }
+        peaks.sort_by(|a, b| b.0.total_cmp(&a.0));
+        peaks.truncate(self.candidates);
+    }
+
+    /// The fine directions within one coarse cell of each of `peaks`, each once (`mark`,
+    /// one flag per fine direction, all false on entry), in `dirs`.
+    fn around(&self, peaks: &[(f32, usize, usize)], mark: &mut [bool], dirs: &mut Vec<usize>) {
+        let (cel, n_el) = (self.els.len(), self.el_bracket.len());
+        dirs.clear();
+        for &(_, j, i) in peaks {
+            let e_lo = if j == 0 { 0 } else { self.els[j - 1] };
+            let e_hi = if j + 1 < cel {
+                self.els[j + 1]
+            } else {
+                n_el - 1
+            };
+            let a0 = i * self.az_stride;
+            for e in e_lo..=e_hi {
+                for da in 0..=2 * self.az_stride {
+                    let a = (a0 + self.n_az + da - self.az_stride) % self.n_az;
+                    let d = e * self.n_az + a;
+                    if !mark[d] {
+                        mark[d] = true;
+                        dirs.push(d);
+                    }
+                }
+            }
+        }
+    }
+
+    /// The full grid in `out` from the coarse spectrum `sum`: linear in azimuth along
+    /// each coarse elevation (in `rows`), then in elevation.
+    fn interpolate(&self, sum: &[f32], rows: &mut [f32], out: &mut [f32]) {
+        let (n_az, caz) = (self.n_az, self.n_az / self.az_stride);
+        for (j, row) in rows.chunks_exact_mut(n_az).enumerate() {
+            let cs = &sum[j * caz..(j + 1) * caz];
+            for (o, &(i0, i1, u)) in row.iter_mut().zip(&self.az_bracket) {
+                *o = cs[i0] + (cs[i1] - cs[i0]) * u;
+            }
+        }
+        for (e, &(lo, hi, t)) in self.el_bracket.iter().enumerate() {
+            let (rl, rh) = (
+                &rows[lo * n_az..(lo + 1) * n_az],
+                &rows[hi * n_az..(hi + 1) * n_az],
+            );
+            for ((o, &l), &h) in out[e * n_az..(e + 1) * n_az].iter_mut().zip(rl).zip(rh) {
+                *o = l + (h - l) * t;
+            }
         }
     }
 }
