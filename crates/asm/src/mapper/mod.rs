@@ -153,7 +153,8 @@ pub struct Source {
     pub blends: Vec<usize>,
     /// The stops whose DoAs it explains as its image in a wall near it, heard instead of
     /// its direct sound (with [`IasmConfig::reflections`]): it stands where their rays,
-    /// unfolded in that wall, meet its others. Empty for most sources.
+    /// unfolded in that wall, meet its others, or, from stops the map hides it from, where
+    /// its others meet. Empty for most sources.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub images: Vec<usize>,
 }

@@ -19,6 +19,14 @@
 //! (`l_wing`'s wing talker heard with MVDR at N = 4: three blends and a ray 3 degrees off
 //! meet beyond the wing's corner, and the talker stood in that corner, 1.1 m off).
 //!
+//! A stop the map hides a source from cannot hear its direct sound: from where its rays
+//! meet, such a stop's ray that misses it beyond the gate and passes one of its images
+//! nearer is that image, and is left out of the fit as the blends are (within the gate it
+//! is still taken as the direct sound, which a corner the map's raster rounds lets by).
+//! `corridor_alcoves`' first alcove talker is heard with MVDR from the stop just past the
+//! alcove's east corner at its image in the west wall, 12 degrees off; with a blend from
+//! the stop before, its bearing fit stood 0.2 m off, and 0.04 m without them.
+//!
 //! And a source can be heard from some stops by its image instead of its direct sound:
 //! two coherent arrivals closer than the array's main lobe make one apparent direction,
 //! between them or beyond by their relative phase at each frequency (radar's glint), and
@@ -50,6 +58,20 @@
 
 use super::*;
 use crate::mapper::refine::{KEPT_INFORMATION, Medians, weakest_information};
+
+/// What a source's ray is when not its direct sound ([`Mapper::cost`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Aside {
+    /// One peak of its direct sound and its image in a wall near it.
+    Blend,
+    /// Its image, heard from a stop the map hides it from.
+    Image,
+    /// Another sound's, heard from a stop the map hides it from.
+    Other,
+}
+
+/// Where [`Mapper::unblended`] places a source, and the stops of its blends and images.
+type Unblended = ([f64; 2], Vec<usize>, Vec<usize>);
 
 /// How many times a source heard by its image is refitted, each time with the rays that
 /// pass its image nearer than itself from where the last fit stands
@@ -96,10 +118,11 @@ impl Mapper {
             // most meet in the room, as a blend lies between the source and its image.
             let mut medians = Medians::of(s.rays.iter());
             let (at, _) = medians.least([s.x, s.y]);
-            let (in_room, _) = medians.least_where([s.x, s.y], |q| self.in_room(q));
-            if let Some((p, blends)) = self.unblended(s, in_room) {
+            let free = |q: [f64; 2]| matches!(self.map.cell_at(q), Some(Cell::Free));
+            let (in_room, _) = medians.least_where([s.x, s.y], free);
+            if let Some((p, blends, images)) = self.unblended(s, in_room) {
                 (s.x, s.y) = (p[0], p[1]);
-                s.blends = blends;
+                (s.blends, s.images) = (blends, images);
             } else if let Some((p, images)) = self.imaged(s, at, &self.spare_rays(s, stops, pool)) {
                 (s.x, s.y) = (p[0], p[1]);
                 // The spare DoAs taken as its image are its own now.
@@ -119,34 +142,40 @@ impl Mapper {
         }
     }
 
-    /// Where `s` stands without the rays that blend it with its own image: the bearing fit
-    /// of its other rays, from `at`, where most of its rays meet, and the stops of the
-    /// rays left out. `None` when none blends there, or the fit is not taken: a ray left
-    /// out no longer a blend at the fit, less than [`KEPT_INFORMATION`] of the information
-    /// on the position kept, or the rays explained no better than where `s` stands
-    /// ([`Mapper::cost`]).
-    fn unblended(&self, s: &Source, at: [f64; 2]) -> Option<([f64; 2], Vec<usize>)> {
+    /// Where `s` stands without the rays that blend it with its own image, or come from
+    /// stops the map hides it from: the bearing fit of its other rays, from `at`, where
+    /// most of its rays meet, and the stops of the blends and of the images (rays from
+    /// hidden stops at its image) left out there. `None` when no ray is left out
+    /// there, or the fit is not taken: a ray left out no longer so at the fit, less than
+    /// [`KEPT_INFORMATION`] of the information on the position kept, or the rays explained
+    /// no better than where `s` stands ([`Mapper::cost`]).
+    fn unblended(&self, s: &Source, at: [f64; 2]) -> Option<Unblended> {
         let rays = &s.rays;
         let here = [s.x, s.y];
         let (_, out) = self.cost(at, rays);
-        if !out.contains(&true) {
+        if out.iter().all(Option::is_none) {
             return None;
         }
         let own: Vec<Ray> = rays
             .iter()
             .zip(&out)
-            .filter(|(_, b)| !**b)
+            .filter(|(_, aside)| aside.is_none())
             .map(|(r, _)| *r)
             .collect();
         let (p, _) = fit_bearings(at, &own, self.sigma, self.trim)?;
         let (cost, still) = self.cost(p, rays);
         let weakest = |set: &[Ray]| weakest_information(p, set.iter());
-        (out.iter().zip(&still).all(|(was, is)| !was || *is)
+        (out.iter()
+            .zip(&still)
+            .all(|(was, is)| was.is_none() || is.is_some())
             && weakest(&own) >= KEPT_INFORMATION * weakest(rays)
             && cost < self.cost(here, rays).0)
             .then(|| {
-                let stops = rays.iter().zip(&out).filter(|(_, b)| **b);
-                (p, stops.map(|(r, _)| r.stop).collect())
+                let stops = |kind: Aside| {
+                    let of = rays.iter().zip(&out).filter(|(_, a)| **a == Some(kind));
+                    of.map(|(r, _)| r.stop).collect()
+                };
+                (p, stops(Aside::Blend), stops(Aside::Image))
             })
     }
 
@@ -300,29 +329,57 @@ impl Mapper {
     }
 
     /// How well a source at `q` explains `rays` (-2 log-likelihood, up to a constant), and
-    /// which of them it explains as blends with its image: each ray's squared miss in
+    /// which of them it does not take as its direct sound: each ray's squared miss in
     /// `sigma`s (the mapper's Gaussian DoA model), or for a blend ([`Mapper::blends`])
     /// `2 ln(w / (sqrt(2 pi) sigma))` where that is less (a peak anywhere between the
     /// source and its image, `w` apart), at most 4 (beyond the `2 sigma` gate, another
-    /// sound's).
-    fn cost(&self, q: [f64; 2], rays: &[Ray]) -> (f64, Vec<bool>) {
+    /// sound's). A ray that misses `q` by more than a `sigma` from a stop the map hides `q`
+    /// from is no direct sound of it: its squared miss at `q`'s nearest image whose
+    /// reflection meets a wall, or another sound's.
+    fn cost(&self, q: [f64; 2], rays: &[Ray]) -> (f64, Vec<Option<Aside>>) {
         let mirrors = self.mirrors(q);
         let uniform = (std::f64::consts::TAU.sqrt() * self.sigma).ln();
         let mut total = 0.0;
-        let blends = rays
+        let aside = rays
             .iter()
             .map(|r| {
                 let miss = r.miss(q);
                 let direct = (miss / self.sigma).powi(2);
-                let blend = self
-                    .blend_of(r, q, q, || &mirrors)
-                    .map(|w| 2.0 * (w.ln() - uniform))
-                    .filter(|&b| b < direct);
-                total += blend.unwrap_or(direct).min(4.0);
-                blend.is_some()
+                // From a stop the map hides `q` from, a ray beyond the gate and nearer one
+                // of its images than itself is that image (within the gate, the direct
+                // sound by a corner the map's raster rounds).
+                let image = || {
+                    (mirrors.iter())
+                        .filter_map(|m| {
+                            let (_, mirrored, at) = Self::image_beside(m, r.from, q)?;
+                            self.on_wall(at)
+                                .then(|| wrap_rad(r.bearing - mirrored).abs())
+                        })
+                        .fold(f64::INFINITY, f64::min)
+                };
+                let hidden = miss > 2.0 * self.sigma && self.hidden(r.from, q);
+                let (c, aside) = if let Some(image) = hidden.then(image).filter(|&i| i < miss) {
+                    (
+                        (image / self.sigma).powi(2),
+                        Some(if image < 2.0 * self.sigma {
+                            Aside::Image
+                        } else {
+                            Aside::Other
+                        }),
+                    )
+                } else {
+                    match self.blend_of(r, q, q, || &mirrors) {
+                        Some(w) if 2.0 * (w.ln() - uniform) < direct => {
+                            (2.0 * (w.ln() - uniform), Some(Aside::Blend))
+                        }
+                        _ => (direct, None),
+                    }
+                };
+                total += c.min(4.0);
+                aside
             })
             .collect();
-        (total, blends)
+        (total, aside)
     }
 
     /// The DoAs of `pool` (world bearings no source explains, by stop) at the stops where `s`

@@ -476,6 +476,29 @@ fn blends_are_judged_from_where_the_rays_meet_in_the_room() {
 }
 
 #[test]
+fn a_ray_from_a_stop_the_map_hides_a_talker_from_is_its_image() {
+    // The alcove's talker heard directly from the stops at x = 1..5, and from x = 7, where
+    // the corridor's north wall hides it, at its image in the alcove's west wall (half a
+    // degree off; 12 degrees beside the bearing to the talker): the reflection is what
+    // reaches that stop (`corridor_alcoves`' first alcove talker, MVDR, from the stop past
+    // the alcove's east corner). The bearing fit of all six is pulled towards it, and no
+    // ray lies between the talker and its image. The stop cannot hear the talker's direct
+    // sound, so its ray is taken as the image, left out of the fit, and named so.
+    let (mapper, poses) = alcove(IasmConfig::default());
+    let mut talker = heard_from(TALKER, &poses, &[1, 2, 3, 4, 5]);
+    let image = poses[7].bearing_to([2.0, TALKER[1]]);
+    talker
+        .rays
+        .push(ray(&poses, 7, image + 0.5f64.to_radians()));
+    talker.observations = talker.rays.len();
+    let none = vec![Vec::new(); poses.len()];
+    let (fit, placed, _) = fitted_and_placed(&mapper, &poses, talker, TALKER, none);
+    assert!(dist(fit, TALKER) > 0.1, "the image pulls the fit: {fit:?}");
+    assert!(dist([placed.x, placed.y], TALKER) < 1e-6, "{placed:?}");
+    assert_eq!((placed.images, placed.blends), (vec![7], vec![]));
+}
+
+#[test]
 fn a_talker_stays_where_its_blends_explain_its_rays_no_better() {
     // Two peaks of five blend the talker with its image, 40 % of the way to it (18
     // degrees off from the stop at x = 4, where the image is 45 degrees beside the
