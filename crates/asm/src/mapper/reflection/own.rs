@@ -95,8 +95,8 @@ impl Mapper {
     /// Each refined source with four rays or more placed where its direct sound is heard,
     /// its rays judged from where most of them meet ([`Medians::least`]): moved to the fit of
     /// its other rays where some of its own rays blend its direct sound with its image in
-    /// a wall near it, judged from where most meet in the room ([`Mapper::in_room`];
-    /// [`Mapper::unblended`]), or else to where its direct rays and those
+    /// a wall near it, judged from where most meet in a free cell of the map
+    /// ([`Mapper::unblended`]), or else to where its direct rays and those
     /// that are its image, unfolded in the wall, meet ([`Mapper::imaged`]). Nothing on a
     /// map without walls, or with [`IasmConfig::reflections`] or [`IasmConfig::refine`]
     /// off.
@@ -324,8 +324,17 @@ impl Mapper {
     /// stop may hear that image ([`Mapper::image_beside`], the point of reflection on the
     /// wall) and sees `s`.
     fn image_miss(&self, m: &Mirror, r: &Ray, s: [f64; 2]) -> Option<f64> {
+        self.wall_image_miss(m, r, s)
+            .filter(|_| !self.hidden(r.from, s))
+    }
+
+    /// The miss (rad) of ray `r` at the image of a source at `s` in `m`'s wall, where its
+    /// stop may hear that image ([`Mapper::image_beside`]) and the point of reflection is
+    /// on the wall, whether or not the stop sees `s`.
+    fn wall_image_miss(&self, m: &Mirror, r: &Ray, s: [f64; 2]) -> Option<f64> {
         let (_, mirrored, at) = Self::image_beside(m, r.from, s)?;
-        (self.on_wall(at) && !self.hidden(r.from, s)).then(|| wrap_rad(r.bearing - mirrored).abs())
+        self.on_wall(at)
+            .then(|| wrap_rad(r.bearing - mirrored).abs())
     }
 
     /// How well a source at `q` explains `rays` (-2 log-likelihood, up to a constant), and
@@ -333,9 +342,10 @@ impl Mapper {
     /// `sigma`s (the mapper's Gaussian DoA model), or for a blend ([`Mapper::blends`])
     /// `2 ln(w / (sqrt(2 pi) sigma))` where that is less (a peak anywhere between the
     /// source and its image, `w` apart), at most 4 (beyond the `2 sigma` gate, another
-    /// sound's). A ray that misses `q` by more than a `sigma` from a stop the map hides `q`
-    /// from is no direct sound of it: its squared miss at `q`'s nearest image whose
-    /// reflection meets a wall, or another sound's.
+    /// sound's). A ray from a stop the map hides `q` from that misses `q` beyond the gate
+    /// and passes one of its images (the reflection meeting a wall) nearer is no direct
+    /// sound of it: its squared miss at that image, an image within the gate and another
+    /// sound's beyond.
     fn cost(&self, q: [f64; 2], rays: &[Ray]) -> (f64, Vec<Option<Aside>>) {
         let mirrors = self.mirrors(q);
         let uniform = (std::f64::consts::TAU.sqrt() * self.sigma).ln();
@@ -350,11 +360,7 @@ impl Mapper {
                 // sound by a corner the map's raster rounds).
                 let image = || {
                     (mirrors.iter())
-                        .filter_map(|m| {
-                            let (_, mirrored, at) = Self::image_beside(m, r.from, q)?;
-                            self.on_wall(at)
-                                .then(|| wrap_rad(r.bearing - mirrored).abs())
-                        })
+                        .filter_map(|m| self.wall_image_miss(m, r, q))
                         .fold(f64::INFINITY, f64::min)
                 };
                 let hidden = miss > 2.0 * self.sigma && self.hidden(r.from, q);
@@ -368,12 +374,10 @@ impl Mapper {
                         }),
                     )
                 } else {
-                    match self.blend_of(r, q, q, || &mirrors) {
-                        Some(w) if 2.0 * (w.ln() - uniform) < direct => {
-                            (2.0 * (w.ln() - uniform), Some(Aside::Blend))
-                        }
-                        _ => (direct, None),
-                    }
+                    (self.blend_of(r, q, q, || &mirrors))
+                        .map(|w| 2.0 * (w.ln() - uniform))
+                        .filter(|&b| b < direct)
+                        .map_or((direct, None), |b| (b, Some(Aside::Blend)))
                 };
                 total += c.min(4.0);
                 aside
