@@ -136,9 +136,17 @@ fn a_maps_mcap_holds_its_sources_ellipses_rays_path_and_grid_in_frame_map() {
     }
     let by = |t: &str| msgs.iter().find(|m| m.topic == t).unwrap();
 
-    // The grid, decoded by the bag reader: the PGM's cells, rows from the bottom.
-    assert_eq!(by("/map").schema, "nav_msgs/msg/OccupancyGrid");
-    let g = bag::msg::grid(bag::msg::Encoding::Cdr, &by("/map").data).unwrap();
+    grid_is_the_pgms(by("/map"));
+    poses_are_the_jsons(&by("/iasm/source_poses").data, sources);
+    markers_are_the_jsons(&by("/iasm/sources").data, sources);
+    path_is_the_pose_tables(&by("/iasm/path").data);
+    rays_point_at_the_truth(&by("/iasm/doas").data);
+}
+
+/// `/map`, decoded by the bag reader: the PGM's cells of [`walled`], rows from the bottom.
+fn grid_is_the_pgms(m: &Read) {
+    assert_eq!(m.schema, "nav_msgs/msg/OccupancyGrid");
+    let g = bag::msg::grid(bag::msg::Encoding::Cdr, &m.data).unwrap();
     assert_eq!(
         (g.frame_id.as_str(), g.width, g.height, g.resolution),
         ("map", 160, 120, 0.05)
@@ -154,20 +162,23 @@ fn a_maps_mcap_holds_its_sources_ellipses_rays_path_and_grid_in_frame_map() {
     assert_eq!(cell(-0.5, 1.9), 0);
     assert_eq!(g.data.iter().filter(|&&c| c == 100).count(), 4 * 20);
     assert_eq!(g.data.iter().filter(|&&c| c == -1).count(), 20 * 20);
+}
 
-    // The sources for programs: the JSON's, in its order.
-    let poses = PoseArray::from_cdr(&by("/iasm/source_poses").data).unwrap();
+/// `/iasm/source_poses`, the sources for programs: the JSON's, in its order.
+fn poses_are_the_jsons(data: &[u8], sources: &[serde_json::Value]) {
+    let poses = PoseArray::from_cdr(data).unwrap();
     assert_eq!(poses.header.frame_id, "map");
     assert_eq!(poses.poses.len(), 3);
     for (p, s) in poses.poses.iter().zip(sources) {
         assert!((p.position.x - f(&s["x"])).abs() < 1e-12, "{p:?} {s}");
         assert!((p.position.y - f(&s["y"])).abs() < 1e-12, "{p:?} {s}");
     }
+}
 
-    // Markers: a DELETEALL, then per source a sphere, its 2-sigma ellipse and a label.
-    let markers = MarkerArray::from_cdr(&by("/iasm/sources").data)
-        .unwrap()
-        .markers;
+/// `/iasm/sources`: a DELETEALL, then per source of the JSON a sphere, its 2-sigma
+/// ellipse and a label.
+fn markers_are_the_jsons(data: &[u8], sources: &[serde_json::Value]) {
+    let markers = MarkerArray::from_cdr(data).unwrap().markers;
     assert_eq!(markers[0].action, Marker::DELETEALL);
     for (k, s) in sources.iter().enumerate() {
         let find = |ns: &str| {
@@ -211,9 +222,11 @@ fn a_maps_mcap_holds_its_sources_ellipses_rays_path_and_grid_in_frame_map() {
             }
         }
     }
+}
 
-    // The path: the pose table's stops, with headings, a second apart.
-    let path = RosPath::from_cdr(&by("/iasm/path").data).unwrap();
+/// `/iasm/path`: the pose table's stops, with headings, a second apart.
+fn path_is_the_pose_tables(data: &[u8]) {
+    let path = RosPath::from_cdr(data).unwrap();
     let stops = drive();
     assert_eq!(path.poses.len(), stops.len());
     for (k, (p, &(x, y, th))) in path.poses.iter().zip(&stops).enumerate() {
@@ -221,12 +234,13 @@ fn a_maps_mcap_holds_its_sources_ellipses_rays_path_and_grid_in_frame_map() {
         assert!(ssl::wrap_deg(p.pose.orientation.to_yaw().to_degrees() - th).abs() < 1e-9);
         assert_eq!(p.header.stamp.ns(), k as i64 * 1_000_000_000);
     }
+}
 
-    // The rays: per stop, one segment per DoA from the robot, 5 m long, pointing at a
-    // true source (the table's DoAs are the exact bearings).
-    let rays = MarkerArray::from_cdr(&by("/iasm/doas").data)
-        .unwrap()
-        .markers;
+/// `/iasm/doas`: per stop, one segment per DoA from the robot, 5 m long, pointing at a
+/// true source (the table's DoAs are the exact bearings).
+fn rays_point_at_the_truth(data: &[u8]) {
+    let stops = drive();
+    let rays = MarkerArray::from_cdr(data).unwrap().markers;
     assert_eq!(rays.len(), stops.len());
     for (k, (m, &(x, y, _))) in rays.iter().zip(&stops).enumerate() {
         assert_eq!(
