@@ -434,49 +434,7 @@ fn ros2_node_maps_a_robot_run_live_as_map_maps_the_bag() {
     }
     let dir = tempdir();
     let bag_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/bags/sim_run.mcap");
-    let script = r#"
-set -u
-ip link set lo up multicast on
-ip route add 224.0.0.0/4 dev lo
-cd "$WORK"
-"$IASM" ros2 --seed 5 --out node.json --mcap node.mcap > node.log 2> node.err &
-NODE=$!
-"$IASM" ros2-play "$BAG" --listen heard.json --linger 120 > play.log 2> play.err &
-PLAY=$!
-for i in $(seq 1 600); do grep -q '^played' play.log && break; sleep 0.1; done
-sleep 0.5
-kill -INT $NODE
-wait $NODE; echo "node $?"
-kill -INT $PLAY
-wait $PLAY; echo "play $?"
-"#;
-    let o = std::process::Command::new("unshare")
-        .args(["--net", "bash", "-c", script])
-        .env("IASM", env!("CARGO_BIN_EXE_iasm"))
-        .env("BAG", &bag_path)
-        .env("WORK", dir.path())
-        .output()
-        .unwrap();
-    let read = |n: &str| std::fs::read_to_string(dir.path().join(n)).unwrap_or_default();
-    let logs = format!(
-        "{}\nnode:\n{}{}\nplay:\n{}{}",
-        show(&o),
-        read("node.log"),
-        read("node.err"),
-        read("play.log"),
-        read("play.err")
-    );
-    let out = String::from_utf8_lossy(&o.stdout);
-    assert!(out.contains("node 0") && out.contains("play 0"), "{logs}");
-    // Every stop mapped live, the last on Ctrl-C.
-    assert_eq!(
-        read("node.log")
-            .lines()
-            .filter(|l| l.starts_with("stop "))
-            .count(),
-        6,
-        "{logs}"
-    );
+    let logs = run_node_and_player(dir.path(), &bag_path);
 
     let ds = path(&dir, "ds");
     let o = iasm(&["bag", arg(&bag_path), "--out", arg(&ds)]);
@@ -524,6 +482,56 @@ wait $PLAY; echo "play $?"
             .collect::<Vec<_>>(),
         "the MCAP's last update",
     );
+}
+
+/// Runs `iasm ros2` and `iasm ros2-play BAG --listen` side by side in this network
+/// namespace, in `work`, until the player has played the bag, then stops both with Ctrl-C;
+/// both must exit cleanly, the node having mapped every stop. Returns their logs.
+fn run_node_and_player(work: &Path, bag: &Path) -> String {
+    let script = r#"
+set -u
+ip link set lo up multicast on
+ip route add 224.0.0.0/4 dev lo
+cd "$WORK"
+"$IASM" ros2 --seed 5 --out node.json --mcap node.mcap > node.log 2> node.err &
+NODE=$!
+"$IASM" ros2-play "$BAG" --listen heard.json --linger 120 > play.log 2> play.err &
+PLAY=$!
+for i in $(seq 1 600); do grep -q '^played' play.log && break; sleep 0.1; done
+sleep 0.5
+kill -INT $NODE
+wait $NODE; echo "node $?"
+kill -INT $PLAY
+wait $PLAY; echo "play $?"
+"#;
+    let o = std::process::Command::new("unshare")
+        .args(["--net", "bash", "-c", script])
+        .env("IASM", env!("CARGO_BIN_EXE_iasm"))
+        .env("BAG", bag)
+        .env("WORK", work)
+        .output()
+        .unwrap();
+    let read = |n: &str| std::fs::read_to_string(work.join(n)).unwrap_or_default();
+    let logs = format!(
+        "{}\nnode:\n{}{}\nplay:\n{}{}",
+        show(&o),
+        read("node.log"),
+        read("node.err"),
+        read("play.log"),
+        read("play.err")
+    );
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("node 0") && out.contains("play 0"), "{logs}");
+    // Every stop mapped live, the last on Ctrl-C.
+    assert_eq!(
+        read("node.log")
+            .lines()
+            .filter(|l| l.starts_with("stop "))
+            .count(),
+        6,
+        "{logs}"
+    );
+    logs
 }
 
 /// What a robot gets wrong is a warning and a note, never the end of the run: a message
