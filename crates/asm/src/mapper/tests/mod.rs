@@ -225,7 +225,7 @@ pub(super) fn ray_towards(stop: usize, from: [f64; 2], to: [f64; 2], off_deg: f6
 
 mod mirror;
 mod plausibility;
-mod reflection;
+pub(in crate::mapper) mod reflection;
 mod room;
 mod rounds;
 mod vote;

@@ -6,7 +6,7 @@ use super::*;
 /// A corridor along y in [-1.5, 0.5] with an alcove x in [3, 5] up to y = 2 on its north
 /// side, walls 0.15 m thick, the unknown beyond; a talker in the alcove at (4, 1.5) and
 /// the robot's stops along y = -0.5 at x = 0, 1, ..., 9.
-fn alcove(config: IasmConfig) -> (Mapper, Vec<Pose>) {
+pub(in crate::mapper) fn alcove(config: IasmConfig) -> (Mapper, Vec<Pose>) {
     let mapper = ghost_mapper_on(
         |[x, y]| {
             let alcove = (3.0..5.0).contains(&x);
@@ -25,7 +25,7 @@ fn alcove(config: IasmConfig) -> (Mapper, Vec<Pose>) {
     (mapper, poses)
 }
 
-const TALKER: [f64; 2] = [4.0, 1.5];
+pub(in crate::mapper) const TALKER: [f64; 2] = [4.0, 1.5];
 
 /// The talker's reflections in the alcove's side walls (faces x = 3 and x = 5) that reach
 /// stop `p`: the bearing to its image, where the path through the point of reflection
