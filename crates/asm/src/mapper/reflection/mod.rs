@@ -201,10 +201,7 @@ impl Mapper {
             };
             // The normal of the wall at the point hit, towards the side the ray came from
             // (beside a corner, of the line through it).
-            let cells = self.map.occupied_within(hit, WALL_REACH_M);
-            let line =
-                line_normal(&cells).or_else(|| line_through(hit, &cells, self.map.resolution()));
-            let Some(normal) = line.map(|n| facing(n, [-dir[0], -dir[1]])) else {
+            let Some(normal) = self.wall_normal(hit, [-dir[0], -dir[1]], true) else {
                 break;
             };
             dir = reflect_direction(dir, normal);
@@ -216,13 +213,24 @@ impl Mapper {
 
     /// The unit normal of the wall met at `hit` (the line of its cells within
     /// [`WALL_REACH_M`]), on the side `towards` points to; `None` where the cells do not
-    /// run along one line (a corner). Why not the line through `hit` there, as a traced
-    /// ray takes it ([`line_through`]): the walls around a source are searched from many
-    /// directions, and each is found where its cells run along one line; taken beside
-    /// corners too, `notched_hall_respeaker6`'s talker 0.4 m from two walls was mapped
-    /// further off with MVDR (0.48 -> 0.52 m).
-    fn wall_normal(&self, hit: [f64; 2], towards: [f64; 2]) -> Option<[f64; 2]> {
-        let n = line_normal(&self.map.occupied_within(hit, WALL_REACH_M))?;
+    /// run along one line (a corner), unless `beside_corner` asks for the line through
+    /// `hit` there ([`line_through`]), as a traced ray takes it. Why not for the walls
+    /// around a source ([`Mapper::mirrors`]): they are searched from many directions, and
+    /// each is found where its cells run along one line; taken beside corners too,
+    /// `notched_hall_respeaker6`'s talker 0.4 m from two walls was mapped further off with
+    /// MVDR (0.48 -> 0.52 m).
+    fn wall_normal(
+        &self,
+        hit: [f64; 2],
+        towards: [f64; 2],
+        beside_corner: bool,
+    ) -> Option<[f64; 2]> {
+        let cells = self.map.occupied_within(hit, WALL_REACH_M);
+        let n = line_normal(&cells).or_else(|| {
+            beside_corner
+                .then(|| line_through(hit, &cells, self.map.resolution()))
+                .flatten()
+        })?;
         Some(facing(n, towards))
     }
 
@@ -241,7 +249,8 @@ impl Mapper {
             let Some(wall) = self.map.first_occupied(s, end) else {
                 continue;
             };
-            let Some(normal) = self.wall_normal(wall, [s[0] - wall[0], s[1] - wall[1]]) else {
+            let towards = [s[0] - wall[0], s[1] - wall[1]];
+            let Some(normal) = self.wall_normal(wall, towards, false) else {
                 continue;
             };
             let mirror = Mirror::of(s, wall, normal);
@@ -527,10 +536,11 @@ const LINE_STEPS: usize = 90;
 /// that meets `corridor_alcoves`' alcove wall 0.2 m from the corridor's wall is reflected
 /// by it, where the trace ended before (with [`HIDDEN_MAX_ORDER`], a ghost at the alcove's
 /// mouth made of the alcove talker's images is explained away: GCC-PHAT 0.108 -> 0.097 m).
-/// Why only where the principal axis says none: taken for every point hit, it changed no
-/// suite row, but the thick walls of a map (a wall 0.2 m thick, four cells) hold as many
-/// cells across the line through `hit` as along it within a cell, and the trace of
-/// `mapper::tests::mirror` ended at a plain wall. Where a corner's other wall is near
+/// Why only where the principal axis says none: taken for every point hit, it mapped the
+/// corridor alike (0.098 m) and a held-out corner talker better, but the thick walls of a
+/// map (a wall 0.2 m thick, four cells) hold as many cells across the line through `hit`
+/// as along it within a cell, and the trace of `mapper::tests::mirror` ended at a plain
+/// wall. Where a corner's other wall is near
 /// enough to turn the principal axis but not to break it (the alcove of this module's
 /// tests: 8 degrees 0.1 m from the corner, a reflection 16 degrees off), that axis stands.
 fn line_through(hit: [f64; 2], cells: &[[f64; 2]], res: f64) -> Option<[f64; 2]> {
