@@ -17,3 +17,46 @@ fn every_scene_meets_its_thresholds() {
         breaches.join("\n")
     );
 }
+
+/// The generated benchmark's small draw (`iasm regress --generated --count 6 --seed 0
+/// --map-seeds 2`): one scene of each plan family, each rendered twice, mapped twice per
+/// method and from true bearings. The bounds are distribution bounds measured on it (the
+/// figures of the full draws are in BENCHMARKS.md): from true bearings the mapper places
+/// the sources of five of the six plans exactly (the T's floor loses two of six, the
+/// mapper's own loss); from raw audio no method maps a source outside the walls, and each
+/// stays within its measured mean, 90th percentile and right count.
+#[test]
+fn the_generated_small_draw_holds_its_distribution() {
+    use iasm::generated::{Distribution, DrawOptions, DrawThresholds, TRUE_BEARINGS, run_draw};
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let opts = DrawOptions {
+        seeds: 0..6,
+        renderings: 2,
+        map_seeds: 2,
+        talkers: iasm::generated::talkers_in(&root.join("fixtures/audio")).unwrap(),
+    };
+    let report = run_draw(&opts, &iasm::settings::Settings::default()).unwrap();
+    println!("{}", report.scenes_table());
+    println!("{}", report.table());
+    // Six families, each once: 6 scenes x 2 renderings x 2 maps per method.
+    for g in report.group("all") {
+        assert_eq!(g.maps.maps, 24, "{}", g.method);
+    }
+    for f in sim::draw::Family::ALL {
+        assert!(report.group(f.name()).next().is_some(), "{f:?}");
+    }
+    let floor = Distribution::of(report.maps.iter().filter(|m| m.method == TRUE_BEARINGS));
+    assert!(floor.mean <= 0.07 && floor.right_count >= 0.8, "{floor:?}");
+    let breaches = report.breaches(&DrawThresholds {
+        max_mean: Some(0.68),
+        max_p90: Some(0.95),
+        min_right_count: Some(0.10),
+        max_outside: Some(0),
+    });
+    assert!(
+        breaches.is_empty(),
+        "\n{}\n{}",
+        report.table(),
+        breaches.join("\n")
+    );
+}

@@ -10,6 +10,7 @@
 //! - [`dataset`]: the published data-set layout, tables, poses, maps, natural file order.
 //! - [`scenes`]: scene files (with the suite's `[expect]`), and writing a rendered scene.
 //! - [`suite`]: the synthetic-room regression suite.
+//! - [`generated`]: the benchmark of scenes drawn at random, beside true bearings.
 //! - [`score`]: the DoA score against known sources.
 //! - [`rules`]: which SSL rule left each missed near source out, and let each false DoA in.
 //! - [`explain`]: which DoAs each source of a map explains, which none does, and where a
@@ -57,6 +58,7 @@ pub(crate) mod compare;
 pub mod dataset;
 pub mod explain;
 pub(crate) mod figure;
+pub mod generated;
 pub mod live;
 pub(crate) mod online;
 pub(crate) mod output;
@@ -129,14 +131,23 @@ fn run(cli: &args::Cli) -> anyhow::Result<Outcome> {
             config,
             num,
             json,
+            generated,
         } => {
             let settings = settings::Settings::load(config.as_deref())?;
             anyhow::Context::with_context(settings.validate(), || match config {
                 Some(p) => format!("settings {}", p.display()),
                 None => "the default settings".to_owned(),
             })?;
-            cmd::regress::run(dir, &settings, *num, *json)
+            if generated.generated {
+                anyhow::ensure!(num.is_none(), "--num: a drawn scene's N is drawn with it");
+                cmd::regress::run_generated(generated, &settings, *json)
+            } else {
+                cmd::regress::run(dir, &settings, *num, *json)
+            }
         }
+        args::Command::Scenes {
+            command: args::ScenesCommand::Generate { draw, out },
+        } => cmd::scenes::generate(&draw_options(draw, 1, 1)?, out),
         args::Command::Eval(a) => {
             set_threads(a.threads);
             cmd::eval::run(a)
@@ -148,6 +159,24 @@ fn run(cli: &args::Cli) -> anyhow::Result<Outcome> {
         args::Command::Watch(a) => cmd::watch::run(a),
         args::Command::Bag(a) => cmd::bag::run(a),
     }
+}
+
+/// The draw of `iasm regress --generated` and `iasm scenes generate`.
+fn draw_options(
+    a: &args::DrawArgs,
+    renderings: usize,
+    map_seeds: usize,
+) -> anyhow::Result<generated::DrawOptions> {
+    let end = a.seed.checked_add(a.count).ok_or_else(|| {
+        anyhow::anyhow!("--seed {} --count {}: beyond the seeds", a.seed, a.count)
+    })?;
+    anyhow::ensure!(a.count >= 1, "--count: at least one scene");
+    Ok(generated::DrawOptions {
+        seeds: a.seed..end,
+        renderings,
+        map_seeds,
+        talkers: cmd::scenes::talkers(a.talkers.as_deref())?,
+    })
 }
 
 /// Sizes the worker pool for `--threads N` (all cores when not given). Only the first call

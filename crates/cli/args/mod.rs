@@ -2,6 +2,7 @@
 //! validated values ([`Settings`], [`SurveyInputs`]): ripgrep's two stages, so that the
 //! library stays callable without a command line.
 
+mod generated;
 mod inputs;
 mod robot;
 mod survey;
@@ -10,6 +11,7 @@ use std::path::PathBuf;
 
 use clap::{Parser, Subcommand};
 
+pub use generated::{DrawArgs, GeneratedArgs, ScenesCommand};
 pub use inputs::AngleUnit;
 pub use robot::{BagArgs, WatchArgs};
 #[cfg(feature = "ros2")]
@@ -80,6 +82,17 @@ pub enum Command {
         /// Print JSON instead of a table.
         #[arg(long)]
         json: bool,
+        /// Instead of the folder's scenes, scenes drawn at random (`iasm scenes
+        /// generate`): each rendered several times, mapped with every method and from true
+        /// bearings, reported as a distribution per plan family and per array.
+        #[command(flatten)]
+        generated: GeneratedArgs,
+    },
+    /// Scenes drawn at random: floor plans of six families, sources, arrays and paths.
+    Scenes {
+        /// What to do with them.
+        #[command(subcommand)]
+        command: ScenesCommand,
     },
     /// Map the sound sources with I-ASM from DoA tables or raw audio.
     Map(MapArgs),

@@ -11,6 +11,7 @@ pub mod map;
 pub mod regress;
 #[cfg(feature = "ros2")]
 pub mod ros2;
+pub mod scenes;
 pub mod simulate;
 pub mod ssl;
 pub mod watch;

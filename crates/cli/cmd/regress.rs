@@ -7,6 +7,8 @@ use anyhow::Result;
 use ssl::Method;
 
 use crate::Outcome;
+use crate::args::GeneratedArgs;
+use crate::generated::{DrawThresholds, run_draw};
 use crate::settings::Settings;
 use crate::suite::run_suite;
 
@@ -28,6 +30,48 @@ pub fn run(dir: &Path, settings: &Settings, num: Option<usize>, json: bool) -> R
         );
     }
     Ok(if report.breaches().is_empty() {
+        Outcome::Success
+    } else {
+        Outcome::ThresholdFailed
+    })
+}
+
+/// Runs `iasm regress --generated`.
+///
+/// # Errors
+/// As [`run_draw`].
+pub fn run_generated(a: &GeneratedArgs, settings: &Settings, json: bool) -> Result<Outcome> {
+    let opts = crate::draw_options(&a.draw, a.renderings, a.map_seeds)?;
+    let report = run_draw(&opts, settings)?;
+    let breaches = report.breaches(&DrawThresholds {
+        max_mean: a.max_mean_ospa,
+        max_p90: a.max_p90_ospa,
+        min_right_count: a.min_right_count,
+        max_outside: a.max_outside,
+    });
+    if json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        if a.scenes {
+            print!("{}", report.scenes_table());
+            println!();
+        }
+        print!("{}", report.table());
+        println!(
+            "{} scenes (seeds {}..{}) x {} renderings x {} maps, {} methods and true bearings, in {:.1} s",
+            report.seeds[1] - report.seeds[0],
+            report.seeds[0],
+            report.seeds[1],
+            report.renderings,
+            report.map_seeds,
+            Method::PAPER.len(),
+            report.seconds
+        );
+        for b in &breaches {
+            println!("breach: {b}");
+        }
+    }
+    Ok(if breaches.is_empty() {
         Outcome::Success
     } else {
         Outcome::ThresholdFailed

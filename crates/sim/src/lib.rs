@@ -17,6 +17,9 @@
 //! - [`render`]: what each microphone hears of sources in a room (FFT convolution with the
 //!   image-source responses).
 //!
+//! - [`draw`]: whole scenes drawn at random from a seed (plans of six families, sources,
+//!   arrays, paths): the benchmark no rule was written for.
+//!
 //! - [`scene`]: a robot carrying an array through a room with sources, from a TOML file,
 //!   rendered stop by stop.
 //!
@@ -36,6 +39,7 @@
 //! SI units; azimuth counter-clockwise from `x`, elevation above the `xy` plane, degrees at
 //! the API; audio channel-major (`audio[mic][sample]`).
 
+pub mod draw;
 pub mod error;
 pub mod farfield;
 pub mod ism;

@@ -24,7 +24,7 @@ pub enum Signal {
 
 /// A generated signal as a scene file names it (`signal = "..."`); a voiced source takes
 /// its fundamental from the scene's `f0`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum SignalKind {
     /// [`Signal::Noise`].

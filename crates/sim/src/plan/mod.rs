@@ -326,6 +326,12 @@ impl PlanRoom {
             .fold(f64::INFINITY, f64::min)
     }
 
+    /// Whether the plan points `a` and `b` see each other: the segment between them
+    /// crosses no wall.
+    pub fn sees(&self, a: [f64; 2], b: [f64; 2]) -> bool {
+        !self.blocked(a, b, [None, None])
+    }
+
     /// Pressure reflection coefficient of wall `i` (`n` the floor, `n + 1` the ceiling).
     fn beta(&self, i: usize) -> f64 {
         (1.0 - self.absorption[i]).sqrt()

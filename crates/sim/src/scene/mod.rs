@@ -40,7 +40,7 @@
 use geom::Pose;
 use rand::{Rng, SeedableRng, rngs::StdRng};
 use rand_distr::StandardNormal;
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 use crate::error::SimError;
 use crate::render::{RenderConfig, Renderer, RoomSource};
@@ -70,7 +70,7 @@ pub const MAX_RT60_S: f64 = 20.0;
 pub const MAX_CALIBRATION_IMAGES: f64 = 5e7;
 
 /// A scene as written in its TOML file.
-#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Scene {
     /// Name used in reports. Default: empty.
@@ -121,7 +121,7 @@ fn default_c() -> f64 {
 }
 
 /// The array of a scene.
-#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct ArraySpec {
     /// A preset name, resolved by the application.
@@ -133,7 +133,7 @@ pub struct ArraySpec {
 }
 
 /// One source of a scene.
-#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct SourceSpec {
     /// Position (m).
@@ -182,7 +182,7 @@ fn default_level() -> f64 {
 }
 
 /// The robot's stops: explicit poses, or waypoints walked at a spacing.
-#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct TrajectorySpec {
     /// `[x, y, theta_deg]` per stop.
@@ -194,7 +194,7 @@ pub struct TrajectorySpec {
 }
 
 /// An axis-aligned box obstacle (m).
-#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Obstacle {
     /// Lower corner (x, y).

@@ -1,6 +1,6 @@
 //! The room of a scene: a shoebox or a floor plan, as written and as checked.
 
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 use super::{MAX_RT60_S, Scene, invalid};
 use crate::error::SimError;
@@ -8,7 +8,7 @@ use crate::plan::PlanRoom;
 use crate::room::{Room, Space};
 
 /// The room of a scene: a shoebox (`dims`) or a floor plan (`plan` and `height`).
-#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct RoomSpec {
     /// A shoebox's dimensions (m).
