@@ -484,6 +484,38 @@ fn ros2_node_maps_a_robot_run_live_as_map_maps_the_bag() {
     );
 }
 
+/// A node that never hears a message ends after `--until-idle`, counted from its start,
+/// with its (empty) map, instead of waiting for ever.
+// See: issue 71 (`node_and_player.sh -`)
+#[cfg(feature = "ros2")]
+#[test]
+fn r71_a_node_that_hears_nothing_ends_after_until_idle() {
+    if let Err(why) = own_network_namespace() {
+        assert!(
+            std::env::var_os("IASM_REQUIRE_ROS2_TEST").is_none(),
+            "IASM_REQUIRE_ROS2_TEST is set but no network namespace can be made here ({why})"
+        );
+        eprintln!("skipped: no network namespace of its own can be made here ({why})");
+        return;
+    }
+    let script = r#"
+set -u
+ip link set lo up multicast on
+ip route add 224.0.0.0/4 dev lo
+timeout 30 "$IASM" ros2 --until-idle 1
+echo "node $?"
+"#;
+    let o = std::process::Command::new("unshare")
+        .args(["--net", "bash", "-c", script])
+        .env("IASM", env!("CARGO_BIN_EXE_iasm"))
+        .output()
+        .unwrap();
+    let out = String::from_utf8_lossy(&o.stdout);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(out.contains("node 0"), "{}", show(&o));
+    assert!(err.contains("no message at all in 1 s"), "{}", show(&o));
+}
+
 /// Runs `iasm ros2` and `iasm ros2-play BAG --listen` side by side in this network
 /// namespace, in `work`, until the player has played the bag, then stops both with Ctrl-C;
 /// both must exit cleanly, the node having mapped every stop. Returns their logs.

@@ -168,6 +168,9 @@ impl LiveMapper {
     /// message can mend (settings the SSL refuses for this audio are warnings per stop).
     pub fn step(&mut self, all: bool) -> (Vec<Update>, Vec<String>) {
         let mut warnings = Vec::new();
+        for n in self.recorder.take_notes() {
+            warnings.push(self.note(n));
+        }
         let finished = match self.recorder.finished_stops(&self.stop_options, all) {
             Ok(s) => {
                 self.waiting = None;

@@ -33,6 +33,11 @@ pub const AUDIO_WAIT_S: f64 = 2.0;
 /// How much of `/tf` before the last finished stop is kept (s): a localiser's `map -> odom`
 /// is republished at every scan, so half a minute holds its latest.
 pub const KEEP_TF_S: f64 = 30.0;
+/// How long audio is kept while no pose comes (s): past it, the audio older than this is
+/// dropped with a note. A stop listens for seconds, so a minute keeps every stop a pose
+/// can still come for, and bounds what a run without poses holds (a minute of six
+/// channels at 48 kHz in 16 bits is 35 MB).
+pub const PENDING_AUDIO_S: f64 = 60.0;
 
 /// A stop of a live run, with its audio.
 #[derive(Clone, Debug)]
@@ -63,6 +68,14 @@ pub struct Recorder {
     ids: HashMap<String, u32>,
     /// Where the next stop must start (ns since the epoch): after the last one handed on.
     next_after_ns: i64,
+    /// When the last pose, odometry or transform message came (ns since the epoch).
+    last_pose_ns: Option<i64>,
+    /// Audio dropped while no pose came and not yet said (s).
+    dropped_s: f64,
+    /// The stamp jumps said: (topic, the jump in tenths of a second).
+    jumps_said: std::collections::HashSet<(String, i64)>,
+    /// Notes not yet taken.
+    notes: Vec<String>,
 }
 
 impl Recorder {
@@ -74,6 +87,10 @@ impl Recorder {
             kept: Kept::default(),
             ids: HashMap::new(),
             next_after_ns: i64::MIN,
+            last_pose_ns: None,
+            dropped_s: 0.0,
+            jumps_said: Default::default(),
+            notes: Vec::new(),
         }
     }
 
@@ -139,6 +156,7 @@ impl Recorder {
                 what,
             });
         }
+        let kind = Kind::of(msg_type);
         self.kept.take(
             &Message {
                 connection,
@@ -148,7 +166,40 @@ impl Recorder {
             &self.options,
         )?;
         self.summary.count(id, time_ns);
+        if kind.is_some_and(|k| k.is_pose() || k == Kind::Tf) {
+            self.last_pose_ns = Some(time_ns);
+        } else if kind.is_some_and(Kind::is_audio) {
+            self.bound_pending_audio(time_ns);
+        }
         Ok(())
+    }
+
+    /// Drops the audio older than [`PENDING_AUDIO_S`] before `now_ns` when no pose has come
+    /// since then: no stop can be found in it until a pose comes.
+    fn bound_pending_audio(&mut self, now_ns: i64) {
+        let cutoff = now_ns - (PENDING_AUDIO_S * 1e9) as i64;
+        if self.last_pose_ns.is_some_and(|p| p >= cutoff) {
+            return;
+        }
+        let before = self.kept.audio_span_ns();
+        self.kept.forget_audio_before(cutoff);
+        self.dropped_s += (before - self.kept.audio_span_ns()) as f64 * 1e-9;
+    }
+
+    /// The span of the audio kept (s): what a run without poses holds.
+    pub fn kept_audio_s(&self) -> f64 {
+        self.kept.audio_span_ns() as f64 * 1e-9
+    }
+
+    /// What the recorder had to drop since the last call, in words.
+    pub fn take_notes(&mut self) -> Vec<String> {
+        if self.dropped_s > 0.0 {
+            self.dropped_s = 0.0;
+            self.notes.push(format!(
+                "audio older than {PENDING_AUDIO_S} s dropped: no pose came in that time"
+            ));
+        }
+        std::mem::take(&mut self.notes)
     }
 
     /// The run so far, read as a bag.
@@ -168,6 +219,27 @@ impl Recorder {
     /// As [`Recorder::run`], and options [`StopOptions::validate`] refuses.
     pub fn finished_stops(&mut self, options: &StopOptions, all: bool) -> Result<Vec<LiveStop>> {
         let run = self.run()?;
+        // The clock the run began on, kept: its first messages will be forgotten.
+        if self.kept.lag_ns.is_none() {
+            self.kept.lag_ns = run.clock_lag_ns;
+        }
+        // Each jump of the stamps said once, when it is first seen (a jump's first message
+        // is forgotten once a stop after it is handed on: it is known by its size).
+        for j in &run.stamp_jumps {
+            if self
+                .jumps_said
+                .insert((j.topic.clone(), (j.jump_s * 10.0).round() as i64))
+            {
+                self.notes.push(format!(
+                    "{}: stamps {:.1} s {} than the messages came, from {:.1} s on (a clock \
+                     step or a wrong stamp): timed by when they came",
+                    j.topic,
+                    j.jump_s.abs(),
+                    if j.jump_s > 0.0 { "earlier" } else { "later" },
+                    (j.recorded_ns.0 - run.start_ns) as f64 * 1e-9
+                ));
+            }
+        }
         let track = if run.odometry.is_empty() {
             &run.poses
         } else {

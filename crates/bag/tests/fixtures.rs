@@ -707,3 +707,137 @@ fn a_ros2_bag_folder_reads_the_files_its_metadata_names() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The clock faults a robot brings, generated on `sim_run.mcap` (6 stops, stamped
+/// AudioStamped and Odometry): each message's header stamp (the CDR bytes 4..12, after the
+/// encapsulation: `sec`, `nanosec`) moved as the fault says, the run fed to the live
+/// recorder message by message as the node takes them, its stops handed on as the robot
+/// leaves them. Whatever the fault, the run keeps its six stops, each paired with its own
+/// pose and listening window, and one note names the topic whose stamps lied.
+// See: issue 71
+#[test]
+fn r71_stamps_that_step_or_lie_never_pair_a_stop_with_another_place() {
+    type Fault = fn(&str, i64, usize) -> i64;
+    // (name, topic named in the note, the shift of a message's stamp (ns) from its topic,
+    // its log time (ns since the run's start) and its index in the topic).
+    let faults: [(&str, &str, Fault); 4] = [
+        ("odometry stepped 3 s back at 4 s", "/odom", |t, at, _| {
+            if t == "/odom" && at >= 4_000_000_000 {
+                -3_000_000_000
+            } else {
+                0
+            }
+        }),
+        ("odometry stepped 2 s ahead at 3 s", "/odom", |t, at, _| {
+            if t == "/odom" && at >= 3_000_000_000 {
+                2_000_000_000
+            } else {
+                0
+            }
+        }),
+        ("one audio message 5 s early", "/audio", |t, _, i| {
+            if t == "/audio" && i == 20 {
+                -5_000_000_000
+            } else {
+                0
+            }
+        }),
+        ("audio stepped 1.5 s back at 5 s", "/audio", |t, at, _| {
+            if t == "/audio" && at >= 5_000_000_000 {
+                -1_500_000_000
+            } else {
+                0
+            }
+        }),
+    ];
+    let path = fixture("sim_run.mcap");
+    let clean = iasm_bag::read_file(&path, &ReadOptions::default()).unwrap();
+    let want = clean.stops(&StopOptions::default()).unwrap();
+    assert_eq!(want.len(), 6);
+    for (name, topic, fault) in faults {
+        let mut live = iasm_bag::live::Recorder::new(ReadOptions::default());
+        let mut got = Vec::new();
+        let mut index: std::collections::HashMap<String, usize> = Default::default();
+        iasm_bag::ros2::scan_files(&path, |m| {
+            let mut data = m.data.to_vec();
+            let i = index.entry(m.connection.topic.clone()).or_default();
+            let shift = fault(&m.connection.topic, m.time_ns - clean.start_ns, *i);
+            *i += 1;
+            if shift != 0 {
+                let sec = i64::from(i32::from_le_bytes(data[4..8].try_into().unwrap()));
+                let nsec = i64::from(u32::from_le_bytes(data[8..12].try_into().unwrap()));
+                let t = sec * 1_000_000_000 + nsec + shift;
+                data[4..8].copy_from_slice(&(t.div_euclid(1_000_000_000) as i32).to_le_bytes());
+                data[8..12].copy_from_slice(&(t.rem_euclid(1_000_000_000) as u32).to_le_bytes());
+            }
+            live.push(
+                &m.connection.topic,
+                &m.connection.msg_type,
+                m.time_ns,
+                &data,
+            )
+            .unwrap();
+            // As the node does: stops handed on as the robot leaves them, and what they
+            // no longer need forgotten.
+            if live.run().is_ok() {
+                got.extend(live.finished_stops(&StopOptions::default(), false).unwrap());
+            }
+            Ok(())
+        })
+        .unwrap();
+        let run = live.run().unwrap();
+        got.extend(live.finished_stops(&StopOptions::default(), true).unwrap());
+        assert_eq!(got.len(), want.len(), "{name}: {:?}", run.notes);
+        for (g, w) in got.iter().zip(&want) {
+            assert_eq!(g.stop.pose, w.pose, "{name}");
+            assert_abs_diff_eq!(g.stop.listen_s.0, w.listen_s.0, epsilon = 0.05);
+            assert_abs_diff_eq!(g.stop.listen_s.1, w.listen_s.1, epsilon = 0.05);
+        }
+        let notes = live.take_notes();
+        assert!(
+            notes.len() == 1 && notes[0].starts_with(topic) && notes[0].contains("timed by when"),
+            "{name}: {notes:?}"
+        );
+    }
+}
+
+/// Audio with no pose is kept for PENDING_AUDIO_S at most: a live run whose poses never
+/// come holds a bounded stretch of audio, and says it dropped the rest.
+// See: issue 71
+#[test]
+fn r71_audio_awaiting_poses_is_bounded() {
+    use iasm_bag::live::{PENDING_AUDIO_S, Recorder};
+    let path = fixture("sim_run.mcap");
+    let mut audio: Vec<(String, String, Vec<u8>)> = Vec::new();
+    iasm_bag::ros2::scan_files(&path, |m| {
+        if m.connection.topic == "/audio" {
+            audio.push((
+                m.connection.topic.clone(),
+                m.connection.msg_type.clone(),
+                m.data.to_vec(),
+            ));
+        }
+        Ok(())
+    })
+    .unwrap();
+    // The run's audio messages (0.1 s each) pushed over and over, ten a second, for
+    // 3 minutes, and no pose.
+    let mut live = Recorder::new(ReadOptions::default());
+    let n = 1800;
+    for k in 0..n {
+        let (topic, ty, data) = &audio[k % audio.len()];
+        live.push(topic, ty, k as i64 * 100_000_000, data).unwrap();
+    }
+    let notes = live.take_notes();
+    assert!(
+        notes.len() == 1 && notes[0].contains("no pose came"),
+        "{notes:?}"
+    );
+    assert!(live.take_notes().is_empty(), "said once");
+    // What is kept spans at most the bound (and a message).
+    let kept = live.kept_audio_s();
+    assert!(
+        (PENDING_AUDIO_S - 0.2..=PENDING_AUDIO_S + 0.2).contains(&kept),
+        "{kept}"
+    );
+}

@@ -34,8 +34,9 @@ pub struct Ros2Args {
     /// The node's name.
     #[arg(long, default_value = "iasm")]
     pub node_name: String,
-    /// End the run when no message has arrived for this long (s) [default: only on Ctrl-C].
-    #[arg(long, value_name = "S")]
+    /// End the run when no message has arrived for this long (s), counted from the node's
+    /// start when none ever came [default: only on Ctrl-C].
+    #[arg(long, value_name = "S", value_parser = parse_seconds)]
     pub until_idle: Option<f64>,
 }
 
@@ -281,10 +282,10 @@ pub struct WatchArgs {
     #[arg(long, default_value_t = 30.0, value_name = "S")]
     pub give_up_s: f64,
     /// OSPA cutoff c (m), when the truth is known.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = super::inputs::parse_ospa_c)]
     pub ospa_c: f64,
     /// OSPA order p.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = super::inputs::parse_ospa_p)]
     pub ospa_p: f64,
     /// Refine each source by bearing least squares (see `iasm map --refine`).
     #[arg(long)]
@@ -296,4 +297,16 @@ pub struct WatchArgs {
     /// The settings.
     #[command(flatten)]
     pub settings: SettingsArgs,
+}
+
+/// A duration in seconds: finite and not negative (an idle time of NaN would never end a
+/// run; of infinity, only Ctrl-C would).
+#[cfg(feature = "ros2")]
+fn parse_seconds(text: &str) -> Result<f64, String> {
+    let s: f64 = text.parse().map_err(|e| format!("{e}"))?;
+    if s.is_finite() && s >= 0.0 {
+        Ok(s)
+    } else {
+        Err(format!("{s} is not a duration in seconds"))
+    }
 }

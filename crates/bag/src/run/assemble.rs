@@ -62,6 +62,7 @@ pub(crate) fn assemble(summary: &Summary, kept: Kept, options: &ReadOptions) -> 
         raw,
         audio: mut audio_raw,
         encodings,
+        lag_ns: kept_lag,
         ..
     } = kept;
     let msgs = Messages {
@@ -90,6 +91,37 @@ pub(crate) fn assemble(summary: &Summary, kept: Kept, options: &ReadOptions) -> 
         poses.frame.as_deref(),
         &mut notes,
     )?;
+    let (mut audio_msgs, mut poses) = (audio_msgs, poses);
+    // Stamps that lie are judged against the clock the run began on: the usual lag of its
+    // first messages, over every topic (a live run keeps the one it found first, since it
+    // forgets its first messages). A topic whose own lag differs from it by more than
+    // CLOCK_MISMATCH_S keeps another clock (below), and is judged against its own.
+    let pose_msgs = poses.poses.iter().chain(&poses.odometry);
+    let as_times = |m: &(i64, Option<i64>, Pose)| (m.0, m.1, ());
+    let mut all: Vec<(i64, Option<i64>, ())> = audio_msgs
+        .iter()
+        .map(|m| (m.0, m.1, ()))
+        .chain(pose_msgs.map(as_times))
+        .filter(|m| m.1.is_some())
+        .collect();
+    all.sort_by_key(|m| m.0);
+    let mut stamp_jumps = Vec::new();
+    let clock_lag_ns = kept_lag.or_else(|| median_lag(&all[..all.len().min(FIRST_MESSAGES)]));
+    if let Some(run_lag) = clock_lag_ns {
+        let lag_for = |own: Option<i64>| match own {
+            Some(own) if ((own - run_lag) as f64 * 1e-9).abs() > CLOCK_MISMATCH_S => own,
+            _ => run_lag,
+        };
+        let lag = lag_for(median_lag(&audio_msgs));
+        stamp_jumps.extend(rectify_stamps(&audio.topic, &mut audio_msgs, lag));
+        let lag = lag_for(median_lag(&poses.poses));
+        stamp_jumps.extend(rectify_stamps(&poses.name, &mut poses.poses, lag));
+        if let Some(odom) = &poses.odom_name {
+            let lag = lag_for(median_lag(&poses.odometry));
+            stamp_jumps.extend(rectify_stamps(odom, &mut poses.odometry, lag));
+        }
+    }
+    notes.extend(stamp_jumps.iter().map(|j| j.describe(start_ns)));
     let times = |m: &[(i64, Option<i64>, Pose)]| m.iter().map(|m| (m.0, m.1)).collect();
     let use_stamps = one_clock(
         &[
@@ -135,6 +167,8 @@ pub(crate) fn assemble(summary: &Summary, kept: Kept, options: &ReadOptions) -> 
         truncated: summary.truncated,
         notes,
         topics,
+        clock_lag_ns,
+        stamp_jumps,
     })
 }
 

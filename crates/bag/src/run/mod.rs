@@ -19,7 +19,10 @@
 //! clock by more than that. When a topic's stamps and its receipt times disagree by more
 //! than [`CLOCK_MISMATCH_S`] (a bag recorded under simulated time, a device that stamps on
 //! its own clock), the stamps of no topic are used and [`Run::notes`] says so: audio and
-//! poses are then on one clock.
+//! poses are then on one clock. Before that, a topic's stamps that stray from its usual lag
+//! behind the receipt times by more than [`STAMP_JUMP_S`] (a clock stepped back or forth
+//! mid-run, one wrong stamp) are set right by the receipt times, each run of them named in
+//! [`Run::notes`]: a stop is never built from audio and poses on two clocks.
 //!
 //! **The robot's map.** A bag often holds the occupancy grid the robot localised in
 //! (`nav_msgs/OccupancyGrid` on `/map`, latched). It is taken (its last message: a mapper's
@@ -41,6 +44,7 @@ mod time;
 mod topics;
 
 use time::*;
+pub use time::{STAMP_JUMP_S, StampJump};
 use topics::*;
 
 mod assemble;
@@ -209,6 +213,13 @@ pub struct Run {
     pub truncated: Option<u64>,
     /// What the reader decided that the user should know (a clock, a topic chosen).
     pub notes: Vec<String>,
+    /// The usual lag of the stamps behind the receipt times on the clock the run began on
+    /// (ns; `None` with fewer than three stamped messages): what a stamp that lies is
+    /// judged against ([`STAMP_JUMP_S`]).
+    pub clock_lag_ns: Option<i64>,
+    /// The runs of messages whose stamps lied, set right by when they were recorded (each
+    /// also a note).
+    pub stamp_jumps: Vec<StampJump>,
 }
 
 /// Messages of one topic as read: (receipt time ns, bytes).
@@ -312,14 +323,26 @@ pub(crate) struct Kept {
     audio: HashMap<String, AudioRaw>,
     encodings: HashMap<String, Encoding>,
     kinds: HashMap<String, Kind>,
+    /// The run's usual lag of stamps behind receipt times (ns), once known: a live run
+    /// keeps the one its first messages gave, which it forgets ([`Run::clock_lag_ns`]).
+    pub(crate) lag_ns: Option<i64>,
 }
 
 impl Kept {
-    /// Forgets what a run that starts at `cutoff_ns` does not need: audio messages
-    /// received before it, and of each pose topic's messages before it all but the last
-    /// (a localiser that publishes only when the robot moves may have said its last word
-    /// long before); transforms before `cutoff_ns - keep_tf_ns`.
-    pub(crate) fn forget_before(&mut self, cutoff_ns: i64, keep_tf_ns: i64) {
+    /// The span of the audio kept (ns, from its first message's time to its last's).
+    pub(crate) fn audio_span_ns(&self) -> i64 {
+        self.audio
+            .values()
+            .map(|raw| match (raw.msgs.first(), raw.msgs.last()) {
+                (Some(a), Some(b)) => b.0 - a.0,
+                _ => 0,
+            })
+            .sum()
+    }
+
+    /// Forgets the audio received before `cutoff_ns` (its last message before it is kept,
+    /// as [`Kept::forget_before`] keeps it), and nothing else.
+    pub(crate) fn forget_audio_before(&mut self, cutoff_ns: i64) {
         for raw in self.audio.values_mut() {
             let n = raw.msgs.partition_point(|m| m.0 < cutoff_ns);
             let n = n.min(raw.msgs.len().saturating_sub(1));
@@ -327,6 +350,14 @@ impl Kept {
             raw.msgs.drain(..n);
             raw.bytes.drain(..bytes);
         }
+    }
+
+    /// Forgets what a run that starts at `cutoff_ns` does not need: audio messages
+    /// received before it, and of each pose topic's messages before it all but the last
+    /// (a localiser that publishes only when the robot moves may have said its last word
+    /// long before); transforms before `cutoff_ns - keep_tf_ns`.
+    pub(crate) fn forget_before(&mut self, cutoff_ns: i64, keep_tf_ns: i64) {
+        self.forget_audio_before(cutoff_ns);
         for (topic, raw) in &mut self.raw {
             let tf = self.kinds.get(topic) == Some(&Kind::Tf);
             if tf && topic.ends_with("_static") {

@@ -254,6 +254,8 @@ pub fn run(a: &Ros2Args) -> Result<Outcome> {
     let mut log = Log::default();
     let mut last_discovery = Instant::now() - Duration::from_secs(10);
     let mut last_step = Instant::now();
+    // --until-idle counts from the last message, or from the node's start when none came.
+    let started = Instant::now();
     eprintln!(
         "iasm ros2: node /{} on DDS domain {}; listening for audio, poses and the map (Ctrl-C ends the run with its final map)",
         a.node_name, a.domain_id
@@ -269,10 +271,20 @@ pub fn run(a: &Ros2Args) -> Result<Outcome> {
             last_step = Instant::now();
             step(&mut live, &mut sink, &mut log, false)?;
         }
-        if let (Some(idle), Some(t)) = (a.until_idle, inputs.last_message)
-            && t.elapsed().as_secs_f64() > idle
+        if let Some(idle) = a.until_idle
+            && inputs
+                .last_message
+                .unwrap_or(started)
+                .elapsed()
+                .as_secs_f64()
+                > idle
         {
-            eprintln!("no message for {idle} s: the run is over");
+            match inputs.last_message {
+                Some(_) => eprintln!("no message for {idle} s: the run is over"),
+                None => eprintln!(
+                    "no message at all in {idle} s since the node started: the run is over"
+                ),
+            }
             break;
         }
         if got == 0 {

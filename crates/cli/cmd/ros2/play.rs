@@ -67,6 +67,33 @@ fn shift_stamps(kind: Kind, data: &mut [u8], shift_ns: i64) -> Result<()> {
     }
 }
 
+/// The longest pause the player keeps between two messages (s): a robot's topics publish
+/// many times a second, so a longer one is a recorder paused, or a log time that is wrong
+/// (one message 31 years late would hold the run for ever).
+pub const MAX_PLAY_GAP_S: f64 = 5.0;
+
+/// When a message is played, from the first's: its log time, with every pause between two
+/// messages cut to [`MAX_PLAY_GAP_S`]; `cut_s` is the pause cut there.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Due {
+    at: Duration,
+    cut_s: Option<f64>,
+}
+
+/// The play times of messages whose log times (ns) are `times`, in order.
+fn play_times(times: impl IntoIterator<Item = i64>) -> Vec<Due> {
+    let mut out = Vec::new();
+    let (mut last, mut at) = (None::<i64>, Duration::ZERO);
+    for t in times {
+        let gap_s = last.map_or(0.0, |l| (t - l).max(0) as f64 * 1e-9);
+        let cut_s = (gap_s > MAX_PLAY_GAP_S).then_some(gap_s);
+        at += Duration::from_secs_f64(gap_s.min(MAX_PLAY_GAP_S));
+        out.push(Due { at, cut_s });
+        last = Some(t);
+    }
+    out
+}
+
 /// A recorded message: topic, type, receipt time (ns), CDR bytes.
 type Recorded = (String, String, i64, Vec<u8>);
 
@@ -244,20 +271,41 @@ pub fn play(a: &Ros2PlayArgs) -> Result<Outcome> {
     wait_for_subscribers(&dp, &writers, a.wait_s);
     let start = Instant::now();
     let shift = now_ns() - first;
-    for (topic, ty, t, mut data) in msgs {
-        let due = Duration::from_nanos(u64::try_from(t - first).unwrap_or(0));
-        while start.elapsed() < due {
+    let due = play_times(msgs.iter().map(|m| m.2));
+    let mut skipped: BTreeMap<String, usize> = BTreeMap::new();
+    for ((topic, ty, t, mut data), due) in msgs.into_iter().zip(due) {
+        if let Some(gap) = due.cut_s {
+            eprintln!(
+                "warning: the bag's times jump by {gap:.1} s after {:.1} s (to a message of \
+                 {topic}): played as a gap of {MAX_PLAY_GAP_S} s",
+                (t - first) as f64 * 1e-9 - gap
+            );
+        }
+        while start.elapsed() < due.at {
             listener.take();
             std::thread::sleep(
-                due.saturating_sub(start.elapsed())
+                due.at
+                    .saturating_sub(start.elapsed())
                     .min(Duration::from_millis(5)),
             );
         }
-        shift_stamps(Kind::of(&ty).expect("kept"), &mut data, shift)
-            .with_context(|| format!("a message of {topic}"))?;
+        // A message that is not little-endian CDR of its type (as a node refuses it) is
+        // skipped and counted; the run goes on.
+        if data.get(..4) != Some(&iasm_ros::cdr::CDR_LE[..])
+            || shift_stamps(Kind::of(&ty).expect("kept"), &mut data, shift).is_err()
+        {
+            *skipped.entry(topic).or_default() += 1;
+            continue;
+        }
         writers[&topic]
             .write(raw::Cdr(data), None)
             .map_err(|e| anyhow!("publishing on {topic}: {e:?}"))?;
+    }
+    for (topic, n) in &skipped {
+        eprintln!(
+            "warning: {n} message{} of {topic} skipped: not little-endian CDR of its type",
+            if *n == 1 { "" } else { "s" }
+        );
     }
     println!(
         "played {} in {:.1} s",
@@ -273,6 +321,21 @@ pub fn play(a: &Ros2PlayArgs) -> Result<Outcome> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// See: issue 71 (`logtime_far_future.mcap`). Log times a second apart play a second
+    /// apart; a message 31 years late plays MAX_PLAY_GAP_S after the one before, and says
+    /// how far its time jumped; the messages after it keep their own spacing.
+    #[test]
+    fn r71_a_jump_in_log_times_plays_as_a_bounded_gap() {
+        let far = 1_000_000_000_000_000_000i64;
+        let due = play_times([0, 1_000_000_000, far, far + 500_000_000]);
+        let at: Vec<f64> = due.iter().map(|d| d.at.as_secs_f64()).collect();
+        assert_eq!(at, [0.0, 1.0, 1.0 + MAX_PLAY_GAP_S, 1.5 + MAX_PLAY_GAP_S]);
+        assert_eq!(due[1].cut_s, None);
+        let cut = due[2].cut_s.unwrap();
+        assert!((cut - (far as f64 * 1e-9 - 1.0)).abs() < 1.0, "{cut}");
+        assert_eq!(due[3].cut_s, None);
+    }
 
     #[test]
     fn a_tf_messages_every_stamp_moves() {
