@@ -244,11 +244,12 @@ pub fn grid_map(grid: &bag::msg::Grid) -> Result<asm::map::OccupancyMap> {
     );
     // As the YAML gives it: the f32's shortest decimal, read as f64.
     let resolution: f64 = grid.resolution.to_string().parse().unwrap_or(f64::NAN);
-    ensure!(
-        resolution.is_finite() && resolution > 0.0,
-        "an occupancy grid of resolution {}",
-        grid.resolution
-    );
+    asm::map::check_grid(
+        grid.width,
+        grid.height,
+        resolution,
+        [grid.origin.x, grid.origin.y],
+    )?;
     let cells = grid
         .data
         .chunks_exact(grid.width)

@@ -81,12 +81,8 @@ pub fn prepare(scene: Scene) -> Result<PreparedScene> {
     // before anything is rendered.
     let [lx, ly, _] = scene.room.dims();
     let (w, h) = map_size(lx, ly);
-    anyhow::ensure!(
-        w.saturating_mul(h) <= asm::map::MAX_CELLS,
-        "room.dims: a {lx} x {ly} m room's occupancy map at {MAP_RES} m is {w} x {h} cells, \
-         more than a map may have ({})",
-        asm::map::MAX_CELLS
-    );
+    asm::map::check_grid(w, h, MAP_RES, [-MAP_MARGIN, -MAP_MARGIN])
+        .with_context(|| format!("room.dims: a {lx} x {ly} m room's occupancy map"))?;
     Ok(scene)
 }
 

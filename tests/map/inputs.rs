@@ -189,3 +189,64 @@ fn r13_a_map_yaml_with_a_quoted_hash_and_a_block_origin_is_read_as_yaml() {
     assert_eq!(v["sources"].as_array().unwrap().len(), 3, "{v}");
     assert!(v["ospa"]["total"].as_f64().unwrap() < 0.15, "{v}");
 }
+
+/// Poses in another frame than the map (every stop 100 m off it) are an error that says
+/// so, not an empty map with exit 0; the same poses in the map's frame map the sources.
+// See: issue 71 (`poses_II_100m_off.csv`)
+#[test]
+fn r71_stops_that_all_lie_outside_the_map_are_a_clear_error() {
+    let dir = tempdir();
+    let root = dataset(&dir);
+    let o = map_with(&root, &["--doas", arg(&root.join("doas.csv"))]);
+    assert!(o.status.success(), "{}", show(&o));
+    let far: String = drive()
+        .iter()
+        .map(|(x, y, th)| format!("{},{y},{th}\n", x + 100.0))
+        .collect();
+    std::fs::write(root.join("far.csv"), far).unwrap();
+    let o = map_with(
+        &root,
+        &[
+            "--doas",
+            arg(&root.join("doas.csv")),
+            "--poses",
+            arg(&root.join("far.csv")),
+        ],
+    );
+    assert_clear_error(
+        &o,
+        &[
+            "none of the 20 stops lies in the occupancy map",
+            "map's frame",
+        ],
+    );
+}
+
+/// An OSPA order whose c^p overflows a double is computed relative to c: `--ospa-p 400`
+/// prints a finite OSPA; an order below 1 or a cutoff that is not finite is refused.
+// See: issue 71
+#[test]
+fn r71_an_ospa_order_beyond_a_double_gives_a_finite_figure() {
+    let dir = tempdir();
+    let root = dataset(&dir);
+    let o = map_with(
+        &root,
+        &[
+            "--doas",
+            arg(&root.join("doas.csv")),
+            "--ospa-p",
+            "400",
+            "--json",
+        ],
+    );
+    assert!(o.status.success(), "{}", show(&o));
+    let total = json(&o)["ospa"]["total"].as_f64().unwrap();
+    assert!(total.is_finite() && (0.0..=1.0).contains(&total), "{total}");
+    let doas = root.join("doas.csv");
+    for bad in [["--ospa-p", "0.5"], ["--ospa-c", "inf"]] {
+        let mut args = vec!["--doas", arg(&doas)];
+        args.extend_from_slice(&bad);
+        let o = map_with(&root, &args);
+        assert_clear_error(&o, &["finite"]);
+    }
+}

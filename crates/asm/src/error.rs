@@ -99,6 +99,19 @@ pub enum MapError {
         /// What is wrong.
         message: String,
     },
+    /// A grid whose geometry no map may have ([`crate::map::check_grid`]).
+    #[error("an occupancy grid: {message}")]
+    Grid {
+        /// What is wrong.
+        message: String,
+    },
+    /// A grid of more cells than a map may have ([`crate::map::MAX_CELLS`]): its cells
+    /// would not fit in memory.
+    #[error("an occupancy grid: {message}")]
+    TooLarge {
+        /// What is wrong.
+        message: String,
+    },
     /// A map with no known (free or occupied) cell: nowhere to put particles.
     #[error("{path}: the map has no known (free or occupied) cell")]
     NoKnownCell {
@@ -133,6 +146,36 @@ pub enum Error {
     /// No pose at all.
     #[error("no observation point: the pose table is empty")]
     NoPoses,
+    /// Not one stop lies in the occupancy map: the poses and the map are in other frames
+    /// (or units), and no source could be found.
+    #[error(
+        "none of the {stops} stops lies in the occupancy map (stops x {:.1} to {:.1}, y {:.1} to {:.1} m; map x {:.1} to {:.1}, y {:.1} to {:.1} m): are the poses in the map's frame?",
+        stops_box[0], stops_box[1], stops_box[2], stops_box[3],
+        map_box[0], map_box[1], map_box[2], map_box[3]
+    )]
+    NoStopInMap {
+        /// Stops.
+        stops: usize,
+        /// The stops' extent: x min, x max, y min, y max (m).
+        stops_box: [f64; 4],
+        /// The map's extent, likewise (m).
+        map_box: [f64; 4],
+    },
+    /// A stop added to an online map lies outside the occupancy map.
+    #[error(
+        "stop {index} at ({x:.2}, {y:.2}) m lies outside the occupancy map (x {:.1} to {:.1}, y {:.1} to {:.1} m): are the poses in the map's frame?",
+        map_box[0], map_box[1], map_box[2], map_box[3]
+    )]
+    StopOutsideMap {
+        /// Zero-based index.
+        index: usize,
+        /// Its x (m).
+        x: f64,
+        /// Its y (m).
+        y: f64,
+        /// The map's extent: x min, x max, y min, y max (m).
+        map_box: [f64; 4],
+    },
     /// A pose with a NaN or infinite value.
     #[error("pose {index} (row {row}) has a non-finite value", row = index + 1)]
     NonFinitePose {

@@ -119,7 +119,8 @@ impl OnlineMapper {
     /// first, at most `N`; non-finite ones are skipped as empty cells).
     ///
     /// # Errors
-    /// [`Error::NonFinitePose`](crate::Error::NonFinitePose) or
+    /// [`Error::NonFinitePose`](crate::Error::NonFinitePose),
+    /// [`Error::StopOutsideMap`](crate::Error::StopOutsideMap) or
     /// [`Error::TooManyDoas`](crate::Error::TooManyDoas), naming the stop; the map is
     /// unchanged.
     pub fn add_stop(&mut self, pose: Pose, doas_rad: &[f64]) -> Result<StopUpdate> {
@@ -139,6 +140,9 @@ impl OnlineMapper {
         cut: Option<bool>,
     ) -> Result<StopUpdate> {
         let stop = self.stops.len();
+        if pose.is_finite() {
+            self.mapper.check_in_map(stop, pose)?;
+        }
         self.mapper
             .push_stop(&mut self.stops, pose, doas_rad, cut)?;
         self.pool.push(self.stops.heard()[stop].clone());

@@ -8,6 +8,11 @@
 //! It splits into a localisation part (the assignment term) and a cardinality part (the
 //! `c^p (n - m)` term); for `p = 1` they add up to the total. The optimal assignment is
 //! found with the Hungarian algorithm, `O(n^2 m)`.
+//!
+//! The powers are taken of the distances relative to `c` (each in `[0, 1]`), and the
+//! result is scaled by `c` at the end: `d = c ((1/n) (sum (d_c / c)^p + (n - m)))^(1/p)`,
+//! the same figure, but one that cannot overflow whatever `c` and `p` are (`c^p` itself
+//! overflows a double for `c = 10, p = 400`, and the assignment then never settles).
 
 use serde::Serialize;
 
@@ -22,12 +27,33 @@ pub struct Ospa {
     pub cardinality: f64,
 }
 
+/// Checks OSPA's parameters: a finite cutoff `c > 0` (m) and a finite order `p >= 1` (below
+/// 1 the distance is not a metric). The commands and the Python bindings ask this before
+/// [`ospa`].
+///
+/// # Errors
+/// The refusal, naming both values.
+pub fn check_params(c: f64, p: f64) -> Result<(), String> {
+    if c.is_finite() && c > 0.0 && p.is_finite() && p >= 1.0 {
+        Ok(())
+    } else {
+        Err(format!(
+            "OSPA needs a finite cutoff c > 0 and a finite order p >= 1 (got c = {c}, p = {p})"
+        ))
+    }
+}
+
 /// OSPA between `est` and `truth` (either order gives the same), cutoff `c` (m), order `p`.
+/// A coordinate that is not finite counts as a distance of `c`.
 ///
 /// # Panics
-/// If `c` or `p` is not positive.
+/// If `c` or `p` is not finite and positive (a caller's bug: [`check_params`] says so
+/// first).
 pub fn ospa(est: &[[f64; 2]], truth: &[[f64; 2]], c: f64, p: f64) -> Ospa {
-    assert!(c > 0.0 && p > 0.0, "OSPA needs c > 0 and p > 0");
+    assert!(
+        c.is_finite() && c > 0.0 && p.is_finite() && p > 0.0,
+        "OSPA needs finite c > 0 and p > 0"
+    );
     let (x, y) = if est.len() <= truth.len() {
         (est, truth)
     } else {
@@ -45,17 +71,22 @@ pub fn ospa(est: &[[f64; 2]], truth: &[[f64; 2]], c: f64, p: f64) -> Ospa {
         .iter()
         .map(|a| {
             y.iter()
-                .map(|b| ((a[0] - b[0]).hypot(a[1] - b[1])).min(c).powf(p))
+                .map(|b| {
+                    let d = (a[0] - b[0]).hypot(a[1] - b[1]);
+                    // NaN (a coordinate that is not a number) is as far as anything can be.
+                    let d = if d.is_nan() { c } else { d.min(c) };
+                    (d / c).powf(p)
+                })
                 .collect()
         })
         .collect();
     let assigned = if m == 0 { 0.0 } else { min_assignment(&cost) };
-    let card = c.powf(p) * (n - m) as f64;
+    let card = (n - m) as f64;
     let nf = n as f64;
     Ospa {
-        total: ((assigned + card) / nf).powf(1.0 / p),
-        localization: (assigned / nf).powf(1.0 / p),
-        cardinality: (card / nf).powf(1.0 / p),
+        total: c * ((assigned + card) / nf).powf(1.0 / p),
+        localization: c * (assigned / nf).powf(1.0 / p),
+        cardinality: c * (card / nf).powf(1.0 / p),
     }
 }
 
@@ -189,6 +220,38 @@ mod tests {
         // A far miss costs at most c.
         let o = ospa(&[[50.0, 0.0]], &[[0.0, 0.0]], 1.0, 1.0);
         assert_eq!(o.total, 1.0);
+    }
+
+    /// Parameters whose `c^p` overflows a double give the figure the definition gives,
+    /// in finite time: one miss of 50 m at c = 100, p = 200 is 50 m; equal sets at c = 10,
+    /// p = 400 are at 0; a miss as large as c (1e160) at p = 2 is c.
+    #[test]
+    fn powers_beyond_a_double_do_not_overflow() {
+        assert_abs_diff_eq!(
+            ospa(&[[50.0, 0.0]], &[[0.0, 0.0]], 100.0, 200.0).total,
+            50.0,
+            epsilon = 1e-9
+        );
+        assert_eq!(ospa(&[[0.0, 0.0]], &[[0.0, 0.0]], 10.0, 400.0).total, 0.0);
+        let o = ospa(&[[1e160, 0.0]], &[[0.0, 0.0]], 1e160, 2.0);
+        assert_abs_diff_eq!(o.total / 1e160, 1.0, epsilon = 1e-12);
+        // Two misses of 3 and 4 m and a missing point, c = 10, p = 300: the largest term
+        // is the cardinality's, (1/3)^(1/300) c.
+        let o = ospa(&[[3.0, 0.0], [0.0, 4.0]], &[[0.0, 0.0]; 3], 10.0, 300.0);
+        assert!(
+            o.total.is_finite() && o.total > 9.9 && o.total <= 10.0,
+            "{o:?}"
+        );
+        assert!(check_params(10.0, 400.0).is_ok());
+        for (c, p) in [
+            (f64::NAN, 1.0),
+            (f64::INFINITY, 1.0),
+            (0.0, 1.0),
+            (1.0, 0.5),
+            (1.0, f64::INFINITY),
+        ] {
+            assert!(check_params(c, p).is_err(), "c = {c}, p = {p}");
+        }
     }
 
     #[test]

@@ -265,6 +265,18 @@ pub(super) fn parse_channels(text: &str) -> Result<ChannelList, String> {
     Ok(ChannelList(out))
 }
 
+/// `--ospa-c`: a finite cutoff above 0 (m), as [`asm::ospa::check_params`] asks.
+pub(super) fn parse_ospa_c(s: &str) -> Result<f64, String> {
+    let c: f64 = s.parse().map_err(|e| format!("{e}"))?;
+    asm::ospa::check_params(c, 1.0).map(|()| c)
+}
+
+/// `--ospa-p`: a finite order of at least 1, as [`asm::ospa::check_params`] asks.
+pub(super) fn parse_ospa_p(s: &str) -> Result<f64, String> {
+    let p: f64 = s.parse().map_err(|e| format!("{e}"))?;
+    asm::ospa::check_params(1.0, p).map(|()| p)
+}
+
 #[cfg(test)]
 mod channel_list_tests {
     use super::*;

@@ -62,10 +62,10 @@ pub struct ReportArgs {
     #[arg(long)]
     pub json: bool,
     /// OSPA order p.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = super::inputs::parse_ospa_p)]
     pub ospa_p: f64,
     /// OSPA cutoff c (m).
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = super::inputs::parse_ospa_c)]
     pub ospa_c: f64,
 }
 

@@ -67,6 +67,10 @@ pub struct Follower {
     give_up: Duration,
     /// For the recording being waited on: its size and when that size was first seen.
     seen: HashMap<PathBuf, (u64, Instant)>,
+    /// The next stop's recording, once seen and until taken: if it vanishes before it is
+    /// taken (deleted while it waited for its pose row), its stop is passed over, so that
+    /// the recordings after it keep their rows.
+    pending: Option<PathBuf>,
     /// Warnings not yet taken, and every one said (each is said once).
     warnings: Vec<String>,
     said: std::collections::HashSet<String>,
@@ -89,6 +93,7 @@ impl Follower {
             rows_used: Vec::new(),
             give_up,
             seen: HashMap::new(),
+            pending: None,
             warnings: Vec::new(),
             said: std::collections::HashSet::new(),
         }
@@ -221,6 +226,7 @@ impl Follower {
     /// Takes `file` as the next stop, paired with `row`.
     fn take(&mut self, file: &Path, row: Option<Pose>) {
         self.seen.remove(file);
+        self.pending = None;
         self.taken.push(file.to_owned());
         self.rows_used.push(row);
     }
@@ -238,9 +244,21 @@ impl Follower {
                 dir.display()
             )));
         }
+        if let Some(gone) = self.pending.clone().filter(|f| !f.exists()) {
+            let k = self.taken.len() + 1;
+            self.take(&gone, None);
+            return Ok(Next::Skipped {
+                file: gone,
+                reason: format!(
+                    "deleted while stop {k} waited for its pose row: the stop is passed over \
+                     with pose row {k}, and the recordings after it keep their rows"
+                ),
+            });
+        }
         let Some(file) = self.next_recording(&dir)? else {
             return Ok(Next::Waiting("no new recording".into()));
         };
+        self.pending = Some(file.clone());
         let size = std::fs::metadata(&file).map_or(0, |m| m.len());
         let since = match self.seen.get(&file) {
             Some(&(s, t)) if s == size => t,
@@ -401,6 +419,31 @@ pub(crate) mod tests {
         );
         // Each recording once: nothing is taken again.
         assert_eq!(next(&mut f), "wait");
+        assert_eq!(f.done(), 3);
+    }
+
+    /// See: issue 71 (`watch_deleted_pending.sh`). A recording deleted while it waits for
+    /// its pose row is its stop passed over with that row: the next recording is paired
+    /// with the next row, not with the deleted one's.
+    #[test]
+    fn r71_a_recording_deleted_before_its_row_shifts_nothing() {
+        let d = Folder::new();
+        let mut f = d.follower();
+        d.wav("stop01.wav", 10);
+        d.row("1,0,0");
+        assert_eq!(next(&mut f), "stop01.wav n=10 x=1");
+        d.wav("stop02.wav", 20);
+        assert_eq!(next(&mut f), "wait"); // row 2 not yet written
+        std::fs::remove_file(d.0.path().join("audio/stop02.wav")).unwrap();
+        d.row("2,0,0");
+        d.wav("stop03.wav", 30);
+        d.row("3,0,0");
+        let skipped = next(&mut f);
+        assert!(
+            skipped.starts_with("skip stop02.wav") && skipped.contains("pose row 2"),
+            "{skipped}"
+        );
+        assert_eq!(next(&mut f), "stop03.wav n=30 x=3");
         assert_eq!(f.done(), 3);
     }
 

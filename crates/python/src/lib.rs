@@ -24,16 +24,30 @@ use numpy::{
     Complex32, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyReadonlyArray3,
     PyUntypedArrayMethods,
 };
-use pyo3::exceptions::{PyFileNotFoundError, PyValueError};
+use pyo3::exceptions::{PyFileNotFoundError, PyMemoryError, PyValueError};
 use pyo3::prelude::*;
 use rand::SeedableRng;
 
 use iasm::settings::Settings;
 
-/// An error as Python expects it: `FileNotFoundError` when a file is missing, else
-/// `ValueError`; the message is the CLI's (every cause, outermost first).
+/// An error as Python expects it: `MemoryError` when a size bound is exceeded (a grid of
+/// more cells than a map may have, a recording longer than one localisation takes),
+/// `FileNotFoundError` when a file is missing, else `ValueError`; the message is the
+/// CLI's (every cause, outermost first).
 fn py_err(e: anyhow::Error) -> PyErr {
     let msg = format!("{e:#}");
+    let too_large = e.chain().any(|c| {
+        matches!(
+            c.downcast_ref::<asm::MapError>(),
+            Some(asm::MapError::TooLarge { .. })
+        ) || matches!(
+            c.downcast_ref::<ssl::Error>(),
+            Some(ssl::Error::TooLong { .. })
+        )
+    });
+    if too_large {
+        return PyMemoryError::new_err(msg);
+    }
     let missing = e.chain().any(|c| {
         c.downcast_ref::<std::io::Error>()
             .is_some_and(|io| io.kind() == ErrorKind::NotFound)
@@ -70,6 +84,9 @@ fn mic_array(spec: &str, positions: Option<PyReadonlyArray2<'_, f64>>) -> Result
 
 /// A recording from an `(M, samples)` array (validated by the Python layer).
 fn audio(signals: &PyReadonlyArray2<'_, f32>, fs: u32) -> Result<ssl::Audio> {
+    let (m, n) = signals.as_array().dim();
+    // The CLI's bound on a WAV, before the channels are copied.
+    ssl::audio::check_length("the recording", m, n, fs)?;
     let channels: Vec<Vec<f32>> = signals
         .as_array()
         .rows()
@@ -213,10 +230,8 @@ fn occupancy(
     if let Some(g) = grid {
         let g = g.as_array();
         let (h, w) = g.dim();
-        anyhow::ensure!(
-            resolution.is_finite() && resolution > 0.0,
-            "the grid's resolution must be a positive number of metres (got {resolution})"
-        );
+        // The CLI's checks of a map file, before any cell is built.
+        asm::map::check_grid(w, h, resolution, origin)?;
         let cells: Vec<Cell> = g
             .iter()
             .map(|&v| match v {
@@ -390,13 +405,16 @@ fn ospa(
             .map(|r| [r[0], r[1]])
             .collect()
     };
-    if !(c.is_finite() && c > 0.0 && p.is_finite() && p >= 1.0) {
-        return Err(PyValueError::new_err(format!(
-            "OSPA needs a cutoff c > 0 and an order p >= 1 (got c = {c}, p = {p})"
-        )));
-    }
+    asm::ospa::check_params(c, p).map_err(PyValueError::new_err)?;
     let o = asm::ospa::ospa(&pts(&estimate), &pts(&truth), c, p);
     Ok((o.total, o.localization, o.cardinality))
+}
+
+/// Refuses a recording of `channels` x `samples` at `fs` Hz longer than one localisation
+/// takes, as the CLI refuses such a WAV: `MemoryError`, before the Python layer copies it.
+#[pyfunction]
+fn check_recording(channels: usize, samples: usize, fs: u32) -> PyResult<()> {
+    ssl::audio::check_length("the recording", channels, samples, fs).map_err(|e| py_err(e.into()))
 }
 
 /// A rendered scene: per stop the audio (`(M, samples)`, float32), and the scene's poses,
@@ -565,6 +583,7 @@ fn read_dataset<'py>(
 fn _iasm(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(map_sources, m)?)?;
     m.add_function(wrap_pyfunction!(ospa, m)?)?;
+    m.add_function(wrap_pyfunction!(check_recording, m)?)?;
     m.add_function(wrap_pyfunction!(simulate, m)?)?;
     m.add_function(wrap_pyfunction!(read_wav, m)?)?;
     m.add_function(wrap_pyfunction!(read_dataset, m)?)?;

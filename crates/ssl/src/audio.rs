@@ -4,7 +4,7 @@
 //! integer formats; float WAVs are taken as they are.
 
 use std::io::Read;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
 
@@ -193,6 +193,32 @@ fn open_wav(path: &Path) -> Result<WavFile> {
         hound::Error::FormatError(m) => wav_err(format!("not a valid WAV file: {m}")),
         other => wav_err(format!("not a supported WAV file: {other}")),
     })
+}
+
+/// Refuses a recording of `channels` x `samples_per_channel` at `rate` Hz beyond
+/// [`MAX_WAV_SAMPLES`], before it is copied: the bound of a WAV file, for recordings that
+/// come from elsewhere (a numpy array, a ROS message); `what` names it in the error.
+///
+/// # Errors
+/// [`Error::TooLong`].
+pub fn check_length(
+    what: &str,
+    channels: usize,
+    samples_per_channel: usize,
+    rate: u32,
+) -> Result<()> {
+    let total = (channels as u64).saturating_mul(samples_per_channel as u64);
+    if total > MAX_WAV_SAMPLES {
+        let per_s = f64::from(rate.max(1)) * channels.max(1) as f64;
+        return Err(Error::TooLong {
+            path: PathBuf::from(what),
+            seconds: total as f64 / per_s,
+            channels: u16::try_from(channels).unwrap_or(u16::MAX),
+            rate,
+            limit_s: MAX_WAV_SAMPLES as f64 / per_s,
+        });
+    }
+    Ok(())
 }
 
 /// How many of the `declared` samples the file can hold, refused beyond

@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use super::occupancy::{MAX_CELLS, MAX_EXTENT_M, MAX_RESOLUTION_M};
+use super::occupancy::{MAX_CELLS, check_origin, check_resolution};
 use crate::error::MapError;
 
 /// The YAML metadata, as read.
@@ -105,24 +105,12 @@ pub(super) fn parse_yaml(text: &str) -> Result<Meta, String> {
         .map_or(Ok(0.196), |v| yaml_number(v, "free_thresh"))?;
     let mode = raw.mode.unwrap_or_else(|| "trinary".to_owned());
     let resolution = resolution.ok_or("missing key `resolution`")?;
-    if !(resolution.is_finite() && resolution > 0.0) {
-        return Err(format!("resolution {resolution} must be positive"));
-    }
-    if resolution > MAX_RESOLUTION_M {
-        return Err(format!(
-            "resolution {resolution} m per cell is beyond any occupancy map (at most {MAX_RESOLUTION_M})"
-        ));
-    }
+    check_resolution(resolution)?;
     let origin = origin.ok_or("missing key `origin`")?;
-    if origin.iter().any(|v| !v.is_finite()) {
+    if !origin[2].is_finite() {
         return Err("origin has a non-finite value".into());
     }
-    if origin[..2].iter().any(|v| v.abs() > MAX_EXTENT_M) {
-        return Err(format!(
-            "origin {:?} lies more than {MAX_EXTENT_M} m from the world frame's origin",
-            &origin[..2]
-        ));
-    }
+    check_origin([origin[0], origin[1]])?;
     if origin[2] != 0.0 {
         return Err(format!(
             "origin yaw {} is not supported (only 0): rotate the map instead",

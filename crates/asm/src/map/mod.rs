@@ -10,4 +10,6 @@
 mod format;
 mod occupancy;
 
-pub use occupancy::{Cell, MAX_CELLS, OccupancyMap};
+pub use occupancy::{
+    Cell, MAX_CELLS, MAX_EXTENT_M, MAX_RESOLUTION_M, MIN_RESOLUTION_M, OccupancyMap, check_grid,
+};

@@ -16,12 +16,85 @@ pub enum Cell {
 
 /// The coarsest resolution accepted (m per cell): occupancy maps are centimetres to a metre.
 pub const MAX_RESOLUTION_M: f64 = 10.0;
+/// The finest resolution accepted (m per cell): a millimetre, finer than any range sensor
+/// maps. A grid finer than that is a unit mistake (a resolution given in kilometres).
+pub const MIN_RESOLUTION_M: f64 = 1e-3;
 /// The largest extent a map may span, and the farthest its origin may lie (m): a robot's
 /// building, campus or yard, with room to spare. Bounds every size computed from a map.
 pub const MAX_EXTENT_M: f64 = 10_000.0;
 /// The most cells a map may have: a 250-m square at 5 cm, or 2.5 km at 0.5 m. Bounds the
 /// memory of a map and of its known cells (16 bytes each) to well under a gigabyte.
 pub const MAX_CELLS: usize = 25_000_000;
+
+/// Checks a grid's geometry before any cell of it is built: its resolution within
+/// [[`MIN_RESOLUTION_M`], [`MAX_RESOLUTION_M`]], its origin finite and within
+/// [`MAX_EXTENT_M`] of the world's, its span within [`MAX_EXTENT_M`] and its cells at most
+/// [`MAX_CELLS`]. Every door asks this one function: a map file, a grid from Python, a
+/// ROS `/map` message.
+///
+/// # Errors
+/// [`MapError::TooLarge`] for a grid of more cells than a map may have (its cells would not
+/// fit in memory); [`MapError::Grid`] for the rest.
+pub fn check_grid(
+    width: usize,
+    height: usize,
+    resolution: f64,
+    origin: [f64; 2],
+) -> Result<(), MapError> {
+    let grid = |message| Err(MapError::Grid { message });
+    if let Err(message) = check_resolution(resolution) {
+        return grid(message);
+    }
+    if let Err(message) = check_origin(origin) {
+        return grid(message);
+    }
+    if width == 0 || height == 0 {
+        return grid(format!("a {width} x {height} grid has no cell"));
+    }
+    if width.checked_mul(height).is_none_or(|n| n > MAX_CELLS) {
+        return Err(MapError::TooLarge {
+            message: format!(
+                "{width} x {height} cells are more than a map may have ({MAX_CELLS}): crop it \
+                 to the surveyed area or give it at a coarser resolution"
+            ),
+        });
+    }
+    let extent = (width.max(height) as f64) * resolution;
+    if extent > MAX_EXTENT_M {
+        return grid(format!(
+            "resolution {resolution} m x {width} x {height} cells spans {extent:.0} m, more than the {MAX_EXTENT_M} m a map may span"
+        ));
+    }
+    Ok(())
+}
+
+/// A resolution within [[`MIN_RESOLUTION_M`], [`MAX_RESOLUTION_M`]] m per cell.
+pub(super) fn check_resolution(resolution: f64) -> Result<(), String> {
+    if !(resolution.is_finite() && resolution > 0.0) {
+        return Err(format!(
+            "resolution {resolution} must be a positive number of metres"
+        ));
+    }
+    if !(MIN_RESOLUTION_M..=MAX_RESOLUTION_M).contains(&resolution) {
+        return Err(format!(
+            "resolution {resolution} m per cell is beyond any occupancy map ({MIN_RESOLUTION_M} to {MAX_RESOLUTION_M})"
+        ));
+    }
+    Ok(())
+}
+
+/// An origin that is finite and within [`MAX_EXTENT_M`] of the world frame's.
+pub(super) fn check_origin(origin: [f64; 2]) -> Result<(), String> {
+    if origin.iter().any(|v| !v.is_finite()) {
+        return Err(format!("origin {origin:?} has a non-finite value"));
+    }
+    if origin.iter().any(|v| v.abs() > MAX_EXTENT_M) {
+        return Err(format!(
+            "origin {origin:?} lies more than {MAX_EXTENT_M} m from the world frame's origin"
+        ));
+    }
+    Ok(())
+}
 
 /// An occupancy grid: `width x height` cells of `resolution` metres, row 0 at the top
 /// (image order), lower-left cell at `origin`.
@@ -202,16 +275,12 @@ impl OccupancyMap {
             })
             .collect();
         let _ = (&meta.image, &meta.mode);
-        let extent = (w.max(h) as f64) * meta.resolution;
-        if extent > MAX_EXTENT_M {
-            return Err(MapError::Yaml {
+        check_grid(w, h, meta.resolution, [meta.origin[0], meta.origin[1]]).map_err(|e| {
+            MapError::Yaml {
                 path: yaml.to_owned(),
-                message: format!(
-                    "resolution {} m x {w} x {h} cells spans {extent:.0} m, more than the {MAX_EXTENT_M} m a map may span",
-                    meta.resolution
-                ),
-            });
-        }
+                message: e.to_string(),
+            }
+        })?;
         let map = Self::new(
             w,
             h,

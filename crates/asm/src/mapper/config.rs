@@ -50,7 +50,10 @@ impl std::fmt::Display for Variant {
     }
 }
 
-/// I-ASM parameters; every default is the paper's (or its authors' code's) value.
+/// I-ASM parameters. The defaults are the robust profile ([`Profile::Robust`]): the
+/// paper's parameters (or its authors' code's) with the rules beyond the paper on, each
+/// field saying what the paper profile ([`Profile::Paper`], the paper's algorithm
+/// exactly) sets instead.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct IasmConfig {

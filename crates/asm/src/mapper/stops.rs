@@ -135,11 +135,61 @@ impl Mapper {
         if let Some(index) = poses.iter().position(|p| !p.is_finite()) {
             return Err(Error::NonFinitePose { index });
         }
+        if !poses.iter().any(|p| self.in_map(*p)) {
+            let (lo, hi) = poses.iter().fold(
+                ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]),
+                |(lo, hi), p| {
+                    (
+                        [lo[0].min(p.x), lo[1].min(p.y)],
+                        [hi[0].max(p.x), hi[1].max(p.y)],
+                    )
+                },
+            );
+            return Err(Error::NoStopInMap {
+                stops: poses.len(),
+                stops_box: [lo[0], hi[0], lo[1], hi[1]],
+                map_box: self.map_box(),
+            });
+        }
         let mut stops = Stops::default();
         for (k, (pose, row)) in poses.iter().zip(doas_rad).enumerate() {
             self.push_stop(&mut stops, *pose, row, cut.map(|c| c[k]))?;
         }
         Ok(stops)
+    }
+
+    /// Whether the stop at `pose` lies within the occupancy map's grid.
+    pub fn in_map(&self, pose: Pose) -> bool {
+        self.map.world_to_cell([pose.x, pose.y]).is_some()
+    }
+
+    /// The map's extent: x min, x max, y min, y max (m).
+    fn map_box(&self) -> [f64; 4] {
+        let [x0, y0] = self.map.origin();
+        let r = self.map.resolution();
+        [
+            x0,
+            x0 + r * self.map.width() as f64,
+            y0,
+            y0 + r * self.map.height() as f64,
+        ]
+    }
+
+    /// [`Error::StopOutsideMap`] for a stop that lies outside the map: what the online
+    /// mapper says of a stop it is given one at a time.
+    ///
+    /// # Errors
+    /// As said.
+    pub fn check_in_map(&self, index: usize, pose: Pose) -> Result<()> {
+        if self.in_map(pose) {
+            return Ok(());
+        }
+        Err(Error::StopOutsideMap {
+            index,
+            x: pose.x,
+            y: pose.y,
+            map_box: self.map_box(),
+        })
     }
 
     /// Adds one stop to `stops`: the robot's pose and its DoAs (as [`Mapper::stops`]

@@ -154,7 +154,7 @@ class Dataset:
 ArrayLike = Union[np.ndarray, Sequence[Any]]
 
 
-def _signals(signals: ArrayLike) -> np.ndarray:
+def _signals(signals: ArrayLike, fs: int) -> np.ndarray:
     """``(M, samples)`` float32: a float32 array as it is (no copy), a float64 one cast."""
     a = signals if isinstance(signals, np.ndarray) else np.asarray(signals)
     if a.dtype.kind != "f":
@@ -165,6 +165,8 @@ def _signals(signals: ArrayLike) -> np.ndarray:
         raise ValueError(
             f"signals must have the shape (microphones, samples), got shape {a.shape}"
         )
+    # The CLI's bound on a recording (MemoryError beyond it), before anything is copied.
+    _iasm.check_recording(a.shape[0], a.shape[1], fs)
     if a.dtype != np.float32:
         a = a.astype(np.float32)
     bad = ~np.isfinite(a)
@@ -270,7 +272,7 @@ def _localizer(fs: int, spec: str, positions: Optional[np.ndarray], settings_jso
 def _locate(signals, fs, array, method, num, settings, kw, spectrum):
     spec, positions = _array(array)
     fs = _fs(fs)
-    x = _signals(signals)
+    x = _signals(signals, fs)
     settings_json = _ssl_settings(method, num, settings, kw)
     loc = _localizer(fs, spec, positions, settings_json)
     # A localizer keeps working memory: one thread at a time uses it, others plan their own.
