@@ -841,3 +841,115 @@ fn r71_audio_awaiting_poses_is_bounded() {
         "{kept}"
     );
 }
+
+/// Messages as a loaded network delivers them, generated on `sim_run.mcap` and fed to the
+/// live recorder as the node takes them: every 10th audio message delivered twice, pairs
+/// of audio messages swapped, odometry stamps jittered by up to 40 ms, every 7th odometry
+/// message twice. The run keeps its six stops, each with its own pose, and the audio of
+/// each stop is the clean run's (a duplicate is not heard twice, a swapped pair is put
+/// back in order; jittered poses move a window by milliseconds, no more).
+// See: issue 71
+#[test]
+fn r71_messages_duplicated_reordered_or_jittered_keep_every_stop() {
+    let path = fixture("sim_run.mcap");
+    let clean = iasm_bag::read_file(&path, &ReadOptions::default()).unwrap();
+    let want = clean.stops(&StopOptions::default()).unwrap();
+    let mut msgs: Vec<(String, String, i64, Vec<u8>)> = Vec::new();
+    iasm_bag::ros2::scan_files(&path, |m| {
+        msgs.push((
+            m.connection.topic.clone(),
+            m.connection.msg_type.clone(),
+            m.time_ns,
+            m.data.to_vec(),
+        ));
+        Ok(())
+    })
+    .unwrap();
+    type Delivery = fn(&[(String, String, i64, Vec<u8>)]) -> Vec<(String, String, i64, Vec<u8>)>;
+    let deliveries: [(&str, Delivery); 4] = [
+        ("audio messages twice", |m| {
+            let mut out = Vec::new();
+            let mut k = 0;
+            for x in m {
+                out.push(x.clone());
+                if x.0 == "/audio" {
+                    k += 1;
+                    if k % 10 == 0 {
+                        out.push(x.clone());
+                    }
+                }
+            }
+            out
+        }),
+        ("odometry twice", |m| {
+            let mut out = Vec::new();
+            let mut k = 0;
+            for x in m {
+                out.push(x.clone());
+                if x.0 == "/odom" {
+                    k += 1;
+                    if k % 7 == 0 {
+                        out.push(x.clone());
+                    }
+                }
+            }
+            out
+        }),
+        ("audio pairs swapped", |m| {
+            let mut out: Vec<_> = m.to_vec();
+            let idx: Vec<usize> = (0..out.len()).filter(|&i| out[i].0 == "/audio").collect();
+            for pair in idx.chunks(2).step_by(3) {
+                if let [a, b] = pair {
+                    // Delivered in the other order, each at the other's arrival time.
+                    let (ta, tb) = (out[*a].2, out[*b].2);
+                    out.swap(*a, *b);
+                    out[*a].2 = ta;
+                    out[*b].2 = tb;
+                }
+            }
+            out
+        }),
+        ("odometry stamps jittered", |m| {
+            let mut out = m.to_vec();
+            let mut k: i64 = 0;
+            for x in out.iter_mut().filter(|x| x.0 == "/odom") {
+                k += 1;
+                let shift = ((k * 7919) % 81 - 40) * 1_000_000; // -40..40 ms
+                let d = &mut x.3;
+                let sec = i64::from(i32::from_le_bytes(d[4..8].try_into().unwrap()));
+                let nsec = i64::from(u32::from_le_bytes(d[8..12].try_into().unwrap()));
+                let t = sec * 1_000_000_000 + nsec + shift;
+                d[4..8].copy_from_slice(&(t.div_euclid(1_000_000_000) as i32).to_le_bytes());
+                d[8..12].copy_from_slice(&(t.rem_euclid(1_000_000_000) as u32).to_le_bytes());
+            }
+            out
+        }),
+    ];
+    for (name, deliver) in deliveries {
+        let mut live = iasm_bag::live::Recorder::new(ReadOptions::default());
+        let mut got = Vec::new();
+        for (topic, ty, t, data) in deliver(&msgs) {
+            live.push(&topic, &ty, t, &data).unwrap();
+            if live.run().is_ok() {
+                got.extend(live.finished_stops(&StopOptions::default(), false).unwrap());
+            }
+        }
+        got.extend(live.finished_stops(&StopOptions::default(), true).unwrap());
+        assert_eq!(got.len(), want.len(), "{name}");
+        for (g, w) in got.iter().zip(&want) {
+            // The same pose (a mean over the stop's poses: to rounding when one came twice).
+            assert_abs_diff_eq!(g.stop.pose.x, w.pose.x, epsilon = 1e-9);
+            assert_abs_diff_eq!(g.stop.pose.y, w.pose.y, epsilon = 1e-9);
+            assert_abs_diff_eq!(g.stop.pose.theta, w.pose.theta, epsilon = 1e-9);
+            assert_abs_diff_eq!(g.stop.listen_s.0, w.listen_s.0, epsilon = 0.05);
+            // Jittered poses move a window by a few milliseconds; the others leave it.
+            if !name.contains("jittered") {
+                assert!(
+                    g.audio == clean.stop_audio(w),
+                    "{name}: the audio of the stop at {:?}",
+                    w.listen_s
+                );
+            }
+        }
+    }
+}

@@ -235,6 +235,56 @@ struct AudioRaw {
     embedded: Option<msg::Embedded>,
 }
 
+/// How far back (messages) a stamped audio message is looked for as a duplicate, and may
+/// be put back in its place: a loaded network delivers a message twice or two out of
+/// order, not dozens.
+const REORDER_WINDOW: usize = 8;
+
+impl AudioRaw {
+    /// Keeps one audio message (receipt time, stamp, samples). A stamped message that was
+    /// delivered twice (the stamp and length of one of the last [`REORDER_WINDOW`]) is kept
+    /// once; one delivered after a later one (its stamp before theirs, after an earlier
+    /// one's within the window) is put back in its place, so that the samples lie end to
+    /// end in the order they were captured. A stamp that fits nowhere in the window (a
+    /// stamp that lies) is left to [`Run`]'s clock check.
+    fn put(&mut self, time_ns: i64, stamp_ns: Option<i64>, data: &[u8]) {
+        let n = self.msgs.len();
+        let window = n.saturating_sub(REORDER_WINDOW)..n;
+        if let Some(stamp) = stamp_ns {
+            if self.msgs[window.clone()]
+                .iter()
+                .any(|m| m.1 == Some(stamp) && m.2 == data.len())
+            {
+                return;
+            }
+            let later = self.msgs[window.clone()]
+                .iter()
+                .rev()
+                .take_while(|m| m.1.is_some_and(|s| s > stamp))
+                .count();
+            let at = n - later;
+            // Its place: after an earlier stamp within the window, or first of all when the
+            // whole stream so far is within it.
+            let placed = if at == 0 {
+                n <= REORDER_WINDOW
+            } else {
+                at > window.start && self.msgs[at - 1].1.is_some_and(|s| s < stamp)
+            };
+            if later > 0 && placed {
+                let offset: usize = self.msgs[..at].iter().map(|m| m.2).sum();
+                self.bytes.splice(offset..offset, data.iter().copied());
+                // Its receipt time no later than the next one's, so that the messages
+                // stay in receipt order for what forgets them by it.
+                self.msgs
+                    .insert(at, (time_ns.min(self.msgs[at].0), stamp_ns, data.len()));
+                return;
+            }
+        }
+        self.msgs.push((time_ns, stamp_ns, data.len()));
+        self.bytes.extend_from_slice(data);
+    }
+}
+
 impl std::fmt::Debug for Run {
     /// Every field but the audio's bytes, of which it gives the count.
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -412,8 +462,7 @@ impl Kept {
                         Some(_) => {}
                     }
                 }
-                raw.msgs.push((m.time_ns, chunk.stamp_ns, chunk.data.len()));
-                raw.bytes.extend_from_slice(chunk.data);
+                raw.put(m.time_ns, chunk.stamp_ns, chunk.data);
             }
             // Another audio topic than the one named: not kept.
             Some(kind) if kind.is_audio() => {}
