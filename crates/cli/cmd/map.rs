@@ -80,7 +80,9 @@ pub fn run(a: &MapArgs) -> Result<Outcome> {
     let t0 = std::time::Instant::now();
     let result = survey.map(config, a.seed)?;
     let dt = t0.elapsed().as_secs_f64();
-    warn_if_thinned(&survey, config, &result);
+    for w in crate::pipeline::map_warnings(&survey.map, &survey.poses, config, &result) {
+        eprintln!("warning: {w}");
+    }
     let report = report(a, &survey, &settings, config, &result, localised);
     write_files(a, &survey, &report, &result)?;
     if a.report.json {
@@ -113,23 +115,6 @@ fn gather(a: &MapArgs) -> Result<(crate::settings::Settings, Survey)> {
         eprintln!("{note}");
     }
     Ok((settings, survey))
-}
-
-/// Says when the map was too large for the paper's particle density (`asm::MAX_PARTICLES`).
-fn warn_if_thinned(survey: &Survey, config: &IasmConfig, result: &MapResult) {
-    let known = survey.map.known_cells().count();
-    if result.particles == asm::MAX_PARTICLES
-        && known as f64 / config.density_d > 1.0 + result.particles as f64
-    {
-        eprintln!(
-            "warning: the map has {known} known cells: {} particles per round (the most a round \
-             has), one per {:.0} cells instead of density_d = {}; crop the map to the surveyed \
-             area for the paper's density",
-            result.particles,
-            known as f64 / result.particles as f64,
-            config.density_d
-        );
-    }
 }
 
 /// The run's report: the map, and against the truth when there is one.

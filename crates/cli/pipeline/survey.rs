@@ -358,3 +358,42 @@ fn localise_folder(
         Some(rows.iter().map(|r| r.cut).collect()),
     ))
 }
+
+/// What a user should be told of a map that the map itself does not say: stops that lie
+/// outside the occupancy map (some of them: none at all is an error,
+/// [`asm::Error::NoStopInMap`]), and a map too large for the paper's particle density
+/// (`asm::MAX_PARTICLES`). `iasm map` prints them as warnings and the Python bindings raise
+/// them as `warnings.warn`.
+pub fn map_warnings(
+    map: &OccupancyMap,
+    poses: &[Pose],
+    config: &IasmConfig,
+    result: &MapResult,
+) -> Vec<String> {
+    let mut out = Vec::new();
+    let outside = poses
+        .iter()
+        .filter(|p| map.world_to_cell([p.x, p.y]).is_none())
+        .count();
+    if outside > 0 {
+        out.push(format!(
+            "{outside} of {} stops lie outside the occupancy map: their DoAs point from \
+             beyond it (are all the poses in the map's frame?)",
+            poses.len()
+        ));
+    }
+    let known = map.known_cells().count();
+    if result.particles == asm::MAX_PARTICLES
+        && known as f64 / config.density_d > 1.0 + result.particles as f64
+    {
+        out.push(format!(
+            "the map has {known} known cells: {} particles per round (the most a round has), \
+             one per {:.0} cells instead of density_d = {}; crop the map to the surveyed area \
+             for the paper's density",
+            result.particles,
+            known as f64 / result.particles as f64,
+            config.density_d
+        ));
+    }
+    out
+}

@@ -269,8 +269,9 @@ fn poses(p: &PyReadonlyArray2<'_, f64>) -> Vec<Pose> {
 }
 
 /// The map JSON of a mapper's result, as `iasm map` writes its sources, refusals and counts.
-fn map_json(r: &asm::MapResult, seed: u64) -> String {
+fn map_json(r: &asm::MapResult, seed: u64, warnings: &[String]) -> String {
     serde_json::json!({
+        "warnings": warnings,
         "seed": seed,
         "rounds": r.rounds,
         "particles": r.particles,
@@ -310,7 +311,8 @@ fn map_sources(
             cut.as_deref(),
             &mut MapRng::seed_from_u64(seed),
         )?;
-        Ok(map_json(&r, seed))
+        let warnings = iasm::pipeline::map_warnings(&map, &poses, &s.iasm, &r);
+        Ok(map_json(&r, seed, &warnings))
     })
     .map_err(py_err)
 }
@@ -374,7 +376,7 @@ impl OnlineMapper {
 
     /// The map after the stops so far, as JSON.
     fn map(&self) -> String {
-        map_json(&self.inner.map(), self.seed)
+        map_json(&self.inner.map(), self.seed, &[])
     }
 
     /// Replaces the map with the batch map over every stop so far; returns its rounds.

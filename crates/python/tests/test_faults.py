@@ -58,6 +58,15 @@ def test_stops_that_all_lie_outside_the_map_are_a_value_error():
     assert m.add_stop((1.0, 1.0, 0.0), [30.0])["stop"] == 0
 
 
+def test_what_the_cli_warns_of_reaches_python_as_a_warning():
+    # One stop of three beyond the grid: mapped, and said, as `iasm map` says it.
+    some_far = POSES.copy()
+    some_far[2, 0] += 100.0
+    with pytest.warns(UserWarning, match="1 of 3 stops lie outside the occupancy map"):
+        m = iasm.map_sources(some_far, DOAS, GRID, resolution=0.05, origin=(0.0, 0.0))
+    assert "warnings" not in m
+
+
 def test_ospa_is_finite_whatever_c_to_the_p_is():
     # The definition's figures, computed by hand: a lone miss of 50 m at c = 100 is 50 m
     # for every p; equal sets are at 0; a miss as large as c costs c.
@@ -76,6 +85,7 @@ def _alarm(signum, frame):
     raise _Timeout()
 
 
+@pytest.mark.filterwarnings("ignore::UserWarning")
 def test_mutated_arguments_give_a_result_or_a_named_exception_in_bounded_time():
     """A seeded sweep over the mapper's and OSPA's arguments (shapes, dtypes, NaN and inf,
     sizes): each call returns, or raises ValueError, TypeError or MemoryError, within 10 s."""

@@ -22,6 +22,7 @@ from __future__ import annotations
 import json
 import os
 import threading
+import warnings
 from collections import OrderedDict
 from dataclasses import dataclass, field
 from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
@@ -407,7 +408,11 @@ def map_sources(
         p, rows, None if cut is None else [bool(c) for c in cut], _map_args(map, resolution, origin),
         _json({"iasm": table}), int(seed),
     )
-    return json.loads(text)
+    m = json.loads(text)
+    # What `iasm map` prints as warnings: some stops outside the map, particles thinned.
+    for w in m.pop("warnings", []):
+        warnings.warn(w, stacklevel=2)
+    return m
 
 
 class OnlineMapper:
@@ -446,7 +451,9 @@ class OnlineMapper:
 
     def map(self) -> Dict[str, Any]:
         """The map after the stops so far (as :func:`map_sources` returns it)."""
-        return json.loads(self._inner.map())
+        m = json.loads(self._inner.map())
+        m.pop("warnings", None)
+        return m
 
     def consolidate(self) -> int:
         """Replaces the map with the full map over every stop so far; returns its rounds."""
