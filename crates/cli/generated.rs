@@ -27,6 +27,7 @@ use ssl::Method;
 use crate::pipeline::{Simulated, Survey, scene_settings};
 use crate::scenes::prepare;
 use crate::settings::Settings;
+use sim::scene::PreparedScene;
 
 /// The method label of the maps made from true bearings.
 pub const TRUE_BEARINGS: &str = "true-bearings";
@@ -47,6 +48,9 @@ pub struct DrawOptions {
     pub map_seeds: usize,
     /// Talkers' recordings; empty: speech-shaped noise.
     pub talkers: Vec<PathBuf>,
+    /// Map from true bearings only, rendering nothing: the mapper's own loss over many
+    /// scenes in seconds.
+    pub floor_only: bool,
 }
 
 impl DrawOptions {
@@ -373,7 +377,8 @@ pub fn run_draw(opts: &DrawOptions, base: &Settings) -> Result<GeneratedReport> 
     })
 }
 
-/// The maps of one drawn scene: every rendering, every method and the true bearings.
+/// The maps of one drawn scene: every rendering, every method and the true bearings (only
+/// those with [`DrawOptions::floor_only`]: nothing is rendered then).
 fn run_drawn(drawn: &Drawn, opts: &DrawOptions, base: &Settings) -> Result<Vec<MapRecord>> {
     let mut out = Vec::new();
     let seed = drawn.scene.seed;
@@ -381,7 +386,10 @@ fn run_drawn(drawn: &Drawn, opts: &DrawOptions, base: &Settings) -> Result<Vec<M
         let mut scene = drawn.scene.clone();
         // Rendering r draws its signals, sensor noise and tail from its own seed.
         scene.seed = seed.wrapping_mul(16).wrapping_add(r as u64);
-        let sim = Simulated::render(prepare(scene)?, drawn.scene.name.clone())?;
+        let prepared = prepare(scene)?;
+        let floor = true_bearings(&prepared)?;
+        let truth = floor.truth.clone().unwrap_or_default();
+        let room = prepared.room.clone();
         let record = |method: &str, doa_score: f64, map: &asm::MapResult| {
             let found = map.positions();
             MapRecord {
@@ -391,32 +399,35 @@ fn run_drawn(drawn: &Drawn, opts: &DrawOptions, base: &Settings) -> Result<Vec<M
                 array: drawn.scene.array.preset.clone().unwrap_or_default(),
                 method: method.to_owned(),
                 rendering: r,
-                sources: sim.truth.len(),
+                sources: truth.len(),
                 n: drawn.num,
                 doa_score,
                 found: found.len(),
-                ospa: asm::ospa::ospa(&found, &sim.truth, 1.0, 1.0).total,
-                outside: found
-                    .iter()
-                    .filter(|p| outside(&sim.scene.room, **p))
-                    .count(),
+                ospa: asm::ospa::ospa(&found, &truth, 1.0, 1.0).total,
+                outside: found.iter().filter(|p| outside(&room, **p)).count(),
             }
         };
-        let map_seed = |j: usize| sim.scene.scene.seed + 1000 * j as u64;
-        for &method in Method::PAPER.iter() {
-            let settings = scene_settings(base, method, drawn.num);
-            let run = sim.run(&settings, map_seed(0))?;
-            out.push(record(method.name(), run.score.score, &run.map));
-            for j in 1..opts.map_seeds {
-                let map = run.survey.map(&settings.iasm, map_seed(j))?;
-                out.push(record(method.name(), run.score.score, &map));
-            }
-        }
+        let map_seed = |j: usize| prepared.scene.seed + 1000 * j as u64;
         let settings = scene_settings(base, Method::PAPER[0], drawn.num);
-        let floor = true_bearings(&sim);
         for j in 0..opts.map_seeds {
             let map = floor.map(&settings.iasm, map_seed(j))?;
             out.push(record(TRUE_BEARINGS, 1.0, &map));
+        }
+        if opts.floor_only {
+            continue;
+        }
+        let map_seed0 = map_seed(0);
+        let sim = Simulated::render(prepared, drawn.scene.name.clone())?;
+        for &method in Method::PAPER.iter() {
+            let settings = scene_settings(base, method, drawn.num);
+            let run = sim.run(&settings, map_seed0)?;
+            out.push(record(method.name(), run.score.score, &run.map));
+            for j in 1..opts.map_seeds {
+                let map = run
+                    .survey
+                    .map(&settings.iasm, map_seed0 + 1000 * j as u64)?;
+                out.push(record(method.name(), run.score.score, &map));
+            }
         }
     }
     Ok(out)
@@ -425,18 +436,22 @@ fn run_drawn(drawn: &Drawn, opts: &DrawOptions, base: &Settings) -> Result<Vec<M
 /// The survey a perfect front end would give: at every stop, the exact bearing of every
 /// source in its line of sight (array frame, degrees), nearest first, and no row cut. A
 /// source around a corner reaches the stop only by reflection, and its direct bearing is
-/// not something any front end could hear there.
-pub fn true_bearings(sim: &Simulated) -> Survey {
-    let poses = sim.poses().to_vec();
-    let sees = |a: [f64; 2], b: [f64; 2]| match &sim.scene.room {
+/// not something any front end could hear there. Nothing is rendered: the scene's
+/// geometry is all it takes.
+///
+/// # Errors
+/// A scene whose array is refused.
+pub fn true_bearings(scene: &PreparedScene) -> Result<Survey> {
+    let poses = scene.stops.clone();
+    let truth: Vec<[f64; 2]> = scene.room_sources().map(|s| [s.pos[0], s.pos[1]]).collect();
+    let sees = |a: [f64; 2], b: [f64; 2]| match &scene.room {
         sim::Space::Plan(plan) => plan.sees(a, b),
         sim::Space::Shoebox(_) => true,
     };
     let doas_deg = poses
         .iter()
         .map(|p| {
-            let mut by_distance: Vec<(f64, f64)> = sim
-                .truth
+            let mut by_distance: Vec<(f64, f64)> = truth
                 .iter()
                 .filter(|t| sees([p.x, p.y], **t))
                 .map(|t| {
@@ -449,16 +464,17 @@ pub fn true_bearings(sim: &Simulated) -> Survey {
             by_distance.into_iter().map(|(_, az)| Some(az)).collect()
         })
         .collect();
-    Survey {
-        map: sim.map.clone(),
+    let array = ssl::MicArray::new(scene.scene.name.clone(), scene.mics.clone())?;
+    Ok(Survey {
+        map: crate::scenes::scene_map(scene),
         open_margin_m: None,
         cut: Some(vec![false; poses.len()]),
         poses,
         doas_deg,
-        truth: Some(sim.truth.clone()),
+        truth: Some(truth),
         doa_source: TRUE_BEARINGS.to_owned(),
-        mirror_axis_deg: sim.array.mirror_axis_deg(),
-    }
+        mirror_axis_deg: array.mirror_axis_deg(),
+    })
 }
 
 /// Whether the plan point `p` lies outside the room by more than [`OUTSIDE_TOLERANCE_M`].
@@ -478,7 +494,16 @@ pub fn outside(room: &sim::Space, p: [f64; 2]) -> bool {
 /// Each method's distribution over all maps, then per family and per array, each with
 /// the true-bearing floor of the same scenes.
 fn groups(maps: &[MapRecord]) -> Vec<GroupRow> {
-    let methods: Vec<String> = Method::PAPER.iter().map(|m| m.name().to_owned()).collect();
+    // The methods mapped (in the paper's order), or the true bearings alone when only
+    // they were.
+    let mut methods: Vec<String> = Method::PAPER
+        .iter()
+        .map(|m| m.name().to_owned())
+        .filter(|m| maps.iter().any(|r| &r.method == m))
+        .collect();
+    if methods.is_empty() {
+        methods.push(TRUE_BEARINGS.to_owned());
+    }
     type Member = Box<dyn Fn(&MapRecord) -> bool>;
     let mut keys: Vec<(String, Member)> = vec![("all".to_owned(), Box::new(|_| true))];
     for f in Family::ALL {
@@ -574,8 +599,7 @@ mod tests {
              [trajectory]\nposes = [[3.0, 2.0, 90.0]]\n",
         )
         .unwrap();
-        let sim = Simulated::render(prepare(scene).unwrap(), "t".into()).unwrap();
-        let s = true_bearings(&sim);
+        let s = true_bearings(&prepare(scene).unwrap()).unwrap();
         let row: Vec<f64> = s.doas_deg[0].iter().map(|c| c.unwrap()).collect();
         // Nearest first: the source 2 m to the left (+90), then 3 m ahead (0).
         assert!(

@@ -147,7 +147,7 @@ fn run(cli: &args::Cli) -> anyhow::Result<Outcome> {
         }
         args::Command::Scenes {
             command: args::ScenesCommand::Generate { draw, out },
-        } => cmd::scenes::generate(&draw_options(draw, 1, 1)?, out),
+        } => cmd::scenes::generate(&draw_options(draw, 1, 1, false)?, out),
         args::Command::Eval(a) => {
             set_threads(a.threads);
             cmd::eval::run(a)
@@ -166,6 +166,7 @@ fn draw_options(
     a: &args::DrawArgs,
     renderings: usize,
     map_seeds: usize,
+    floor_only: bool,
 ) -> anyhow::Result<generated::DrawOptions> {
     let end = a.seed.checked_add(a.count).ok_or_else(|| {
         anyhow::anyhow!("--seed {} --count {}: beyond the seeds", a.seed, a.count)
@@ -176,6 +177,7 @@ fn draw_options(
         renderings,
         map_seeds,
         talkers: cmd::scenes::talkers(a.talkers.as_deref())?,
+        floor_only,
     })
 }
 

@@ -36,6 +36,10 @@ pub struct GeneratedArgs {
     /// Maps of each rendering per method (other particle draws).
     #[arg(long, default_value_t = 3, requires = "generated")]
     pub map_seeds: usize,
+    /// Map from true bearings only, rendering nothing: the mapper's own loss over many
+    /// scenes in seconds.
+    #[arg(long, requires = "generated")]
+    pub floor_only: bool,
     /// Also print every scene's row, worst first.
     #[arg(long, requires = "generated")]
     pub scenes: bool,

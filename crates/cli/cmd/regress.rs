@@ -41,7 +41,7 @@ pub fn run(dir: &Path, settings: &Settings, num: Option<usize>, json: bool) -> R
 /// # Errors
 /// As [`run_draw`].
 pub fn run_generated(a: &GeneratedArgs, settings: &Settings, json: bool) -> Result<Outcome> {
-    let opts = crate::draw_options(&a.draw, a.renderings, a.map_seeds)?;
+    let opts = crate::draw_options(&a.draw, a.renderings, a.map_seeds, a.floor_only)?;
     let report = run_draw(&opts, settings)?;
     let breaches = report.breaches(&DrawThresholds {
         max_mean: a.max_mean_ospa,
@@ -57,14 +57,18 @@ pub fn run_generated(a: &GeneratedArgs, settings: &Settings, json: bool) -> Resu
             println!();
         }
         print!("{}", report.table());
+        let mapped = if a.floor_only {
+            "true bearings only".to_owned()
+        } else {
+            format!("{} methods and true bearings", Method::PAPER.len())
+        };
         println!(
-            "{} scenes (seeds {}..{}) x {} renderings x {} maps, {} methods and true bearings, in {:.1} s",
+            "{} scenes (seeds {}..{}) x {} renderings x {} maps, {mapped}, in {:.1} s",
             report.seeds[1] - report.seeds[0],
             report.seeds[0],
             report.seeds[1],
             report.renderings,
             report.map_seeds,
-            Method::PAPER.len(),
             report.seconds
         );
         for b in &breaches {
