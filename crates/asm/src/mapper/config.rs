@@ -372,7 +372,8 @@ pub struct IasmConfig {
     /// from the talker, and moved to the wall's face stands 0.35 m from it. Moving a
     /// point onto the region that holds the truth (a half-plane, locally) never takes it
     /// further from the truth. An occupied cell near free space (a table, a
-    /// loudspeaker's own cells) is not moved from. Measured (`docs/decisions/0010`):
+    /// loudspeaker's own cells) is not moved from. Measured (`docs/decisions/0010` and its
+    /// history in git):
     /// `corridor_alcoves` 0.202 / 0.262 -> 0.186 / 0.231 m (GCC-PHAT / MVDR),
     /// `l_west_wing` (held out) GCC-PHAT 0.202 -> 0.126; `dogleg_uma8` (held out) MVDR
     /// kept the right count in 27 % of maps, not 47 (a vent's estimate 1 m off, beyond the
@@ -517,8 +518,9 @@ pub struct IasmConfig {
     /// of them better by the Bayesian information criterion (each DoA taken as the image
     /// one more parameter) and moves it away from the wall more than along it.
     ///
-    /// Measured, rule by rule (the suite, `fixtures/heldout` and arrangement II):
-    /// `docs/decisions/0010`.
+    /// Measured, rule by rule (the suite, `fixtures/heldout` and arrangement II): the
+    /// history of `docs/decisions/0010` in git; on scenes drawn at random, the decision
+    /// itself.
     pub reflections: bool,
     /// For DoAs from a linear array: the azimuth of its line (degrees, array frame; the
     /// `ssl` crate's `MicArray::mirror_axis_deg`). Such an array hears the angle to its
