@@ -708,6 +708,36 @@ fn a_ros2_bag_folder_reads_the_files_its_metadata_names() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// Moves the header stamp of a CDR message (bytes 4..12 after the encapsulation: `sec`,
+/// `nanosec`) by `shift_ns`.
+fn shift_header_stamp(data: &mut [u8], shift_ns: i64) {
+    let sec = i64::from(i32::from_le_bytes(data[4..8].try_into().unwrap()));
+    let nsec = i64::from(u32::from_le_bytes(data[8..12].try_into().unwrap()));
+    let t = sec * 1_000_000_000 + nsec + shift_ns;
+    data[4..8].copy_from_slice(&(t.div_euclid(1_000_000_000) as i32).to_le_bytes());
+    data[8..12].copy_from_slice(&(t.rem_euclid(1_000_000_000) as u32).to_le_bytes());
+}
+
+/// `msgs` with every `every`-th message of `topic` delivered twice.
+fn twice(
+    msgs: &[(String, String, i64, Vec<u8>)],
+    topic: &str,
+    every: usize,
+) -> Vec<(String, String, i64, Vec<u8>)> {
+    let mut out = Vec::new();
+    let mut k = 0;
+    for x in msgs {
+        out.push(x.clone());
+        if x.0 == topic {
+            k += 1;
+            if k % every == 0 {
+                out.push(x.clone());
+            }
+        }
+    }
+    out
+}
+
 /// The clock faults a robot brings, generated on `sim_run.mcap` (6 stops, stamped
 /// AudioStamped and Odometry): each message's header stamp (the CDR bytes 4..12, after the
 /// encapsulation: `sec`, `nanosec`) moved as the fault says, the run fed to the live
@@ -764,11 +794,7 @@ fn r71_stamps_that_step_or_lie_never_pair_a_stop_with_another_place() {
             let shift = fault(&m.connection.topic, m.time_ns - clean.start_ns, *i);
             *i += 1;
             if shift != 0 {
-                let sec = i64::from(i32::from_le_bytes(data[4..8].try_into().unwrap()));
-                let nsec = i64::from(u32::from_le_bytes(data[8..12].try_into().unwrap()));
-                let t = sec * 1_000_000_000 + nsec + shift;
-                data[4..8].copy_from_slice(&(t.div_euclid(1_000_000_000) as i32).to_le_bytes());
-                data[8..12].copy_from_slice(&(t.rem_euclid(1_000_000_000) as u32).to_le_bytes());
+                shift_header_stamp(&mut data, shift);
             }
             live.push(
                 &m.connection.topic,
@@ -867,34 +893,8 @@ fn r71_messages_duplicated_reordered_or_jittered_keep_every_stop() {
     .unwrap();
     type Delivery = fn(&[(String, String, i64, Vec<u8>)]) -> Vec<(String, String, i64, Vec<u8>)>;
     let deliveries: [(&str, Delivery); 4] = [
-        ("audio messages twice", |m| {
-            let mut out = Vec::new();
-            let mut k = 0;
-            for x in m {
-                out.push(x.clone());
-                if x.0 == "/audio" {
-                    k += 1;
-                    if k % 10 == 0 {
-                        out.push(x.clone());
-                    }
-                }
-            }
-            out
-        }),
-        ("odometry twice", |m| {
-            let mut out = Vec::new();
-            let mut k = 0;
-            for x in m {
-                out.push(x.clone());
-                if x.0 == "/odom" {
-                    k += 1;
-                    if k % 7 == 0 {
-                        out.push(x.clone());
-                    }
-                }
-            }
-            out
-        }),
+        ("audio messages twice", |m| twice(m, "/audio", 10)),
+        ("odometry twice", |m| twice(m, "/odom", 7)),
         ("audio pairs swapped", |m| {
             let mut out: Vec<_> = m.to_vec();
             let idx: Vec<usize> = (0..out.len()).filter(|&i| out[i].0 == "/audio").collect();
@@ -914,13 +914,8 @@ fn r71_messages_duplicated_reordered_or_jittered_keep_every_stop() {
             let mut k: i64 = 0;
             for x in out.iter_mut().filter(|x| x.0 == "/odom") {
                 k += 1;
-                let shift = ((k * 7919) % 81 - 40) * 1_000_000; // -40..40 ms
-                let d = &mut x.3;
-                let sec = i64::from(i32::from_le_bytes(d[4..8].try_into().unwrap()));
-                let nsec = i64::from(u32::from_le_bytes(d[8..12].try_into().unwrap()));
-                let t = sec * 1_000_000_000 + nsec + shift;
-                d[4..8].copy_from_slice(&(t.div_euclid(1_000_000_000) as i32).to_le_bytes());
-                d[8..12].copy_from_slice(&(t.rem_euclid(1_000_000_000) as u32).to_le_bytes());
+                // -40..40 ms
+                shift_header_stamp(&mut x.3, ((k * 7919) % 81 - 40) * 1_000_000);
             }
             out
         }),

@@ -32,7 +32,7 @@ use std::path::PathBuf;
 use rand::{Rng, SeedableRng, rngs::StdRng};
 
 use crate::error::SimError;
-use crate::plan::PlanRoom;
+use crate::plan::{PlanRoom, distance_to_segment};
 use crate::scene::{ArraySpec, RoomSpec, Scene, SourceSpec, TrajectorySpec};
 use crate::signal::SignalKind;
 
@@ -458,17 +458,6 @@ fn place(
 
 fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
     (a[0] - b[0]).hypot(a[1] - b[1])
-}
-
-fn distance_to_segment(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
-    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-    let len2 = dx * dx + dy * dy;
-    let t = if len2 > 0.0 {
-        (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    dist(p, [a[0] + t * dx, a[1] + t * dy])
 }
 
 #[cfg(test)]
