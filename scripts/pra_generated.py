@@ -60,6 +60,7 @@ def render(scene, base, ds, seed):
     fs = scene.get("fs", 16000)
     n = int(round(scene.get("clip_s", 1.0) * fs))
     rng = np.random.default_rng(seed)
+    np.random.seed(seed)  # pyroomacoustics' ray tracing draws from numpy's global generator
     room = scene["room"]
     corners = np.array(room["plan"]).T
     height = room["height"]
