@@ -121,6 +121,15 @@ impl LiveMapper {
         })
     }
 
+    /// Keeps audio at most `seconds` while no pose comes (`iasm ros2 --pending-audio`).
+    ///
+    /// # Errors
+    /// A duration that is not finite and positive.
+    pub fn with_pending_audio(mut self, seconds: f64) -> Result<Self> {
+        self.recorder = self.recorder.with_pending_audio(seconds)?;
+        Ok(self)
+    }
+
     fn note(&mut self, what: String) -> String {
         *self.notes.entry(what.clone()).or_default() += 1;
         what

@@ -70,6 +70,8 @@ pub struct Recorder {
     next_after_ns: i64,
     /// When the last pose, odometry or transform message came (ns since the epoch).
     last_pose_ns: Option<i64>,
+    /// How long audio is kept while no pose comes (s; [`PENDING_AUDIO_S`] by default).
+    pending_audio_s: f64,
     /// Audio dropped while no pose came and not yet said (s).
     dropped_s: f64,
     /// The stamp jumps said: (topic, the jump in tenths of a second).
@@ -88,10 +90,25 @@ impl Recorder {
             ids: HashMap::new(),
             next_after_ns: i64::MIN,
             last_pose_ns: None,
+            pending_audio_s: PENDING_AUDIO_S,
             dropped_s: 0.0,
             jumps_said: Default::default(),
             notes: Vec::new(),
         }
+    }
+
+    /// Keeps audio at most `seconds` while no pose comes (instead of [`PENDING_AUDIO_S`]).
+    ///
+    /// # Errors
+    /// [`Error::Config`] for a duration that is not finite and positive.
+    pub fn with_pending_audio(mut self, seconds: f64) -> Result<Self> {
+        if !(seconds.is_finite() && seconds > 0.0) {
+            return Err(Error::Config(format!(
+                "the audio kept while no pose comes must be a positive duration (got {seconds} s)"
+            )));
+        }
+        self.pending_audio_s = seconds;
+        Ok(self)
     }
 
     /// Takes one message of `topic` (CDR, encapsulation header included), received at
@@ -174,10 +191,11 @@ impl Recorder {
         Ok(())
     }
 
-    /// Drops the audio older than [`PENDING_AUDIO_S`] before `now_ns` when no pose has come
-    /// since then: no stop can be found in it until a pose comes.
+    /// Drops the audio older than the pending bound ([`PENDING_AUDIO_S`] by default) before
+    /// `now_ns` when no pose has come since then: no stop can be found in it until a pose
+    /// comes.
     fn bound_pending_audio(&mut self, now_ns: i64) {
-        let cutoff = now_ns - (PENDING_AUDIO_S * 1e9) as i64;
+        let cutoff = now_ns - (self.pending_audio_s * 1e9) as i64;
         if self.last_pose_ns.is_some_and(|p| p >= cutoff) {
             return;
         }
@@ -196,7 +214,8 @@ impl Recorder {
         if self.dropped_s > 0.0 {
             self.dropped_s = 0.0;
             self.notes.push(format!(
-                "audio older than {PENDING_AUDIO_S} s dropped: no pose came in that time"
+                "audio older than {} s dropped: no pose came in that time",
+                self.pending_audio_s
             ));
         }
         std::mem::take(&mut self.notes)

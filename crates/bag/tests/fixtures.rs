@@ -860,6 +860,24 @@ fn r71_audio_awaiting_poses_is_bounded() {
         "{notes:?}"
     );
     assert!(live.take_notes().is_empty(), "said once");
+    // A bound of the user's: what is kept spans that instead.
+    let mut short = Recorder::new(ReadOptions::default())
+        .with_pending_audio(10.0)
+        .unwrap();
+    for k in 0..n {
+        let (topic, ty, data) = &audio[k % audio.len()];
+        short.push(topic, ty, k as i64 * 100_000_000, data).unwrap();
+    }
+    assert!(
+        (9.8..=10.2).contains(&short.kept_audio_s()),
+        "{}",
+        short.kept_audio_s()
+    );
+    assert!(
+        Recorder::new(ReadOptions::default())
+            .with_pending_audio(0.0)
+            .is_err()
+    );
     // What is kept spans at most the bound (and a message).
     let kept = live.kept_audio_s();
     assert!(

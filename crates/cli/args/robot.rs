@@ -38,6 +38,10 @@ pub struct Ros2Args {
     /// start when none ever came [default: only on Ctrl-C].
     #[arg(long, value_name = "S", value_parser = parse_seconds)]
     pub until_idle: Option<f64>,
+    /// Keep audio at most this long (s) while no pose comes; older audio is dropped with a
+    /// warning (a minute of six channels at 48 kHz is 35 MB).
+    #[arg(long, value_name = "S", default_value_t = bag::live::PENDING_AUDIO_S, value_parser = parse_seconds)]
+    pub pending_audio: f64,
 }
 
 /// `iasm ros2-play`.

@@ -238,7 +238,8 @@ pub fn run(a: &Ros2Args) -> Result<Outcome> {
         a.run.read_options()?,
         a.run.stop_options()?,
         a.seed,
-    )?;
+    )?
+    .with_pending_audio(a.pending_audio)?;
     let stop = Arc::new(AtomicBool::new(false));
     {
         let stop = Arc::clone(&stop);
