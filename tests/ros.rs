@@ -412,6 +412,25 @@ fn own_network_namespace() -> Result<(), String> {
     }
 }
 
+/// Whether a DDS test may run here: only in a network namespace of its own, so that no
+/// packet leaves the machine. Where none can be made it says `skipped:`, unless
+/// IASM_REQUIRE_ROS2_TEST is set (CI runs as root and must run them: there, a skip is a
+/// failure).
+#[cfg(feature = "ros2")]
+fn may_run_dds() -> bool {
+    let Err(why) = own_network_namespace() else {
+        return true;
+    };
+    assert!(
+        std::env::var_os("IASM_REQUIRE_ROS2_TEST").is_none(),
+        "IASM_REQUIRE_ROS2_TEST is set but no network namespace can be made here ({why})"
+    );
+    eprintln!(
+        "skipped: no network namespace of its own can be made here ({why}); DDS must not reach the host's network"
+    );
+    false
+}
+
 /// The node on a robot: inside a network namespace of its own (only `lo`, multicast on it),
 /// `iasm ros2-play` publishes `fixtures/bags/sim_run.mcap` as the robot published it
 /// (AudioStamped, Odometry, a transient-local OccupancyGrid; stamps moved to now), `iasm
@@ -421,15 +440,7 @@ fn own_network_namespace() -> Result<(), String> {
 #[cfg(feature = "ros2")]
 #[test]
 fn ros2_node_maps_a_robot_run_live_as_map_maps_the_bag() {
-    if let Err(why) = own_network_namespace() {
-        // CI runs as root and must run it: there, a skip is a failure.
-        assert!(
-            std::env::var_os("IASM_REQUIRE_ROS2_TEST").is_none(),
-            "IASM_REQUIRE_ROS2_TEST is set but no network namespace can be made here ({why})"
-        );
-        eprintln!(
-            "skipped: no network namespace of its own can be made here ({why}); DDS must not reach the host's network"
-        );
+    if !may_run_dds() {
         return;
     }
     let dir = tempdir();
@@ -490,12 +501,7 @@ fn ros2_node_maps_a_robot_run_live_as_map_maps_the_bag() {
 #[cfg(feature = "ros2")]
 #[test]
 fn r71_a_node_that_hears_nothing_ends_after_until_idle() {
-    if let Err(why) = own_network_namespace() {
-        assert!(
-            std::env::var_os("IASM_REQUIRE_ROS2_TEST").is_none(),
-            "IASM_REQUIRE_ROS2_TEST is set but no network namespace can be made here ({why})"
-        );
-        eprintln!("skipped: no network namespace of its own can be made here ({why})");
+    if !may_run_dds() {
         return;
     }
     let script = r#"
