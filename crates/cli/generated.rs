@@ -455,9 +455,8 @@ pub fn true_bearings(scene: &PreparedScene) -> Result<Survey> {
                 .iter()
                 .filter(|t| sees([p.x, p.y], **t))
                 .map(|t| {
-                    let (dx, dy) = (t[0] - p.x, t[1] - p.y);
-                    let az = (dy.atan2(dx) - p.theta).to_degrees();
-                    (dx.hypot(dy), (az + 180.0).rem_euclid(360.0) - 180.0)
+                    let az = geom::wrap_rad(p.bearing_to(*t) - p.theta).to_degrees();
+                    ((t[0] - p.x).hypot(t[1] - p.y), az)
                 })
                 .collect();
             by_distance.sort_by(|a, b| a.0.total_cmp(&b.0));
