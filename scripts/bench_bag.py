@@ -1,12 +1,12 @@
 #!/usr/bin/env python3
-"""The bag benchmark of BENCHMARKS.md (session 31), by hand:
+"""The bag benchmark of BENCHMARKS.md, by hand:
 
     pip install rosbags==0.11.9 mcap==1.6.0
     python3 scripts/bench_bag.py make /tmp/big10.bag 10     # a 10-minute ROS 1 bag
     rosbags-convert --src /tmp/big10.bag --dst /tmp/big10_ros2 --dst-storage mcap
     rosbags-convert --src /tmp/big10.bag --dst /tmp/big10_db3 --dst-storage sqlite3
     python3 scripts/bench_bag.py zstd /tmp/big10_ros2/big10_ros2.mcap /tmp/big10_zstd.mcap
-    # compressed as `ros2 bag record --compression-format zstd` does (session 33):
+    # compressed as `ros2 bag record --compression-format zstd` does:
     mkdir /tmp/mz /tmp/dz && zstd -3 /tmp/big10_ros2/big10_ros2.mcap -o /tmp/mz/big10.mcap.zstd
     zstd -3 /tmp/big10_db3/big10_db3.db3 -o /tmp/dz/big10.db3.zstd      # --compression-mode file
     python3 scripts/bench_bag.py message /tmp/big10.bag /tmp/big10_msgz  # --compression-mode message

@@ -3,7 +3,7 @@
 
 Issue 9 asked whether the far-field plane-wave model is what puts 4-5 degrees of error on
 the sources within 1.5 m of arrangement II. Two hand-run checks (no test or CI uses
-Python; the figures are in BENCHMARKS.md, session 22):
+Python; the figures are in BENCHMARKS.md):
 
     python3 scripts/nearfield_check.py ring OUT.toml SOURCE_Z
         writes a scene for `iasm simulate`: one white-noise source at (5, 4, SOURCE_Z) in a

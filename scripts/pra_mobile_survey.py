@@ -15,14 +15,13 @@ Hand-run only (no test or CI uses Python); the figures it gave are in BENCHMARKS
     python3 scripts/pra_mobile_survey.py OUT [RT60_S] [SNR_DB] [SEED] [iasm6|respeaker4]
 
 `TALKERS=1,3` (environment) keeps only those talkers of the five (0-based), for scenes of
-fewer sources (BENCHMARKS.md, session 28). `SIGNAL=noise` makes each source a steady
+fewer sources (BENCHMARKS.md). `SIGNAL=noise` makes each source a steady
 white-noise source (a fan, an air vent) in place of its sentence, for the steady-recording
-pooling (`ssl::Pooling::Auto`; BENCHMARKS.md, session 29). `FAN_DB=50` puts a fan on the
+pooling (`ssl::Pooling::Auto`; BENCHMARKS.md). `FAN_DB=50` puts a fan on the
 robot (pink noise at that level in dB SPL at 1 m, the talkers being at 65 dB; 0.2 m behind
 and 0.3 m below the array's centre, moving with it) and writes the robot alone (4 s at the
 first stop, another stretch of the fan's noise, the same sensor noise level) as
-`noise/robot.wav`, for the robot's-noise subtraction (`ssl::noise`; BENCHMARKS.md,
-session 32); every WAV then shares one scale, so that the levels of the stops and of the
+`noise/robot.wav`, for the robot's-noise subtraction (`ssl::noise`; BENCHMARKS.md); every WAV then shares one scale, so that the levels of the stops and of the
 robot alone agree.
 """
 import os

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Renders variants of every suite and held-out scene, for measuring a change beyond the
-# scenes it was made on (BENCHMARKS.md, sessions 33-34). Hand-run only; no test or CI uses it.
+# scenes it was made on (BENCHMARKS.md). Hand-run only; no test or CI uses it.
 #
 #   scripts/scene_variants.sh sparse OUT   # each scene with a path walked at a spacing,
 #                                          # at 2.5 and 4 times that spacing (3-12 stops)

@@ -25,10 +25,9 @@
 //! each (`ssl`, `map`, `eval`, `compare`, `simulate`, `regress`, `demo`, `watch`, `bag`,
 //! `ros2`); none imports another. [`main`] runs the command line.
 //!
-//! Where these docs say why a default is what it is, "the journal, session N" names the
-//! section of the development journal that measured it; git keeps the journal
-//! (`git show 7ee1616:BENCHMARKS.md`), `BENCHMARKS.md` today's figures and
-//! `docs/decisions/` the decisions.
+//! Where these docs say why a default is what it is, they state the measurement that chose
+//! it; `docs/decisions/` holds the decisions, `BENCHMARKS.md` today's figures and git the
+//! history (the development journal: `git show 7ee1616:BENCHMARKS.md`).
 //!
 //! The pipeline from Rust, end to end: a scene rendered by the image-source method (one
 //! talker at (3.5, 3.2) m, a robot passing it), every stop localised with MVDR and the stops

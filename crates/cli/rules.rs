@@ -20,8 +20,8 @@
 //! a pose error), or with another true source within `min_sep_deg` (one peak for two).
 //!
 //! Why: every rule trades the sources it lets in against the clutter it keeps out, and a
-//! recall figure alone does not say which trade to revisit on a data set. Measured
-//! (the journal, session 21): on the regression suite, the held-out scenes, surveys
+//! recall figure alone does not say which trade to revisit on a data set. Measured on
+//! the regression suite, the held-out scenes, surveys
 //! rendered by pyroomacoustics and the authors' recordings, the height and coherence rules
 //! left out 4-23 % of the missed near sources; about half to two thirds of the misses had
 //! no peak within 5 degrees (48-70 %), and where more sources sound at once than `N`, `N`

@@ -16,9 +16,9 @@
 //! as much as the audio does. Measured over the suite's and `fixtures/heldout`'s
 //! renderings (3 each, 5 draws per rendering, both methods): `reverberant_low_snr` with
 //! GCC-PHAT maps 1.13 ghosts per map on average, where one draw per rendering showed one
-//! ghost in three maps (the journal, session 17).
+//! ghost in three maps.
 //!
-//! Why ten ([`DEFAULT_MAP_SEEDS`]; three until session 26): with three, a hard scene's
+//! Why ten ([`DEFAULT_MAP_SEEDS`], not three): with three, a hard scene's
 //! mean and worst were those of nine draws, and thresholds set on them passed by the
 //! draws' luck. When the mapper's generator changed (ChaCha12 to xoshiro256++, the same
 //! distribution) `reverberant_low_snr` MVDR lost a talker in one map of nine and

@@ -9,7 +9,7 @@
 //! separates the two: on the authors' arrangement II recordings the maps from our DoAs and
 //! from the authors' own tables all need the same transform (scale 1.05, rotation -1.5 to
 //! -2.3 degrees, shift about 0.12 m) and agree with the truth to 0.03-0.05 m after it,
-//! against 0.155-0.21 before (the journal). It is a diagnostic of the data, never a
+//! against 0.155-0.21 before. It is a diagnostic of the data, never a
 //! correction of the map: the transform is fitted to the truth.
 //!
 //! In 2-D the fit has a closed form: with the centred estimates `a_i` and true positions

@@ -34,10 +34,9 @@
 //! `Rng`: the same seed gives the same map ([`MapRng`] is the generator the `iasm` CLI
 //! seeds).
 //!
-//! Where these docs say why a default is what it is, "the journal, session N" names the
-//! section of the development journal that measured it; git keeps the journal
-//! (`git show 7ee1616:BENCHMARKS.md`), `BENCHMARKS.md` today's figures and
-//! `docs/decisions/` the decisions.
+//! Where these docs say why a default is what it is, they state the measurement that chose
+//! it; `docs/decisions/` holds the decisions, `BENCHMARKS.md` today's figures and git the
+//! history (the development journal: `git show 7ee1616:BENCHMARKS.md`).
 
 pub mod align;
 pub mod assoc;
@@ -61,8 +60,7 @@ pub use online::{OnlineMapper, StopUpdate};
 /// (`rand_xoshiro`), whose output for a seed is fixed by its specification.
 ///
 /// Why not `rand`'s `StdRng` (ChaCha12): a map draws two normal deviates per particle per
-/// stop, and with ChaCha the generator took 45 % of a map's time (`perf`, arrangement II,
-/// the journal, session 26). A particle filter needs no cryptographic strength, only
+/// stop, and with ChaCha the generator took 45 % of a map's time (`perf`, arrangement II). A particle filter needs no cryptographic strength, only
 /// good equidistribution, which xoshiro256++ has (it passes BigCrush and PractRand).
 /// Any `Rng` can be given to [`Mapper::run`]; this one is what the CLI's seeds mean.
 pub type MapRng = rand_xoshiro::Xoshiro256PlusPlus;

@@ -11,7 +11,7 @@
 //! but they lower its background and its every peak's relative height alike, and the
 //! rules that tell a quiet source from a reflection (the source coherence's noise term,
 //! the significance) read the failed channel as a source of independent signal. Measured
-//! (the journal, session 30; `two_talkers`, first rendering, N = 3, the paper's
+//! (`two_talkers`, first rendering, N = 3, the paper's
 //! 6-microphone array): with one channel zeroed, or replaced by white noise at its level,
 //! low peaks of nothing pass the thresholds at a third of the stops and the map's OSPA goes
 //! from 0.017 / 0.015 m (GCC-PHAT / MVDR) to 0.066-0.070; localised without that channel
@@ -41,7 +41,7 @@
 //! median of the channels' best values, and the test is made only when `r` is at least
 //! [`COHERENT_BIAS_MULTIPLE`] times the bias (in silence, or with sensor noise only, no
 //! channel is coherent with any other, and none is singled out). Measured on every
-//! recording we have (the journal, session 30: the 78 renderings of the suite's and
+//! recording we have (the 78 renderings of the suite's and
 //! held-out scenes, five arrays among them; the pyroomacoustics surveys, speech and steady
 //! noise, RT60 0.3-0.8 s; the authors' 40 recordings at 48 kHz): a working channel's best
 //! lies at 0.73-1.0 of `r` (0.57 on a Kinect's line, whose end microphone is 0.15 m

@@ -66,7 +66,7 @@ impl FromStr for Pooling {
 ///   stronger peak carries ([`SslConfig::incoherent_relative`]): a quiet source, not a
 ///   loud one's reflection.
 ///
-/// These choices were checked on real recordings of ten talkers (see the journal):
+/// These choices were checked on real recordings of ten talkers (decision records 0003-0005):
 /// short blocks beat one spectrum over the whole recording by a wide margin, and the
 /// 64 ms frame of MBSS Locate (`frame_len = 4096` at 48 kHz) scores lower and costs more.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -84,7 +84,7 @@ pub struct SslConfig {
     /// The default was the power of two at or above 20 ms for every method: 32 ms at 16
     /// kHz but 21 ms at 48, and the simulated scenes resampled from 16 to 48 kHz gave
     /// other rows and other maps (`reverberant_low_snr` MVDR 0.095 -> 0.443 m); with 32 ms
-    /// at both, their rows agree within 1-3 degrees (the journal, session 28). Why 32
+    /// at both, their rows agree within 1-3 degrees. Why 32
     /// ms: every simulated scene (16 kHz) was always analysed so, and on the authors'
     /// recordings (48 kHz) it does better than 21 ms: DoA score 0.506 / 0.487 -> 0.544 /
     /// 0.531 (MVDR / GCC-PHAT, published truth; 0.744 / 0.762 -> 0.762 / 0.769 in the
@@ -118,12 +118,12 @@ pub struct SslConfig {
     /// the better estimator for broadband sources that sound without pause in a noisy or
     /// reverberant room, where the best of many noisy blocks is an extreme value and lifts
     /// the room's ripples over the thresholds; with talkers who pause it loses some of
-    /// them. Measured (the journal, session 24): two continuous talkers at RT60 0.8 s
+    /// them. Measured: two continuous talkers at RT60 0.8 s
     /// and SNR 5 dB 0.29 / 0.19 -> 0.06 / 0.05 m (GCC-PHAT / MVDR), but five real talkers
     /// in pyroomacoustics rooms MVDR 0.10-0.15 -> 0.24-0.52 m, and the authors' ten
     /// loudspeakers' GCC-PHAT maps 100 % -> 56 % of runs with all ten. Hence the choice
     /// per recording, which keeps max for every recording of speech we have and takes the
-    /// mean for steady noise ([`crate::steady`] has the figures; the journal, session 29).
+    /// mean for steady noise ([`crate::steady`] has the figures).
     pub pooling: Pooling,
     /// With max pooling ([`Pooling::Max`], or [`Pooling::Auto`] on a recording that is not
     /// steady): each direction keeps the mean of its `pool_top` largest block values
@@ -135,7 +135,7 @@ pub struct SslConfig {
     /// dominated that block, and the maximum of many noisy blocks lifts the whole
     /// background; a source present in at least `pool_top` blocks keeps its height when
     /// they are averaged, a one-block fluke does not. Why the default stays 1, measured
-    /// (the journal, 3 seeds per scene): with 3, DoA scores rise in the noisy and
+    /// (3 seeds per scene): with 3, DoA scores rise in the noisy and
     /// crowded scenes (SNR 5 dB at RT60 0.8 s 0.42 -> 0.58, ten talkers 0.82-0.83 -> 0.87,
     /// two talkers with pauses, GCC-PHAT 0.79 -> 0.83) and the MVDR map of the authors'
     /// recordings improves (0.155 -> 0.141 m), but the lower background lifts a single
@@ -164,7 +164,7 @@ pub struct SslConfig {
     /// heard (a reflection, a sidelobe, a source under a louder one's flank) has no blocks
     /// of its own, its best blocks are another sound's, and placed sharply, reflections
     /// cross into ghosts more often. Why a quarter of the blocks. Measured
-    /// (the journal, session 27; 78 renderings of the 26 simulated scenes, 20 maps
+    /// (78 renderings of the 26 simulated scenes, 20 maps
     /// each; mean OSPA, share of maps with the right count): pooled peaks 0.0863 m, 90.6 %;
     /// every DoA placed, a tenth of the blocks 0.0832, a quarter 0.0803 (89.5 %), half
     /// 0.0807, all 0.0834; a quarter, only DoAs that dominated a block, **0.0803, 90.3 %**
@@ -173,7 +173,7 @@ pub struct SslConfig {
     /// surveys' 20 rows -5 % in sum. On the authors' recordings the maps do not move
     /// (aligned to the truth: MVDR 0.034 -> 0.037 m, GCC-PHAT 0.038 -> 0.035, all ten
     /// sources in every run): their DoAs move by a median of 0.5 degrees, and their errors
-    /// are the poses' (the journal, session 8). Their DoA score in the poses' frame
+    /// are the poses'. Their DoA score in the poses' frame
     /// is 0.762 -> 0.744 (MVDR) and 0.762 -> 0.762 (GCC-PHAT); against the published
     /// truth, whose frame is offset, 0.525 -> 0.506 and 0.550 -> 0.487, as DoAs near the
     /// 5-degree line cross it. What it costs: a talker 0.9 m from a
@@ -195,7 +195,7 @@ pub struct SslConfig {
     ///
     /// Why: on a compact array a weaker source heard beside a stronger one peaks on the
     /// stronger one's wide lobe, 5-25 degrees off; deflated, within a degree or two.
-    /// Measured (the journal, session 28; 78 renderings of the 26 simulated scenes, 20
+    /// Measured (78 renderings of the 26 simulated scenes, 20
     /// maps each): two talkers heard by the ReSpeaker 4-mic 0.128 / 0.168 -> 0.085 /
     /// 0.056 m (GCC-PHAT / MVDR), six sources heard by the UMA-8 0.129 / 0.126 -> 0.130 /
     /// 0.116 (but with N = 8, held out, MVDR 0.107 -> 0.141), ten talkers heard by the
@@ -206,11 +206,11 @@ pub struct SslConfig {
     /// array deflating moves maps both ways (two talkers 0.026 / 0.018 -> 0.033 / 0.022 m,
     /// ten in rows 0.031 / 0.039 -> 0.030 / 0.038) and their mean not at all (0.0742 ->
     /// 0.0744 m over its 66 renderings, both methods); before the gate, MVDR lost in its reverberant rooms
-    /// (`reverberant_low_snr` 0.193 -> 0.302 m, session 25). The authors' recordings
+    /// (`reverberant_low_snr` 0.193 -> 0.302 m). The authors' recordings
     /// (rows cut at `N = 4`) and the pyroomacoustics surveys of five talkers (rows the
     /// gate refuses) do not change either way. Cost: a row it refines takes about twice as
     /// long to localise (ReSpeaker, two talkers, 2 s: 1.25 -> 2.47 ms GCC-PHAT, 1.93 ->
-    /// 3.77 ms MVDR; the journal, session 25).
+    /// 3.77 ms MVDR).
     pub deflate: Option<bool>,
     /// With [`SslConfig::deflate`], a row is refined only when its DoAs explain the field:
     /// once they are all projected out, the power left per dimension is less than this
@@ -222,7 +222,7 @@ pub struct SslConfig {
     /// share is about 1 for spatially white noise and for a field of many more sources
     /// than the row holds (what a crowd looks like through a compact array), and the
     /// noise's share of the power when the row's plane waves are all there is. Measured
-    /// (the journal, session 25; first renderings, rows of two DoAs heard by the
+    /// (first renderings, rows of two DoAs heard by the
     /// ReSpeaker 4-mic): two talkers 0.46-0.63, ten talkers 0.66-0.73; rows of three DoAs
     /// among ten talkers 0.31-0.66, which is why they are not tested. Reverberation fills
     /// the residual as a crowd does, and the paper's array in the suite's reverberant
@@ -272,7 +272,7 @@ pub struct SslConfig {
     /// energy rule misses. Measured (the regression suite, 3 seeds): two talkers with
     /// pauses at RT60 0.5 s, DoA score GCC-PHAT 0.79 -> 0.81, MVDR 0.68 -> 0.78, every
     /// other scene and every map unchanged; on held-out variants (other rooms, talker
-    /// positions, SNR) DoA scores rise by 0 to 0.08 (the journal).
+    /// positions, SNR) DoA scores rise by 0 to 0.08.
     pub dominance_blocks: usize,
     /// A peak other than the strongest is reported only when the spectrum dips between it
     /// and every higher peak by at least this fraction of its height above the median
@@ -285,7 +285,7 @@ pub struct SslConfig {
     /// resolved; a shallower dip is not a second source the array can tell apart. At low
     /// SNR in a reverberant room one talker's peak is broad and ragged, and its ripples
     /// stand 10-20 degrees beside it, further apart than [`SslConfig::min_sep_deg`].
-    /// Measured (the journal, 3 seeds per scene): SNR 5 dB at RT60 0.8 s, two talkers
+    /// Measured (3 seeds per scene): SNR 5 dB at RT60 0.8 s, two talkers
     /// mapped at 0.50 / 0.60 m (3-5 sources) -> 0.27 / 0.20 m (2-3); the held-out
     /// one-talker scenes' last ghosts gone (RT60 1.0 s: 0.18 / 0.20 -> 0.01 / 0.04 m); but
     /// ten continuous sources heard by the 4-microphone ReSpeaker, MVDR, 0.196 -> 0.230 m,
@@ -317,7 +317,7 @@ pub struct SslConfig {
     /// where the source is silent there is no sidelobe; every real DoA the test took in
     /// the measurements below, without this rule, had dominated one or two blocks.
     ///
-    /// Measured (the journal, session 13; 3 seeds per scene, N = 3 or 4): of the
+    /// Measured (3 seeds per scene, N = 3 or 4): of the
     /// DoAs it removes from the suite's scenes (first seeds) none is a source's;
     /// `three_talkers_rt06` (held out) MVDR 0.150 / 0.304 -> 0.060 / 0.065 m (a ghost
     /// gone), GCC-PHAT 0.157 -> 0.127 m; a pyroomacoustics survey of five talkers
@@ -363,7 +363,7 @@ pub struct SslConfig {
     /// [`SslConfig::min_significance`]), and it costs one pass over the frames, in rows
     /// that have such a peak only.
     ///
-    /// Measured (the journal, session 19; 3 renderings x 3 maps per scene, N = 3 or
+    /// Measured (3 renderings x 3 maps per scene, N = 3 or
     /// 4): ten sparse talkers, GCC-PHAT 0.139 -> 0.066 m with all ten found in every map,
     /// MVDR 0.209 -> 0.156 m (8-9 -> 9-10 found); ten talkers in rows 0.037 / 0.049 ->
     /// 0.030 / 0.040 m; two talkers with pauses at RT60 0.5 s, MVDR DoA score 0.78 ->
@@ -376,7 +376,7 @@ pub struct SslConfig {
     ///
     /// Why 0.55: with the sensor noise taken out of the fit, the peaks of a second talker
     /// lie at 0.3-0.55 and the reflections and sidelobes of the scenes' talkers at
-    /// 0.5-1 (regression suite and held-out scenes, both methods, the journal): of
+    /// 0.5-1 (regression suite and held-out scenes, both methods): of
     /// the peaks between 0.15 and 0.3 high, below 0.55 lie 36 of a source's and 9 others
     /// (MVDR), 26 and 15 (GCC-PHAT); below 0.5, 22 and 6, 15 and 7. At 0.5 the two
     /// talkers with pauses at RT60 0.5 s keep an MVDR DoA score of 0.79.
@@ -403,9 +403,9 @@ pub struct SslConfig {
     /// little. Why 4 blocks: a reflection can be an octave's strongest direction for a
     /// block or two, as in the full band ([`SslConfig::dominance_blocks`]); over the
     /// suite's and held-out scenes, in every row, 3 votes added 13 real DoAs and 90 false
-    /// ones, 4 added 6 and 45, 5 none and 20 (the journal, session 15); in cut rows
+    /// ones, 4 added 6 and 45, 5 none and 20; in cut rows
     /// only, on the authors' recordings, every threshold from 3 to 8 maps all ten sources
-    /// in every run, and 4 keeps 46 of 53 of 3's added DoAs (session 16). The pairwise
+    /// in every run, and 4 keeps 46 of 53 of 3's added DoAs. The pairwise
     /// methods' octave spectra cost about 4 ms per 3-s recording, in cut rows only; MUSIC
     /// and NormMUSIC sum their octaves' groups apart in the band's own pass
     /// ([`crate::SpectrumEstimator::estimate_blocks_parts`]), about 1 ms in every row.

@@ -25,7 +25,7 @@
 //!
 //! It is not 0 for an independent source in a room: the reverberation of both sources
 //! leaks into both fitted waves alike, and a recording has finitely many frames. Measured
-//! on the regression suite's and held-out scenes (see the journal, session 19), a
+//! on the regression suite's and held-out scenes, a
 //! second talker's low peaks mostly lie at 0.3-0.55, the reflections and sidelobes of the
 //! scenes' talkers mostly at 0.5-1 (0.95 for a single white-noise source).
 //!
@@ -34,7 +34,7 @@
 //! taken for a copy of that sidelobe (`tests/coherence.rs`). Fitting every stronger peak
 //! at once ([`SpatialCovariance::multiple_coherence`]) removes that, but with five waves
 //! on six microphones the fit explains much of any signal, and it reported fewer of the
-//! quiet talkers of the ten-talker scenes (measured, session 19): the localizer tests
+//! quiet talkers of the ten-talker scenes (measured): the localizer tests
 //! pair by pair.
 //!
 //! A source whose pitch never moves (a hum: a fan, a motor; the simulator's `voiced`
@@ -42,7 +42,7 @@
 //! however late they arrive: in its bins its whole reverberant field is one signal, part
 //! of which the fit gives to any other direction, and the two look coherent through it.
 //! Broadband sources' late reflections are decorrelated within a frame and do not do this.
-//! Measured (the journal, session 24): the steady 180-Hz talker of `three_sources`
+//! Measured: the steady 180-Hz talker of `three_sources`
 //! against a louder talker 0.69-0.72 at 2.1-2.3 m, in the range of that row's reflections
 //! (0.61-0.79), so its low peaks are taken for copies.
 //!

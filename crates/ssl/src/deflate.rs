@@ -33,12 +33,11 @@
 //! hence a gate (`residual_share`, [`crate::SslConfig::deflate_max_residual`]) that
 //! refines a row only when its DoAs, projected out all at once, leave clearly less power
 //! per dimension than noise would (a crowd, or a reverberant room, leaves nearly as
-//! much; measured in the journal, session 25). And a source nearer than the array's
+//! much; measured). And a source nearer than the array's
 //! far-field distance (2 D² / λ: 2.1 m for the paper's array, 0.211 m across, at 8 kHz) is
 //! no plane wave, so that projecting its DoA out leaves much of it. Hence on by default
 //! only for an array whose far-field distance at the band's top is under a metre (a
-//! ReSpeaker's is 0.19 m; [`crate::SslConfig::deflates`]); measured in the journal
-//! (sessions 24, 25 and 28).
+//! ReSpeaker's is 0.19 m; [`crate::SslConfig::deflates`]).
 
 use std::collections::HashMap;
 use std::ops::Range;

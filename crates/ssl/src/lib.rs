@@ -45,10 +45,9 @@
 //! - The forward FFT is unnormalised; every statistic is normalised per bin, so the
 //!   scale of the audio does not matter.
 //!
-//! Where these docs say why a default is what it is, "the journal, session N" names the
-//! section of the development journal that measured it; git keeps the journal
-//! (`git show 7ee1616:BENCHMARKS.md`), `BENCHMARKS.md` today's figures and
-//! `docs/decisions/` the decisions.
+//! Where these docs say why a default is what it is, they state the measurement that chose
+//! it; `docs/decisions/` holds the decisions, `BENCHMARKS.md` today's figures and git the
+//! history (the development journal: `git show 7ee1616:BENCHMARKS.md`).
 
 pub mod array;
 pub mod audio;

@@ -5,7 +5,7 @@
 //! a hard disk. That noise reaches the array from the same place in the array frame at
 //! every stop, louder than most sources because it is a few tens of centimetres away (a
 //! fan of 50 dB SPL at 1 m, 0.36 m from the array, is 59 dB there; a talker of 65 dB at 2
-//! m is 59 dB). Measured on our simulator (the journal, session 32): with such a fan
+//! m is 59 dB). Measured on our simulator: with such a fan
 //! behind the array, two talkers who take turns are found in no map by GCC-PHAT (DoA
 //! score 0.86 -> 0.06: the fan fills every pause and every block the max pooling keeps),
 //! and three talkers in a third of the maps.

@@ -5,7 +5,7 @@
 //! their best moment; but for sources that never pause the best of many noisy blocks is
 //! an extreme value, and at a low SNR or a long RT60 it lifts the room's ripples over the
 //! thresholds and scatters the peaks, where the blocks' mean averages the noise down
-//! (the journal, session 24). What tells the two apart is whether anything starts,
+//!. What tells the two apart is whether anything starts,
 //! stops or takes turns, and that shows in the blocks' levels: speech moves its energy
 //! between frequency bands from one syllable to the next (voiced and unvoiced sounds,
 //! formants, pauses); a fan, a ventilation outlet or any continuous noise source does not,
@@ -17,7 +17,7 @@
 //! babble of several talkers is nearly steady, while each octave of it is not. A sum of
 //! power over `B` Hz and `T` s has about `2 B T` degrees of freedom, so a steady source's
 //! spread depends on the block's length and the octave's width, not on the sample rate.
-//! Measured on the default 80-ms blocks (the journal, session 29), per recording: our
+//! Measured on the default 80-ms blocks, per recording: our
 //! simulator's continuous sources (speech-shaped noise, a harmonic hum; one to ten at
 //! once, SNR 5-30 dB, RT60 0.3-0.8 s, four arrays) 0.6-2.1 dB; pyroomacoustics' rooms
 //! with two to five real talkers at once 4.4-21 dB; the paper's recordings of ten

@@ -19,8 +19,7 @@
 //! wholly within `eps` of a point, or of all of another cell's points, counts whole, one
 //! wholly beyond it is passed over, and only the rest is searched point by point. The
 //! boxes of a settled cloud's cells are much smaller than the cells, so most are settled
-//! whole (a whole map of arrangement II: 19-20 s -> 18 s for 150 maps, the same maps;
-//! the journal, session 35).
+//! whole (a whole map of arrangement II: 19-20 s -> 18 s for 150 maps, the same maps).
 //!
 //! A particle cloud that has converged is the worst case of plain DBSCAN (every point
 //! neighbours every other: quadratic); here it is the best case, a few dense cells.

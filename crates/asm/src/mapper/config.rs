@@ -120,7 +120,7 @@ pub struct IasmConfig {
     /// and least squares lets that one ray pull the source by 5-10 cm:
     /// `speech_two_rt08`'s far talker (MVDR) took a DoA 8 degrees off its bearing from
     /// 4.1 m, beside eight rays within 2 degrees, and moved 6 cm away from the truth.
-    /// Measured (the journal, session 20; the suite and `fixtures/heldout`, 3
+    /// Measured (the suite and `fixtures/heldout`, 3
     /// renderings x 3 maps, both methods): summed mean OSPA 2.046 -> 2.004 m (suite; 5
     /// rows better by more than 2 mm, 1 worse) and 2.535 -> 2.467 m (held-out; 10 better,
     /// 4 worse), no source count changed; `speech_one_rt08` 0.034 / 0.024 -> 0.015 /
@@ -142,7 +142,7 @@ pub struct IasmConfig {
     /// off from two of six stops, the fit 0.4 m off the talker). Taken only if it keeps
     /// half the information the rays give on the position in its worst direction: rays
     /// that agree because their stops lie on a line towards the source say nothing of its
-    /// range. Measured (session 45; 3 renderings x 10 maps, both methods): the suite's
+    /// range. Measured (3 renderings x 10 maps, both methods): the suite's
     /// summed mean OSPA 2.643 -> 2.599 m, `fixtures/heldout` 4.269 -> 4.197 m, no right
     /// count lower; `l_wing` GCC-PHAT 0.134 -> 0.074, `three_talkers_fan` 0.118 / 0.133 ->
     /// 0.075 / 0.112, `speech_two_snr15` GCC-PHAT 0.117 -> 0.071; the worst rows
@@ -244,7 +244,7 @@ pub struct IasmConfig {
     /// scenes' rows (see [`IasmConfig::rank_gain`]). Why: with three stops one cut row
     /// made any source thinly heard (2.6 stops' worth): `speech_one_rt08` rendered with
     /// its stops 1.6 m apart lost its talker, heard by all three within 4 degrees, in
-    /// every seed. Measured (the journal, session 34; CA, N = 3 or 4): the
+    /// every seed. Measured (CA, N = 3 or 4): the
     /// sparse-stop set 0.353 -> 0.338 m (5 rows better, none worse; that talker found in
     /// every seed, 1.000 -> 0.115 m); the pyroomacoustics surveys 0.339 -> 0.328 (RT60
     /// 0.8 s and SNR 10 dB, N = 4, GCC-PHAT: 0.47 / 0.48 -> 0.29 / 0.30 m, five sources in
@@ -401,7 +401,7 @@ pub struct IasmConfig {
     /// already has an explanation, so a second one must fit it more closely than an
     /// unexplained DoA must; at 0.75 and 1 sigma, `reverberant_low_snr` gains a ghost
     /// (GCC-PHAT 0.312 -> 0.352 m, MVDR 0.193 -> 0.241) next to its louder talker, made of
-    /// that talker's own DoAs. Measured at 0.5 (the journal, session 18; the suite and
+    /// that talker's own DoAs. Measured at 0.5 (the suite and
     /// `fixtures/heldout`, 3 renderings x 3 maps): `sparse_ten` GCC-PHAT 0.200 -> 0.139 m
     /// (8-9 -> 9-10 of 10 found), `rows_ten_respeaker4` MVDR 0.160 -> 0.151 (worst 0.312 ->
     /// 0.231), `sparse_eight_speech` GCC-PHAT 0.282 -> 0.266 (worst 0.443 -> 0.305); every
@@ -436,7 +436,7 @@ pub struct IasmConfig {
     /// removals: a ghost about to be
     /// removed would take a talker's stray DoA first and move the talker's fit
     /// (`speech_two_snr15`, GCC-PHAT, first rendering: 0.059 -> 0.103 m when it ran
-    /// before them). Measured (the journal, session 23; the suite and
+    /// before them). Measured (the suite and
     /// `fixtures/heldout`, 3 renderings x 3 maps, N as a user sets it):
     /// `three_talkers_rt06` MVDR 0.145 -> 0.079 m (worst 0.375 -> 0.080; 3 sources in
     /// every map), `reverberant_low_snr` GCC-PHAT 0.304 -> 0.294 (worst 0.705 -> 0.677),
@@ -557,7 +557,7 @@ pub struct IasmConfig {
     /// misses are near sources' bias). As a mixture with the floor, a DoA of any rank
     /// still lifts the particles on it, which a multiplied gain did not (0.5 put the
     /// third DoA at 2.5 m under the floor and lost sources of ten-source scenes).
-    /// Measured (the journal, session 34; CA, N = 3 or 4): the sparse-stop set (108
+    /// Measured (CA, N = 3 or 4): the sparse-stop set (108
     /// rows, 10 seeds) 0.366 -> 0.353 m (10 rows better, 4 worse; `one_source` with 3
     /// stops, GCC-PHAT, 0.747 -> 0.131, two talkers in a fan with 3 stops 0.359 ->
     /// 0.122, three talkers at RT60 0.6 s with 6 stops 0.20 -> 0.12 and the right count

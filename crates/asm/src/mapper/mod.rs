@@ -81,8 +81,7 @@
 //!   association is greedy, so once every source is known each DoA moves to the one nearest
 //!   its bearing, and a source left with fewer than three stops was made of others' DoAs.
 //!
-//! What each of these changed, measured, is in `docs/decisions/0007-robust-mapper-profile.md`
-//! and in the journal.
+//! What each of these changed, measured, is in `docs/decisions/0007-robust-mapper-profile.md`.
 
 use rand::Rng;
 use serde::{Deserialize, Serialize};

@@ -47,7 +47,7 @@ pub(crate) fn refit(
 /// talker and 8-13 from the ghost. Why 1.5 and 1: a DoA 1.5 `sigma` from a source is an
 /// unlikely draw of it (one in seven) where the other source's is likely; a second source
 /// heard in the same peak (one behind the other) is what [`IasmConfig::share_gate_sigmas`]
-/// keeps, and fits within half a `sigma`. Measured (the journal, session 26): the
+/// keeps, and fits within half a `sigma`. Measured: the
 /// suite (3 renderings x 10 draws), `speech_two_rt05` GCC-PHAT 0.093 -> 0.061 m (90 ->
 /// 100 % of maps with two sources); `fixtures/heldout`, `sparse_eight_speech` MVDR 0.268
 /// -> 0.275 (one map of 30 finds 5 of 8); over 20 draws on each of three other renderings

@@ -17,7 +17,7 @@ impl Mapper {
     /// Why the second check: a round's cloud that settles short of a talker, on the
     /// talker's rays, passes the first with the talker's DoAs; reassociated, it keeps only
     /// what else it had (reflections that happen to cross there) and is judged on those.
-    /// Measured (the journal, session 26; 20 seeds on each of three renderings of the
+    /// Measured (20 seeds on each of three renderings of the
     /// suite's and `fixtures/heldout`'s scenes, both methods): `one_source` GCC-PHAT
     /// lost its ghost (4 maps of 60 held one, 0.042 -> 0.009 m), `sparse_eight_speech`
     /// MVDR lost a thinly heard real source in one map of 60 (0.229 -> 0.231 m); the mean
@@ -186,9 +186,9 @@ impl Mapper {
     /// 1-2): a round placed the far talker from stops 0-2, two of them cut rows (2.2 of the
     /// three stops' worth), and its DoAs at stops 3 and 4, within 1.4 degrees of the
     /// refitted place, stayed unexplained; the talker was refused. A second vote after the
-    /// removals found it too, but made ghosts of what the rules had refused elsewhere
-    /// (session 34); this looks only at sources already made, and only at DoAs that fit
-    /// them within the vote's own gate. Measured (the journal, session 35): the
+    /// removals found it too, but made ghosts of what the rules had refused elsewhere;
+    /// this looks only at sources already made, and only at DoAs that fit
+    /// them within the vote's own gate. Measured: the
     /// sparse-stop renderings (108 rows, 10 maps each) 0.3378 -> 0.3362 m, three rows
     /// better, none worse (`reverberant_low_snr` x2.5 GCC-PHAT 0.637 -> 0.546 m, the far
     /// talker in every map; `speech_two_snr15` x2.5 GCC-PHAT 0.122 -> 0.078;
@@ -251,7 +251,7 @@ impl Mapper {
     /// stops. `reverberant_low_snr` (MVDR, second rendering, draw 2006): (1.57, 3.27) from
     /// stops 1, 2, 3, 5 and (1.48, 4.04) from 0, 1, 5, 6, each four cut stops (2.4 of the 3
     /// stops' worth), were both refused and the talker at (1.5, 4.0) was lost; joined, six
-    /// cut stops. Measured (the journal, session 26): the suite (3 renderings x 10
+    /// cut stops. Measured: the suite (3 renderings x 10
     /// draws) `reverberant_low_snr` MVDR 0.249 -> 0.218 m (87 -> 93 % of maps with both
     /// talkers); nothing else in the suite or `fixtures/heldout`, nor over 20 draws on three
     /// other renderings of every scene, nor arrangement II (50 runs, ours and the authors'

@@ -268,7 +268,7 @@ const SUBBAND_EL_STEP_DEG: f64 = 20.0;
 
 /// Peaks of different octaves within this many degrees are one direction: an octave's
 /// peak of one source scatters by a few degrees from another's (its beam is up to four
-/// times as wide, and reflections pull it differently), as measured in session 15.
+/// times as wide, and reflections pull it differently), as measured.
 const SUBBAND_MERGE_DEG: f64 = 6.0;
 
 /// Frames of the synthetic plane wave of [`Localizer::plane_wave_profile`] at most.

@@ -20,7 +20,7 @@
 //! Step 1 becomes PHAT of the block's cross-spectrum less the noise's,
 //! `T (Σ_t X_i X_j^* - T N_ij) / |Σ_t X_i X_j^* - T N_ij|` (the same scale as `T` unit
 //! phasors): the noise's mean can be taken out of a sum, not out of a frame's phasor. Tried
-//! and not kept (the journal, session 32): each frame's `X_i X_j^* - N_ij` over
+//! and not kept: each frame's `X_i X_j^* - N_ij` over
 //! `|X_i| |X_j|` subtracts many times the noise's mean phasor, since `1 / |X|` of a
 //! Gaussian bin has a heavy tail (a fan's two talkers 0.26-0.71 m against 0.02-0.04); the
 //! noise's coherence subtracted from each phasor in proportion to its share of the frame,

@@ -63,8 +63,8 @@ const WALL_ELONGATION: f64 = 2.5;
 /// in `corridor_alcoves`' alcove corner (GCC-PHAT 0.159 -> 0.141 m), but second-order
 /// images are many and lie by chance within the gate of real sources' bearings
 /// (`sparse_ten`, ten talkers: the right count 100 -> 93 % with GCC-PHAT, MVDR 0.138 ->
-/// 0.170 m), and MVDR's corridor lost ground (0.187 -> 0.198 m; again in session 51,
-/// 0.098 -> 0.115 m).
+/// 0.170 m), and MVDR's corridor lost ground (0.187 -> 0.198 m; measured again
+/// later, 0.098 -> 0.115 m).
 const MAX_ORDER: usize = 1;
 
 /// The most reflections a DoA's ray is traced through towards a source the map hides from
