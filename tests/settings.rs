@@ -248,7 +248,7 @@ fn the_deflate_flags_reach_the_localizer() {
 }
 
 /// Every numeric setting of the file, set to what a hand or a typo writes (zero, negative,
-/// NaN, infinite, huge, tiny, and the values of the 2026-11-27 sweep that crashed it,
+/// NaN, infinite, huge, tiny, and the values of an earlier sweep that crashed it,
 /// aborted it on a 2-TB allocation or kept it busy for minutes), is either refused when the
 /// file is read, with an error that names the file, the key and the range accepted, or runs
 /// to a map (exit 0). None panics, aborts or runs on unbounded.
