@@ -211,10 +211,9 @@ pub struct MissedTally {
     /// Refused as too thinly heard ([`asm::IasmConfig::vote_min_thresholded_stops`]).
     pub thinly_heard: f64,
     /// Refused as on the robot's path, beyond the map, outside the room, behind a wall,
-    /// the array's mirror image or another's reflections ([`asm::IasmConfig::min_range_m`],
+    /// or another's reflections ([`asm::IasmConfig::min_range_m`],
     /// [`asm::IasmConfig::beyond_map_m`], [`asm::IasmConfig::room_margin_m`],
-    /// [`asm::IasmConfig::wall_clearance_m`], [`asm::IasmConfig::array_mirror`],
-    /// [`asm::IasmConfig::reflections`]).
+    /// [`asm::IasmConfig::wall_clearance_m`], [`asm::IasmConfig::reflections`]).
     pub misplaced: f64,
     /// Refused because its DoAs fit other mapped sources better
     /// ([`asm::IasmConfig::reassociate`]).
@@ -232,10 +231,7 @@ impl MissedTally {
                 Some(asm::Refusal::SpokenAgainst { .. }) => t.spoken_against += 1.0,
                 Some(asm::Refusal::ThinlyHeard) => t.thinly_heard += 1.0,
                 Some(
-                    asm::Refusal::Misplaced
-                    | asm::Refusal::OutsideRoom
-                    | asm::Refusal::ArrayMirror
-                    | asm::Refusal::Reflection,
+                    asm::Refusal::Misplaced | asm::Refusal::OutsideRoom | asm::Refusal::Reflection,
                 ) => t.misplaced += 1.0,
                 Some(asm::Refusal::Reassigned) => t.reassigned += 1.0,
                 None => {}

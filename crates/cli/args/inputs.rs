@@ -77,9 +77,8 @@ pub struct SettingsArgs {
     /// I-ASM profile: paper (the paper's algorithm exactly, Table I) or robust (bearing
     /// refinement, three observing stops per source, a vote for missed sources, no source
     /// on the robot's path, contradicted by stops that heard nothing, outside the room,
-    /// heard through a wall as another's image, made of another's reflections in the
-    /// map's walls, or another's mirror image in the array) [default: robust, or the
-    /// settings file's].
+    /// heard through a wall as another's image, or made of another's reflections in the
+    /// map's walls) [default: robust, or the settings file's].
     #[arg(long)]
     pub profile: Option<Profile>,
 }

@@ -125,7 +125,7 @@ fn print_table(a: &EvalArgs, doas: &str, stats: &[VariantStats], secs: f64) {
     let m = ca.missed;
     if m.missed > 0.0 {
         println!(
-            "CA: {:.2} true sources missed per run; made and refused by the mapper's rules: {:.2} for stops that heard nothing there (absence_ratio), {:.2} too thinly heard (vote_min_thresholded_stops), {:.2} on the path, beyond the map, outside the room, behind a wall, the array's mirror image or another's reflections (min_range_m, beyond_map_m, room_margin_m, wall_clearance_m, array_mirror, reflections), {:.2} whose DoAs fit other sources better (reassociate); {:.2} never made a source (`iasm map --explain` shows where their DoAs went)",
+            "CA: {:.2} true sources missed per run; made and refused by the mapper's rules: {:.2} for stops that heard nothing there (absence_ratio), {:.2} too thinly heard (vote_min_thresholded_stops), {:.2} on the path, beyond the map, outside the room, behind a wall or another's reflections (min_range_m, beyond_map_m, room_margin_m, wall_clearance_m, reflections), {:.2} whose DoAs fit other sources better (reassociate); {:.2} never made a source (`iasm map --explain` shows where their DoAs went)",
             m.missed,
             m.spoken_against,
             m.thinly_heard,

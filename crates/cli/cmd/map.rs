@@ -268,7 +268,7 @@ fn print_map(a: &MapArgs, survey: &Survey, report: &MapReport<'_>, result: &MapR
     );
     if result.removed > 0 {
         println!(
-            "  {} more found and removed: on the robot's path, beyond the map, outside the room or behind a wall, the array's mirror image or another's reflections, contradicted by stops that heard nothing there, or left with too few DoAs by sources that fit them better (--explain says which; see asm::IasmConfig::min_range_m, room_margin_m, wall_clearance_m, array_mirror, reflections, absence_ratio, reassociate)",
+            "  {} more found and removed: on the robot's path, beyond the map, outside the room or behind a wall or another's reflections, contradicted by stops that heard nothing there, or left with too few DoAs by sources that fit them better (--explain says which; see asm::IasmConfig::min_range_m, room_margin_m, wall_clearance_m, reflections, absence_ratio, reassociate)",
             result.removed
         );
     }
@@ -413,10 +413,6 @@ fn refusal(rule: &asm::Refusal) -> String {
         ),
         asm::Refusal::Reassigned => {
             "its other DoAs fit mapped sources better and went to them, leaving fewer than min_observations stops (reassociate)"
-                .to_owned()
-        }
-        asm::Refusal::ArrayMirror => {
-            "the mirror image, about the array's axis, of a source heard from more stops, where the stops after the robot turned heard nothing towards it (array_mirror)"
                 .to_owned()
         }
         asm::Refusal::Reflection => {

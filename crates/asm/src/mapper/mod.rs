@@ -198,10 +198,6 @@ pub enum Refusal {
     /// [`IasmConfig::room_margin_m`] from a free one, and no free place near it fits its
     /// DoAs.
     OutsideRoom,
-    /// The mirror image, about the array's axis, of a source heard from more stops, where
-    /// the stops after the robot turned heard nothing towards it
-    /// ([`IasmConfig::array_mirror`]).
-    ArrayMirror,
     /// Its DoAs are another mapped source's reflections in the map's walls, blends of that
     /// source with its reflection, or that source's own bearing, each but one
     /// ([`IasmConfig::reflections`]).

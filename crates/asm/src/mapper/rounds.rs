@@ -172,22 +172,8 @@ impl Mapper {
         if !resampled {
             pf.resample(rng);
         }
-        let mut fallback = false;
-        let cluster = match largest_cluster(&self.dbscan, pf.particles()) {
-            Some(c) => c,
-            // A diffuse cloud (broad DoAs: a small array, many sources) has no cluster of
-            // MinPts within eps, yet its densest part may be a source: take it, and let
-            // the association, the refinement and the stop count judge it.
-            None if self.config.densest_fallback => {
-                match densest_cell(pf.particles(), 2.0 * self.config.dbscan_eps_m) {
-                    Some(c) => {
-                        fallback = true;
-                        c
-                    }
-                    None => return Round::NoCluster,
-                }
-            }
-            None => return Round::NoCluster,
+        let Some(cluster) = largest_cluster(&self.dbscan, pf.particles()) else {
+            return Round::NoCluster;
         };
         let est = match self.config.variant {
             Variant::Ws => weighted_mean,
@@ -204,12 +190,7 @@ impl Mapper {
         {
             (est, refined) = (p, true);
         }
-        let needed = if fallback {
-            FALLBACK_OBSERVATIONS.max(self.config.min_observations)
-        } else {
-            self.config.min_observations
-        };
-        if rays.len() < needed {
+        if rays.len() < self.config.min_observations {
             return Round::Clutter(rays);
         }
         Round::Found(Source {
@@ -306,33 +287,6 @@ pub(crate) struct Search {
     pub retries: usize,
     /// The stop whose DoAs a new source must explain.
     pub new_stop: Option<usize>,
-}
-
-/// Stops a source found by the densest-cell fallback must explain.
-pub(super) const FALLBACK_OBSERVATIONS: usize = 5;
-
-/// The particles in the square of side `side` (m) that holds the most of them, and in
-/// its eight neighbours; `None` for no particles.
-pub fn densest_cell(particles: &[[f64; 2]], side: f64) -> Option<Vec<[f64; 2]>> {
-    let key = |p: &[f64; 2]| ((p[0] / side).floor() as i64, (p[1] / side).floor() as i64);
-    let mut counts: std::collections::HashMap<(i64, i64), usize> = Default::default();
-    for p in particles {
-        *counts.entry(key(p)).or_default() += 1;
-    }
-    // The most particles; among equals, the smallest cell (a deterministic choice).
-    let (&(i, j), _) = counts
-        .iter()
-        .max_by(|a, b| a.1.cmp(b.1).then(b.0.cmp(a.0)))?;
-    Some(
-        particles
-            .iter()
-            .filter(|p| {
-                let (a, b) = key(p);
-                (a - i).abs() <= 1 && (b - j).abs() <= 1
-            })
-            .copied()
-            .collect(),
-    )
 }
 
 /// The particles of the largest DBSCAN cluster of `particles` (the first found among equals),

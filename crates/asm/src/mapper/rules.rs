@@ -122,8 +122,6 @@ impl Mapper {
                     Some(Refusal::Misplaced)
                 } else if self.thinly_heard(&sources[i].rays, stops) {
                     Some(Refusal::ThinlyHeard)
-                } else if self.array_mirror(i, sources, stops) {
-                    Some(Refusal::ArrayMirror)
                 } else {
                     None
                 }
@@ -325,66 +323,6 @@ impl Mapper {
             settle(&mut sources[i], p, best);
             sources.remove(j);
         }
-    }
-
-    /// Whether source `i` is another's mirror image in the array (see
-    /// [`IasmConfig::array_mirror`]).
-    pub(super) fn array_mirror(&self, i: usize, sources: &[Source], stops: &Stops) -> bool {
-        if !self.config.array_mirror || self.mirror.is_some() {
-            return false;
-        }
-        let (gate, turn) = (2.0 * self.sigma, 20f64.to_radians());
-        let poses = stops.poses();
-        let a = &sources[i];
-        let a_stops = stops_of(&a.rays);
-        // Each of a's DoAs mirrored about its stop's heading: 2 theta - bearing.
-        let mirrored: Vec<Ray> = a
-            .rays
-            .iter()
-            .map(|r| Ray {
-                bearing: 2.0 * poses[r.stop].theta - r.bearing,
-                ..*r
-            })
-            .collect();
-        let others: Vec<[f64; 2]> = (0..sources.len())
-            .filter(|&k| k != i)
-            .map(|k| [sources[k].x, sources[k].y])
-            .collect();
-        sources.iter().enumerate().any(|(j, b)| {
-            if j == i || stops_of(&b.rays).len() <= a_stops.len() {
-                return false;
-            }
-            // A mirror is heard in the same recording as its source: at b's own stops.
-            let b_stops = stops_of(&b.rays);
-            let fitting: Vec<Ray> = mirrored
-                .iter()
-                .filter(|r| r.miss([b.x, b.y]) <= gate && b_stops.binary_search(&r.stop).is_ok())
-                .copied()
-                .collect();
-            if fitting.len() + 1 < a.rays.len() {
-                return false;
-            }
-            // Where those mirrored DoAs meet: at b, as a's own meet at a.
-            let meets = fit_bearings([b.x, b.y], &fitting, self.sigma, Trim::OFF)
-                .is_some_and(|(p, _)| (p[0] - b.x).hypot(p[1] - b.y) <= self.config.merge_dist_m);
-            if !meets {
-                return false;
-            }
-            // And after the robot turned from every heading at which a mirrored b, b was
-            // still heard and a was not: nothing towards a there but the walls'
-            // reflections of the other sources.
-            let headings: Vec<f64> = fitting.iter().map(|r| poses[r.stop].theta).collect();
-            let silent = b_stops
-                .iter()
-                .filter(|&&k| {
-                    headings
-                        .iter()
-                        .all(|h| wrap_rad(poses[k].theta - h).abs() >= turn)
-                        && self.silent_towards([a.x, a.y], k, stops, &others)
-                })
-                .count();
-            silent >= 2
-        })
     }
 
     /// Whether `q` lies within `margin` (m) of the bounding box of the map's known cells.

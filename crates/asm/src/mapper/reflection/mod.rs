@@ -339,40 +339,6 @@ impl Mapper {
             .min_by(f64::total_cmp)
     }
 
-    /// Whether stop `k` heard nothing towards `at` but the reflections of `others` in the
-    /// map's walls (each DoA within the vote's gate, 2 `sigma`, of the bearing to `at`
-    /// traced through the wall it meets passes one of them within the gate), and the map
-    /// does not hide `at` from it. Silence where the map holds no walls means no DoA
-    /// towards `at` at all.
-    pub(super) fn silent_towards(
-        &self,
-        at: [f64; 2],
-        k: usize,
-        stops: &Stops,
-        others: &[[f64; 2]],
-    ) -> bool {
-        let pose = &stops.poses()[k];
-        let (from, to, gate) = ([pose.x, pose.y], pose.bearing_to(at), 2.0 * self.sigma);
-        let slack = self.config.room_margin_m;
-        !self.hidden(from, at)
-            && stops.heard()[k]
-                .iter()
-                .filter(|&&h| wrap_rad(h - to).abs() <= gate)
-                .all(|&h| {
-                    let ray = Ray {
-                        stop: k,
-                        from,
-                        bearing: h,
-                        twin: None,
-                        shared: false,
-                    };
-                    let legs = self.reflected_legs(&ray, MAX_ORDER);
-                    others
-                        .iter()
-                        .any(|&s| nearest_image(&legs, s, slack).is_some_and(|m| m <= gate))
-                })
-    }
-
     /// Whether the map holds a wall between `a` and `b`, leaving out the
     /// [`IasmConfig::room_margin_m`] at `b` (a source's own wall, its own table).
     fn hidden(&self, a: [f64; 2], b: [f64; 2]) -> bool {

@@ -223,7 +223,6 @@ pub(super) fn ray_towards(stop: usize, from: [f64; 2], to: [f64; 2], off_deg: f6
     }
 }
 
-mod mirror;
 mod plausibility;
 pub(in crate::mapper) mod reflection;
 mod room;

@@ -268,29 +268,6 @@ fn a_round_finds_one_source_and_removes_the_doas_it_explains() {
 }
 
 #[test]
-fn the_densest_cell_and_its_neighbours() {
-    // 5 points in the cell [1, 1.2) x [1, 1.2), 2 in its neighbour, 3 far away.
-    let mut pts = vec![
-        [1.05, 1.05],
-        [1.1, 1.1],
-        [1.15, 1.15],
-        [1.01, 1.19],
-        [1.19, 1.01],
-    ];
-    pts.extend([
-        [1.25, 1.1],
-        [0.95, 0.95],
-        [5.0, 5.0],
-        [5.01, 5.0],
-        [5.0, 5.01],
-    ]);
-    let c = densest_cell(&pts, 0.2).unwrap();
-    assert_eq!(c.len(), 7);
-    assert!(c.iter().all(|p| p[0] < 2.0));
-    assert_eq!(densest_cell(&[], 0.2), None);
-}
-
-#[test]
 fn the_largest_cluster_wins() {
     // 30 points around (0, 0), 50 around (5, 5), one stray point.
     let mut pts: Vec<[f64; 2]> = (0..30).map(|i| [0.001 * i as f64, 0.0]).collect();
