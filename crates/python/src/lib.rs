@@ -592,5 +592,7 @@ fn _iasm(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<OnlineMapper>()?;
     m.add_class::<Localizer>()?;
     m.add("ARRAY_PRESETS", ssl::array::PRESETS.to_vec())?;
+    // The crates' version, which the wheel's metadata and `iasm --version` also carry.
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

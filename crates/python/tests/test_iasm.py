@@ -33,6 +33,21 @@ def dataset(tmp_path_factory):
     return scene, out
 
 
+def test_the_version_is_the_installed_wheels_and_the_clis():
+    from importlib.metadata import version
+
+    assert iasm.__version__ == version("iasm")
+    said = subprocess.run([cli(), "--version"], capture_output=True, text=True, check=True)
+    assert said.stdout.split() == ["iasm", iasm.__version__]
+
+
+def test_dir_shows_the_api_and_every_name_of_it_exists():
+    assert dir(iasm) == sorted(iasm.__all__)
+    assert all(hasattr(iasm, name) for name in iasm.__all__)
+    # Nothing the module is built on: no numpy, os, json or typing names.
+    assert not {"np", "os", "json", "threading", "Dict", "Any"} & set(dir(iasm))
+
+
 @pytest.mark.parametrize("method", ["mvdr", "gcc-phat", "normmusic"])
 def test_locate_gives_the_clis_doas_to_the_last_digit(dataset, method):
     scene, out = dataset

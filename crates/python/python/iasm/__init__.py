@@ -32,6 +32,7 @@ import numpy as np
 from . import _iasm
 
 __all__ = [
+    "__version__",
     "ARRAY_PRESETS",
     "Doa",
     "Located",
@@ -50,6 +51,15 @@ __all__ = [
     "Dataset",
     "doa",
 ]
+
+#: The package's version: the Rust crates' it was built from (as ``iasm --version`` says).
+__version__: str = _iasm.__version__
+
+
+def __dir__() -> List[str]:
+    """The public API only (``__all__``), not the modules and typing names it is built on."""
+    return sorted(__all__)
+
 
 #: The array presets ``array=`` takes by name (``iasm6``: the paper's six microphones).
 ARRAY_PRESETS: Tuple[str, ...] = tuple(_iasm.ARRAY_PRESETS)

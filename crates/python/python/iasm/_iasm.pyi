@@ -10,6 +10,7 @@ import numpy as np
 import numpy.typing as npt
 
 ARRAY_PRESETS: List[str]
+__version__: str
 
 _Spectrum = Tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.float32]]
 
