@@ -4,24 +4,37 @@ Use the package's own functions (`iasm.locate`, `iasm.map_sources`, ...): they c
 arguments and return Python objects; these take what they have checked."""
 
 from os import PathLike
-from typing import List, Optional, Sequence, Tuple, Union
+from typing import List, Optional, Sequence, Tuple, Union, final
 
 import numpy as np
 import numpy.typing as npt
 
+__all__ = [
+    "map_sources",
+    "ospa",
+    "check_recording",
+    "simulate",
+    "read_wav",
+    "read_dataset",
+    "OnlineMapper",
+    "Localizer",
+    "ARRAY_PRESETS",
+    "__version__",
+]
 ARRAY_PRESETS: List[str]
 __version__: str
 
 _Spectrum = Tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.float32]]
 
+@final
 class Localizer:
-    def __init__(
-        self,
+    def __new__(
+        cls,
         fs: int,
         array: str,
         positions: Optional[npt.NDArray[np.float64]],
         settings_json: str,
-    ) -> None: ...
+    ) -> "Localizer": ...
     def locate(
         self, signals: npt.NDArray[np.float32], spectrum: bool
     ) -> Tuple[str, Optional[_Spectrum]]: ...
@@ -41,8 +54,9 @@ def map_sources(
     seed: int,
 ) -> str: ...
 
+@final
 class OnlineMapper:
-    def __init__(self, map: _MapSpec, settings_json: str, seed: int) -> None: ...
+    def __new__(cls, map: _MapSpec, settings_json: str, seed: int) -> "OnlineMapper": ...
     def add_stop(
         self, x: float, y: float, theta: float, doas_deg: Sequence[float], cut: Optional[bool] = None
     ) -> str: ...

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import json
 import warnings
-from typing import Any, Dict, Optional, Sequence
+from typing import Any, Dict, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -119,7 +119,7 @@ class _DOA:
         self.azimuth_recon: Optional[np.ndarray] = None
         self.colatitude_recon: Optional[np.ndarray] = None
         self.doas: list = []
-        self._planned = None
+        self._planned: Optional[Tuple[str, _iasm.Localizer]] = None
 
     def locate_sources(
         self,
