@@ -5,7 +5,11 @@
 //! Why true bearings beside every scene: they are what the mapper could reach with a
 //! perfect front end (every source heard at every stop, at its exact bearing), so each
 //! scene's loss splits between the front end (the method's map against the floor) and the
-//! mapper (the floor against zero).
+//! mapper (the floor against zero). And why, beside each method, the bearings it heard
+//! ([`heard_bearings`]: the exact bearing of each source one of its DoAs found, nothing
+//! else): the front end's share splits again, into the sources it never heard (the floor
+//! against these maps) and what its DoAs' errors and clutter cost the mapper (these maps
+//! against the method's own).
 //!
 //! Why each scene is rendered more than once: the sensor noise and the late tail are drawn
 //! anew each time, and a result that holds on one rendering only shows as spread
@@ -31,6 +35,14 @@ use sim::scene::PreparedScene;
 
 /// The method label of the maps made from true bearings.
 pub const TRUE_BEARINGS: &str = "true-bearings";
+
+/// What follows a method's label in the label of its maps from the bearings it heard
+/// ([`heard_bearings`]).
+pub const HEARD: &str = ":heard";
+
+/// A DoA within this many degrees of a source's bearing heard that source (the DoA score's
+/// tolerance, `iasm ssl --score`).
+pub const HEARD_TOL_DEG: f64 = 5.0;
 
 /// A mapped source further than this outside the room's walls is "outside the free
 /// space" (m): two cells of the simulated maps, so that a vent 0.1 m off a wall placed a
@@ -182,6 +194,9 @@ pub struct GroupRow {
     pub maps: Distribution,
     /// The true-bearing maps of the same scenes and renderings.
     pub floor: Distribution,
+    /// The maps from the exact bearings of the sources the method's DoAs heard
+    /// ([`heard_bearings`]); empty (no maps) for the true bearings themselves.
+    pub heard: Distribution,
 }
 
 /// The generated benchmark's report.
@@ -259,7 +274,7 @@ impl GeneratedReport {
     /// beside its true-bearing floor.
     pub fn table(&self) -> String {
         let mut s = format!(
-            "{:<13} {:<9} {:>5} {:>7} {:>7} {:>7} {:>6} {:>4} {:>7} | {:>7} {:>7} {:>6} {:>6}\n",
+            "{:<13} {:<9} {:>5} {:>7} {:>7} {:>7} {:>6} {:>4} {:>7} | {:>7} {:>7} | {:>7} {:>7} {:>6} {:>6}\n",
             "group",
             "method",
             "maps",
@@ -269,15 +284,17 @@ impl GeneratedReport {
             "right",
             "out",
             "spread",
+            "heard",
+            "h.right",
             "floor",
             "f.p90",
             "f.right",
             "ratio"
         );
         for g in &self.groups {
-            let (d, f) = (&g.maps, &g.floor);
+            let (d, f, h) = (&g.maps, &g.floor, &g.heard);
             s.push_str(&format!(
-                "{:<13} {:<9} {:>5} {:>7.3} {:>7.3} {:>7.3} {:>5.0}% {:>4} {:>7.3} | {:>7.3} {:>7.3} {:>5.0}% {:>6.2}\n",
+                "{:<13} {:<9} {:>5} {:>7.3} {:>7.3} {:>7.3} {:>5.0}% {:>4} {:>7.3} | {:>7.3} {:>6.0}% | {:>7.3} {:>7.3} {:>5.0}% {:>6.2}\n",
                 g.group,
                 g.method,
                 d.maps,
@@ -287,6 +304,8 @@ impl GeneratedReport {
                 100.0 * d.right_count,
                 d.outside,
                 d.spread,
+                h.mean,
+                100.0 * h.right_count,
                 f.mean,
                 f.p90,
                 100.0 * f.right_count,
@@ -428,6 +447,12 @@ fn run_drawn(drawn: &Drawn, opts: &DrawOptions, base: &Settings) -> Result<Vec<M
                     .map(&settings.iasm, map_seed0 + 1000 * j as u64)?;
                 out.push(record(method.name(), run.score.score, &map));
             }
+            let heard = heard_bearings(&run.survey, &truth, HEARD_TOL_DEG);
+            let label = format!("{}{HEARD}", method.name());
+            for j in 0..opts.map_seeds {
+                let map = heard.map(&settings.iasm, map_seed0 + 1000 * j as u64)?;
+                out.push(record(&label, run.score.score, &map));
+            }
         }
     }
     Ok(out)
@@ -474,6 +499,45 @@ pub fn true_bearings(scene: &PreparedScene) -> Result<Survey> {
         doa_source: TRUE_BEARINGS.to_owned(),
         mirror_axis_deg: array.mirror_axis_deg(),
     })
+}
+
+/// The survey of what a front end heard, placed exactly: at each stop, for each of its
+/// DoAs within `tol_deg` of the bearing to a source of `truth`, that source's exact
+/// bearing (array frame, degrees; the nearest source, once per stop, in the DoAs' order),
+/// and nothing for the DoAs that heard no source. Mapped, it splits a method's loss from
+/// its true-bearing floor in two: the sources its DoAs never heard (the floor against
+/// this), and what its DoAs' errors and clutter cost the mapper (this against the
+/// method's own maps).
+pub fn heard_bearings(survey: &Survey, truth: &[[f64; 2]], tol_deg: f64) -> Survey {
+    let tol = tol_deg.to_radians();
+    let doas_deg = survey
+        .poses
+        .iter()
+        .zip(&survey.doas_deg)
+        .map(|(p, row)| {
+            let bearings: Vec<f64> = truth
+                .iter()
+                .map(|t| geom::wrap_rad(p.bearing_to(*t) - p.theta))
+                .collect();
+            let mut heard: Vec<usize> = Vec::new();
+            for az in row.iter().flatten() {
+                let miss = |i: &usize| geom::wrap_rad(bearings[*i] - az.to_radians()).abs();
+                let nearest = (0..truth.len()).min_by(|a, b| miss(a).total_cmp(&miss(b)));
+                if let Some(i) = nearest.filter(|i| miss(i) <= tol && !heard.contains(i)) {
+                    heard.push(i);
+                }
+            }
+            heard
+                .into_iter()
+                .map(|i| Some(bearings[i].to_degrees()))
+                .collect()
+        })
+        .collect();
+    Survey {
+        doas_deg,
+        doa_source: format!("{}{HEARD}", survey.doa_source),
+        ..survey.clone()
+    }
 }
 
 /// Whether the plan point `p` lies outside the room by more than [`OUTSIDE_TOLERANCE_M`].
@@ -527,11 +591,13 @@ fn groups(maps: &[MapRecord]) -> Vec<GroupRow> {
                 .filter(|m| m.method == TRUE_BEARINGS && member(m)),
         );
         for method in &methods {
+            let heard = format!("{method}{HEARD}");
             out.push(GroupRow {
                 group: group.clone(),
                 method: method.clone(),
                 maps: Distribution::of(maps.iter().filter(|m| &m.method == method && member(m))),
                 floor: floor.clone(),
+                heard: Distribution::of(maps.iter().filter(|m| m.method == heard && member(m))),
             });
         }
     }
@@ -605,6 +671,40 @@ mod tests {
             (row[0] - 90.0).abs() < 1e-9 && row[1].abs() < 1e-9,
             "{row:?}"
         );
+    }
+
+    #[test]
+    fn heard_bearings_are_the_sources_the_doas_found_placed_exactly() {
+        let (scene, _) = crate::scenes::parse_scene(
+            "fs = 8000\nclip_s = 0.2\n[room]\ndims = [6.0, 6.0, 3.0]\nrt60 = 0.3\n\
+             [array]\npreset = \"iasm6\"\nheight = 0.8\n\
+             [[sources]]\npos = [3.0, 5.0, 1.0]\n[[sources]]\npos = [1.0, 2.0, 1.0]\n\
+             [trajectory]\nposes = [[3.0, 2.0, 90.0], [3.0, 3.0, 90.0]]\n",
+        )
+        .unwrap();
+        let mut survey = true_bearings(&prepare(scene).unwrap()).unwrap();
+        let truth = survey.truth.clone().unwrap();
+        // At the first stop (heading +y) the sources lie at 0 (ahead, 3 m) and +90 degrees
+        // (left, 2 m); at the second at 0 and atan2(1, 2) + 90 = 116.57 degrees.
+        survey.doas_deg = vec![
+            // 3 degrees off the one ahead, 20 off anything, 4 off the one ahead again.
+            vec![Some(3.0), Some(-70.0), Some(-4.0)],
+            // The left one 4.9 degrees off, the one ahead 5.1 off (missed), an empty cell.
+            vec![Some(121.47), Some(5.1), None],
+        ];
+        let heard = heard_bearings(&survey, &truth, HEARD_TOL_DEG);
+        let rows: Vec<Vec<f64>> = heard
+            .doas_deg
+            .iter()
+            .map(|r| r.iter().map(|c| c.unwrap()).collect())
+            .collect();
+        assert_eq!(rows.len(), 2);
+        assert_eq!(rows[0].len(), 1);
+        assert!(rows[0][0].abs() < 1e-9, "{rows:?}");
+        assert_eq!(rows[1].len(), 1);
+        let left = 90.0 + 0.5f64.atan().to_degrees();
+        assert!((rows[1][0] - left).abs() < 1e-9, "{rows:?}");
+        assert_eq!(heard.poses, survey.poses);
     }
 
     #[test]
