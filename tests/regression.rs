@@ -40,8 +40,10 @@ fn the_generated_small_draw_holds_its_distribution() {
     println!("{}", report.scenes_table());
     println!("{}", report.table());
     // Six families, each once: 6 scenes x 2 renderings x 2 maps per method.
+    // And as many from the bearings each method heard, placed exactly.
     for g in report.group("all") {
         assert_eq!(g.maps.maps, 24, "{}", g.method);
+        assert_eq!(g.heard.maps, 24, "{}", g.method);
     }
     for f in sim::draw::Family::ALL {
         assert!(report.group(f.name()).next().is_some(), "{f:?}");
