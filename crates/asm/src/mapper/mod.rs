@@ -9,6 +9,7 @@
 //! | `stops.rs` | [`Stops`]: the stops a map is made from, built once |
 //! | `rounds.rs` | the paper's rounds: filter, cluster, associate ([`Mapper::run`], [`Mapper::round`]) |
 //! | `vote.rs` | the vote after the rounds ([`Mapper::vote`]) |
+//! | `stages.rs` | what runs after the rounds, as one list ([`Stage`], [`IasmConfig::stages`]) |
 //! | `rules.rs` | what cannot be a source ([`Mapper::drop_implausible`]), thin sources, merging |
 //! | `reassociation.rs` | each DoA to the source it fits best ([`Mapper::reassociate`]) |
 //! | `room.rs` | the map is the room: no source behind a wall ([`IasmConfig::room_margin_m`]) |
@@ -81,7 +82,10 @@
 //!   association is greedy, so once every source is known each DoA moves to the one nearest
 //!   its bearing, and a source left with fewer than three stops was made of others' DoAs.
 //!
-//! What each of these changed, measured, is in `docs/decisions/0007-robust-mapper-profile.md`.
+//! The steps after the rounds run from one list, [`IasmConfig::stages`] (`stages.rs`): a
+//! stage whose settings are off is not in it, and the paper profile's holds the paper's
+//! merge alone. What each of these changed, measured, is in
+//! `docs/decisions/0007-robust-mapper-profile.md` and `docs/decisions/0014-mapper-settings.md`.
 
 use rand::Rng;
 use serde::{Deserialize, Serialize};
@@ -101,6 +105,7 @@ mod reflection;
 mod room;
 mod rounds;
 mod rules;
+mod stages;
 mod stops;
 #[cfg(test)]
 mod tests;
@@ -109,6 +114,7 @@ mod vote;
 pub use config::*;
 pub use refine::*;
 pub use rounds::*;
+pub use stages::Stage;
 pub use stops::Stops;
 use vote::*;
 

@@ -5,51 +5,6 @@
 use super::*;
 
 impl Mapper {
-    /// What follows the search for sources, in the batch map and between the online map's
-    /// full maps: the sources that cannot be are removed
-    /// ([`Mapper::drop_implausible`]), then, with [`IasmConfig::reassociate`], every
-    /// DoA goes to the source it fits best ([`Mapper::reassociate`]; merged first, since two
-    /// estimates of one source closer than the merge distance would split its DoAs between
-    /// them and move apart) and the removals are checked once more on the DoAs each source
-    /// then keeps, and sources closer than [`IasmConfig::merge_dist_m`] are merged. Returns
-    /// the removed sources with their rules; their DoAs go back to `pool`.
-    ///
-    /// Why the second check: a round's cloud that settles short of a talker, on the
-    /// talker's rays, passes the first with the talker's DoAs; reassociated, it keeps only
-    /// what else it had (reflections that happen to cross there) and is judged on those.
-    /// Measured (20 seeds on each of three renderings of the
-    /// suite's and `fixtures/heldout`'s scenes, both methods): `one_source` GCC-PHAT
-    /// lost its ghost (4 maps of 60 held one, 0.042 -> 0.009 m), `sparse_eight_speech`
-    /// MVDR lost a thinly heard real source in one map of 60 (0.229 -> 0.231 m); the mean
-    /// over the scenes 0.0870 -> 0.0864 m.
-    ///
-    /// # Panics
-    /// As [`Mapper::drop_implausible`].
-    pub(crate) fn settle(
-        &self,
-        sources: &mut Vec<Source>,
-        stops: &Stops,
-        pool: &mut [Vec<f64>],
-    ) -> Vec<Refused> {
-        let mut removed = self.drop_implausible(sources, stops, pool);
-        if self.config.reassociate {
-            self.merge(sources);
-            removed.extend(self.reassociate(sources, pool));
-            // Judged again on the DoAs each source now keeps: a cloud that settled on a
-            // talker's rays passed with the talker's DoAs and keeps only its own.
-            removed.extend(self.drop_implausible(sources, stops, pool));
-        }
-        self.merge(sources);
-        // A source its own reflection's blends pulled towards a wall stands where its
-        // other rays meet; one heard by its image in a wall near it, where its direct rays
-        // and its unfolded image rays meet (reflection/own.rs).
-        self.place_by_own_reflections(sources, stops, pool);
-        // A merged or unblended source stands at a refitted crossing: into the room again.
-        removed.extend(self.keep_in_room(sources, pool));
-        own_orphaned_shares(sources, pool);
-        removed
-    }
-
     /// `refused` (in the order refused) with one entry per place: a later one within
     /// [`IasmConfig::merge_dist_m`] of an earlier replaces it (the reason last given
     /// there), and none within that distance of a mapped source (a proposal refused while
