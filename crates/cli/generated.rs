@@ -480,7 +480,7 @@ pub fn true_bearings(scene: &PreparedScene) -> Result<Survey> {
                 .iter()
                 .filter(|t| sees([p.x, p.y], **t))
                 .map(|t| {
-                    let az = geom::wrap_rad(p.bearing_to(*t) - p.theta).to_degrees();
+                    let az = p.azimuth_to(*t).to_degrees();
                     ((t[0] - p.x).hypot(t[1] - p.y), az)
                 })
                 .collect();
@@ -507,7 +507,8 @@ pub fn true_bearings(scene: &PreparedScene) -> Result<Survey> {
 /// and nothing for the DoAs that heard no source. Mapped, it splits a method's loss from
 /// its true-bearing floor in two: the sources its DoAs never heard (the floor against
 /// this), and what its DoAs' errors and clutter cost the mapper (this against the
-/// method's own maps).
+/// method's own maps). Every other field is `survey`'s, the rows' cut flags included: a
+/// row the SSL cut at `N` stays one the mapper counts as cut.
 pub fn heard_bearings(survey: &Survey, truth: &[[f64; 2]], tol_deg: f64) -> Survey {
     let tol = tol_deg.to_radians();
     let doas_deg = survey
@@ -515,10 +516,7 @@ pub fn heard_bearings(survey: &Survey, truth: &[[f64; 2]], tol_deg: f64) -> Surv
         .iter()
         .zip(&survey.doas_deg)
         .map(|(p, row)| {
-            let bearings: Vec<f64> = truth
-                .iter()
-                .map(|t| geom::wrap_rad(p.bearing_to(*t) - p.theta))
-                .collect();
+            let bearings: Vec<f64> = truth.iter().map(|t| p.azimuth_to(*t)).collect();
             let mut heard: Vec<usize> = Vec::new();
             for az in row.iter().flatten() {
                 let miss = |i: &usize| geom::wrap_rad(bearings[*i] - az.to_radians()).abs();
@@ -653,18 +651,24 @@ mod tests {
         assert!((Distribution::of(&two).spread - 0.2).abs() < 1e-12);
     }
 
+    /// The true bearings of a 6 x 6 m box with sources at (3, 5) and (1, 2), heard from
+    /// `poses` (a TOML list of `[x, y, heading_deg]`).
+    fn two_sources_seen_from(poses: &str) -> Survey {
+        let (scene, _) = crate::scenes::parse_scene(&format!(
+            "fs = 8000\nclip_s = 0.2\n[room]\ndims = [6.0, 6.0, 3.0]\nrt60 = 0.3\n\
+             [array]\npreset = \"iasm6\"\nheight = 0.8\n\
+             [[sources]]\npos = [3.0, 5.0, 1.0]\n[[sources]]\npos = [1.0, 2.0, 1.0]\n\
+             [trajectory]\nposes = {poses}\n"
+        ))
+        .unwrap();
+        true_bearings(&prepare(scene).unwrap()).unwrap()
+    }
+
     /// True bearings are the geometry's: a source straight ahead of a robot facing +y is
     /// at 0 degrees in the array frame, one to its left at +90.
     #[test]
     fn true_bearings_are_the_geometry() {
-        let (scene, _) = crate::scenes::parse_scene(
-            "fs = 8000\nclip_s = 0.2\n[room]\ndims = [6.0, 6.0, 3.0]\nrt60 = 0.3\n\
-             [array]\npreset = \"iasm6\"\nheight = 0.8\n\
-             [[sources]]\npos = [3.0, 5.0, 1.0]\n[[sources]]\npos = [1.0, 2.0, 1.0]\n\
-             [trajectory]\nposes = [[3.0, 2.0, 90.0]]\n",
-        )
-        .unwrap();
-        let s = true_bearings(&prepare(scene).unwrap()).unwrap();
+        let s = two_sources_seen_from("[[3.0, 2.0, 90.0]]");
         let row: Vec<f64> = s.doas_deg[0].iter().map(|c| c.unwrap()).collect();
         // Nearest first: the source 2 m to the left (+90), then 3 m ahead (0).
         assert!(
@@ -675,14 +679,7 @@ mod tests {
 
     #[test]
     fn heard_bearings_are_the_sources_the_doas_found_placed_exactly() {
-        let (scene, _) = crate::scenes::parse_scene(
-            "fs = 8000\nclip_s = 0.2\n[room]\ndims = [6.0, 6.0, 3.0]\nrt60 = 0.3\n\
-             [array]\npreset = \"iasm6\"\nheight = 0.8\n\
-             [[sources]]\npos = [3.0, 5.0, 1.0]\n[[sources]]\npos = [1.0, 2.0, 1.0]\n\
-             [trajectory]\nposes = [[3.0, 2.0, 90.0], [3.0, 3.0, 90.0]]\n",
-        )
-        .unwrap();
-        let mut survey = true_bearings(&prepare(scene).unwrap()).unwrap();
+        let mut survey = two_sources_seen_from("[[3.0, 2.0, 90.0], [3.0, 3.0, 90.0]]");
         let truth = survey.truth.clone().unwrap();
         // At the first stop (heading +y) the sources lie at 0 (ahead, 3 m) and +90 degrees
         // (left, 2 m); at the second at 0 and atan2(1, 2) + 90 = 116.57 degrees.

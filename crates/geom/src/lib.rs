@@ -73,6 +73,12 @@ impl Pose {
     pub fn bearing_to(&self, point: [f64; 2]) -> f64 {
         (point[1] - self.y).atan2(point[0] - self.x)
     }
+
+    /// The array-frame azimuth (rad, wrapped to `(-pi, pi]`) of `point` (m) seen from this
+    /// pose: [`Pose::world_bearing`]'s inverse.
+    pub fn azimuth_to(&self, point: [f64; 2]) -> f64 {
+        wrap_rad(self.bearing_to(point) - self.theta)
+    }
 }
 
 /// Wraps an angle (rad) to `(-pi, pi]`.
