@@ -186,12 +186,12 @@ pub struct IasmConfig {
     /// map holds the walls, so the image-source model says where each source's reflections are
     /// heard. Measured: `docs/decisions/0014-mapper-settings.md`, `reflections`.
     pub reflections: bool,
-    #[serde(skip_serializing_if = "Option::is_none")]
     /// For DoAs from a linear array: the azimuth of its line (degrees, array frame; the `ssl`
     /// crate's `MicArray::mirror_axis_deg`); each DoA `a` is taken with its mirror `2 axis -
     /// a`, and only a change of heading tells them apart ([`Source::mirror`]). Default `None`
     /// (not linear, and left out of JSON); finite. Why: a linear array hears only the angle to
     /// its line.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub mirror_axis_deg: Option<f64>,
     /// A stop's DoA behind `r` stronger DoAs still unexplained counts in the likelihood as a
     /// source with probability `rank_gain^r`, as clutter otherwise. In `(0, 1]`; default 0.5
