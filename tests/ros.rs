@@ -495,6 +495,165 @@ fn ros2_node_maps_a_robot_run_live_as_map_maps_the_bag() {
     );
 }
 
+/// A `--ros-args` block the node cannot take is refused before any DDS starts, with what
+/// is wrong in it: a parameter that is no setting (the list of those that are), a value
+/// the setting's flag refuses, a parameters file that is not there, an option rcl has
+/// and iasm does not read, and the block given to a command that is no node.
+#[cfg(feature = "ros2")]
+#[test]
+fn a_ros_args_block_the_node_cannot_take_is_refused_with_its_reason() {
+    for (args, says) in [
+        (
+            &["ros2", "--ros-args", "-p", "nonesuch:=1"][..],
+            "still_radius",
+        ),
+        (
+            &["ros2", "--ros-args", "-p", "method:=nonesuch"],
+            "nonesuch",
+        ),
+        (
+            &["ros2", "--ros-args", "--params-file", "/nonexistent/p.yaml"],
+            "/nonexistent/p.yaml",
+        ),
+        (&["ros2", "--ros-args", "-x"], "\"-x\""),
+        (
+            &["map", "--ros-args", "-r", "a:=b"],
+            "iasm ros2 and iasm ros2-play only",
+        ),
+    ] {
+        let o = iasm(args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", show(&o));
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains(says), "{args:?}: {err}");
+    }
+}
+
+/// The node as ROS users run it: in a namespace under another name (`--ros-args -r
+/// __ns:=/robot1 -r __node:=mapper`), its audio topic remapped (`-r audio:=mic/audio`),
+/// settings from a ROS 2 parameters file and `-p`, on the bag's time (`use_sim_time`,
+/// the player publishing /clock and keeping the bag's stamps, as `ros2 bag play --clock`
+/// does). While the bag plays, the method set through the parameter services takes effect
+/// at the next stop and a setting read at start is refused with its reason; the services
+/// save the map to the path a parameter gives, return it, and clear it.
+#[cfg(feature = "ros2")]
+#[test]
+fn ros2_node_runs_with_ros_args_parameters_services_and_the_bags_clock() {
+    if !may_run_dds() {
+        return;
+    }
+    let dir = tempdir();
+    let work = dir.path();
+    std::fs::write(
+        work.join("params.yaml"),
+        "/**:\n  ros__parameters:\n    seed: 5\n\
+         /robot1/mapper:\n  ros__parameters:\n    method: gcc-phat\n    audio_topic: audio\n\
+         /robot2/mapper:\n  ros__parameters:\n    method: music\n",
+    )
+    .unwrap();
+    let script = r#"
+set -u
+ip link set lo up multicast on
+ip route add 224.0.0.0/4 dev lo
+cd "$WORK"
+"$IASM" ros2 --out node.json --mcap node.mcap --ros-args -r __ns:=/robot1 -r __node:=mapper \
+    -r audio:=mic/audio --params-file params.yaml -p use_sim_time:=true -p save_to:=saved.json \
+    > node.log 2> node.err &
+NODE=$!
+"$IASM" ros2-play "$BAG" --clock --listen heard.json --linger 120 \
+    --ros-args -r __ns:=/robot1 -r audio:=mic/audio > play.log 2> play.err &
+PLAY=$!
+for i in $(seq 1 600); do grep -q '^stop   2' node.log && break; sleep 0.1; done
+"$IASM" ros2-call /robot1/mapper set method mvdr > set.log 2>&1; echo "set $?"
+"$IASM" ros2-call /robot1/mapper set audio_topic /elsewhere > refused.log 2>&1; echo "refused $?"
+"$IASM" ros2-call /robot1/mapper get method > get.log 2>&1; echo "get $?"
+for i in $(seq 1 600); do grep -q '^played' play.log && break; sleep 0.1; done
+sleep 0.5
+"$IASM" ros2-call /robot1/mapper save_map > save.log 2>&1; echo "save $?"
+"$IASM" ros2-call /robot1/mapper get_map > map.json 2> get_map.err; echo "get_map $?"
+"$IASM" ros2-call /robot1/mapper clear_map > clear.log 2>&1; echo "clear $?"
+kill -INT $NODE
+wait $NODE; echo "node $?"
+kill -INT $PLAY
+wait $PLAY; echo "play $?"
+"#;
+    let bag_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/bags/sim_run.mcap");
+    let (o, logs) = in_own_network(
+        script,
+        work,
+        &bag_path,
+        &["set.log", "refused.log", "save.log"],
+    );
+    let read = |n: &str| std::fs::read_to_string(work.join(n)).unwrap_or_default();
+    let out = String::from_utf8_lossy(&o.stdout);
+    for step in [
+        "set 0",
+        "refused 2",
+        "get 0",
+        "save 0",
+        "get_map 0",
+        "clear 0",
+        "node 0",
+        "play 0",
+    ] {
+        assert!(out.contains(step), "{step}\n{logs}");
+    }
+    // The namespace and the remap: the robot's audio, on /robot1/mic/audio, is the node's
+    // /robot1/audio; the player heard the node's sources in the namespace.
+    assert!(
+        read("node.err").contains("subscribed to /robot1/mic/audio as /robot1/audio"),
+        "{logs}"
+    );
+    assert!(
+        read("play.log").contains("on /robot1/iasm/source_poses"),
+        "{logs}"
+    );
+    // The method set while the bag played: GCC-PHAT (the file's) before, MVDR after.
+    assert!(read("refused.log").contains("restart the node"), "{logs}");
+    assert_eq!(read("get.log").trim(), "method: mvdr", "{logs}");
+    let saved = json_file(&work.join("saved.json"));
+    let methods: Vec<&str> = saved["stops"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["method"].as_str().unwrap())
+        .collect();
+    assert_eq!(methods.len(), 5, "{methods:?}\n{logs}");
+    assert_eq!(&methods[..2], ["gcc-phat", "gcc-phat"], "{logs}");
+    assert_eq!(methods[4], "mvdr", "{logs}");
+    assert_eq!(saved["seed"].as_u64(), Some(5));
+    // The map returned by get_map: both talkers of the scene (fixtures/bags/sim).
+    let got = sources_of(&json_file(&work.join("map.json")));
+    let truth = [[2.0, 4.0], [4.5, 1.0]];
+    assert_eq!(got.len(), 2, "{got:?}\n{logs}");
+    for t in truth {
+        let d = got
+            .iter()
+            .map(|g| (g[0] - t[0]).hypot(g[1] - t[1]))
+            .fold(f64::INFINITY, f64::min);
+        assert!(d < 0.15, "{t:?}: nearest source {d} m off\n{logs}");
+    }
+    // clear_map forgot the five stops: the final map holds the sixth alone.
+    assert!(read("clear.log").contains("5 stops forgotten"), "{logs}");
+    assert_eq!(
+        json_file(&work.join("node.json"))["stops"]
+            .as_array()
+            .map(Vec::len),
+        Some(1),
+        "{logs}"
+    );
+    // The node's time was the bag's (/clock), not the wall clock: every update of the
+    // MCAP is stamped within the bag's 8.6 s.
+    let first_ns = 1_700_000_000_000_000_000u64;
+    for m in read_mcap(&work.join("node.mcap")) {
+        assert!(
+            (first_ns..first_ns + 10_000_000_000).contains(&m.log_time),
+            "{} at {}\n{logs}",
+            m.topic,
+            m.log_time
+        );
+    }
+}
+
 /// A node that never hears a message ends after `--until-idle`, counted from its start,
 /// with its (empty) map, instead of waiting for ever.
 // See: issue 71 (`node_and_player.sh -`)
@@ -522,6 +681,37 @@ echo "node $?"
     assert!(err.contains("no message at all in 1 s"), "{}", show(&o));
 }
 
+/// Runs the bash `script` in a network namespace of its own (`$IASM` the binary, `$BAG`
+/// `bag`, `$WORK` `work`); its output, and the logs of the node, the player and the files
+/// `extra` of `work`, for the assertions' messages.
+fn in_own_network(
+    script: &str,
+    work: &Path,
+    bag: &Path,
+    extra: &[&str],
+) -> (std::process::Output, String) {
+    let o = std::process::Command::new("unshare")
+        .args(["--net", "bash", "-c", script])
+        .env("IASM", env!("CARGO_BIN_EXE_iasm"))
+        .env("BAG", bag)
+        .env("WORK", work)
+        .output()
+        .unwrap();
+    let read = |n: &str| std::fs::read_to_string(work.join(n)).unwrap_or_default();
+    let mut logs = format!(
+        "{}\nnode:\n{}{}\nplay:\n{}{}",
+        show(&o),
+        read("node.log"),
+        read("node.err"),
+        read("play.log"),
+        read("play.err")
+    );
+    for f in extra {
+        logs += &format!("\n{f}: {}", read(f));
+    }
+    (o, logs)
+}
+
 /// Runs `iasm ros2` and `iasm ros2-play BAG --listen` side by side in this network
 /// namespace, in `work`, until the player has played the bag, then stops both with Ctrl-C;
 /// both must exit cleanly, the node having mapped every stop. Returns their logs.
@@ -542,22 +732,8 @@ wait $NODE; echo "node $?"
 kill -INT $PLAY
 wait $PLAY; echo "play $?"
 "#;
-    let o = std::process::Command::new("unshare")
-        .args(["--net", "bash", "-c", script])
-        .env("IASM", env!("CARGO_BIN_EXE_iasm"))
-        .env("BAG", bag)
-        .env("WORK", work)
-        .output()
-        .unwrap();
+    let (o, logs) = in_own_network(script, work, bag, &[]);
     let read = |n: &str| std::fs::read_to_string(work.join(n)).unwrap_or_default();
-    let logs = format!(
-        "{}\nnode:\n{}{}\nplay:\n{}{}",
-        show(&o),
-        read("node.log"),
-        read("node.err"),
-        read("play.log"),
-        read("play.err")
-    );
     let out = String::from_utf8_lossy(&o.stdout);
     assert!(out.contains("node 0") && out.contains("play 0"), "{logs}");
     // Every stop mapped live, the last on Ctrl-C.

@@ -83,8 +83,10 @@ pub(crate) enum Outcome {
 /// the outcome as an exit status (0 success, 1 a threshold failed, 2 an error, its file
 /// and problem on stderr).
 pub fn main() -> std::process::ExitCode {
-    use clap::Parser;
-    let cli = args::Cli::parse();
+    #[cfg(feature = "ros2")]
+    let cli = args::parse_from(std::env::args_os().collect()).unwrap_or_else(|e| e.exit());
+    #[cfg(not(feature = "ros2"))]
+    let cli = <args::Cli as clap::Parser>::parse();
     match run(&cli) {
         Ok(Outcome::Success) => std::process::ExitCode::SUCCESS,
         Ok(Outcome::ThresholdFailed) => std::process::ExitCode::from(1),
@@ -116,6 +118,8 @@ fn run(cli: &args::Cli) -> anyhow::Result<Outcome> {
         args::Command::Ros2(a) => cmd::ros2::run(a),
         #[cfg(feature = "ros2")]
         args::Command::Ros2Play(a) => cmd::ros2::play(a),
+        #[cfg(feature = "ros2")]
+        args::Command::Ros2Call(a) => cmd::ros2::call_node(a),
         args::Command::Simulate {
             scene,
             out,

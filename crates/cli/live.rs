@@ -42,6 +42,8 @@ pub struct LiveStopRow {
     pub doas_deg: Vec<f64>,
     /// Whether N cut its row.
     pub cut: bool,
+    /// The SSL method that found them.
+    pub method: ssl::Method,
 }
 
 /// What the node does after each stop.
@@ -153,6 +155,35 @@ impl LiveMapper {
         }
     }
 
+    /// The settings the next stop is localised and mapped with.
+    #[must_use]
+    pub fn settings(&self) -> &Settings {
+        &self.settings
+    }
+
+    /// Localises and maps from the next stop on with `settings` and `seed` (the node's
+    /// parameters set while it runs): the mapper is rebuilt over the stops so far, whose
+    /// DoAs are kept.
+    ///
+    /// # Errors
+    /// Settings that do not validate or name no array; the mapper keeps its own then.
+    pub fn set_settings(&mut self, settings: Settings, seed: u64) -> Result<()> {
+        settings.validate()?;
+        settings.mic_array()?;
+        self.settings = settings;
+        self.seed = seed;
+        self.session = None;
+        Ok(())
+    }
+
+    /// Forgets every stop and the map (the node's `clear_map`); the robot's messages of the
+    /// stop it stands at stay. How many stops were forgotten.
+    pub fn clear(&mut self) -> usize {
+        self.session = None;
+        self.map = None;
+        std::mem::take(&mut self.stops).len()
+    }
+
     /// The stops mapped so far.
     pub fn stops(&self) -> &[LiveStopRow] {
         &self.stops
@@ -257,6 +288,7 @@ impl LiveMapper {
             pose: stop.stop.pose,
             doas_deg: doas,
             cut,
+            method: self.settings.ssl.method,
         });
         Ok(Update {
             record,

@@ -5,6 +5,8 @@
 mod generated;
 mod inputs;
 mod robot;
+#[cfg(feature = "ros2")]
+pub mod ros;
 mod survey;
 
 use std::path::PathBuf;
@@ -13,10 +15,71 @@ use clap::{Parser, Subcommand};
 
 pub use generated::{DrawArgs, GeneratedArgs, ScenesCommand};
 pub use inputs::AngleUnit;
+#[cfg(feature = "ros2")]
+pub use inputs::SettingsArgs;
 pub use robot::{BagArgs, WatchArgs};
 #[cfg(feature = "ros2")]
-pub use robot::{Ros2Args, Ros2PlayArgs};
+pub use robot::{Ros2Args, Ros2CallArgs, Ros2CallWhat, Ros2PlayArgs};
 pub use survey::{CompareArgs, EvalArgs, FigureArgs, MapArgs, SslArgs};
+
+/// The command line `argv` (the program's name first) parsed, `iasm ros2`'s and `iasm
+/// ros2-play`'s `--ros-args` block read ([`ros`]): its parameters become the command's
+/// flags, its names and remaps go to the command.
+///
+/// # Errors
+/// clap's, or the ROS block's (unknown options, a parameter that is no setting, a
+/// parameters file that cannot be read), as a clap error that exits with status 2.
+#[cfg(feature = "ros2")]
+pub fn parse_from(argv: Vec<std::ffi::OsString>) -> Result<Cli, clap::Error> {
+    use clap::CommandFactory;
+    let ros_err = |e: anyhow::Error| {
+        clap::Error::raw(clap::error::ErrorKind::InvalidValue, format!("{e:#}\n"))
+    };
+    let (argv, tokens) = ros::split(argv).map_err(ros_err)?;
+    let Some(tokens) = tokens else {
+        let mut cli = Cli::try_parse_from(&argv)?;
+        if let Command::Ros2(a) = &mut cli.command {
+            a.command_line = argv;
+        }
+        return Ok(cli);
+    };
+    let r = ros::RosArgs::parse(&tokens).map_err(ros_err)?;
+    let (sub, node) = match Cli::try_parse_from(&argv)?.command {
+        Command::Ros2(a) => ("ros2", a.node_name),
+        Command::Ros2Play(_) => ("ros2-play", play_node_name().to_owned()),
+        _ => {
+            return Err(ros_err(anyhow::anyhow!(
+                "--ros-args is read by iasm ros2 and iasm ros2-play only"
+            )));
+        }
+    };
+    let params = r.parameters(&r.fully_qualified(&node)).map_err(ros_err)?;
+    let cmd = Cli::command();
+    let flags =
+        ros::to_flags(&params, cmd.find_subcommand(sub).expect("a subcommand")).map_err(ros_err)?;
+    let mut argv = argv;
+    argv.extend(flags);
+    let mut cli = Cli::try_parse_from(&argv)?;
+    for i in &r.ignored {
+        eprintln!("note: --ros-args {i}: accepted, not used by iasm");
+    }
+    match &mut cli.command {
+        Command::Ros2(a) => {
+            a.ros = r;
+            a.command_line = argv;
+        }
+        Command::Ros2Play(a) => a.ros = r,
+        _ => unreachable!("checked above"),
+    }
+    Ok(cli)
+}
+
+/// The node name of `iasm ros2-play`.
+#[cfg(feature = "ros2")]
+#[must_use]
+pub const fn play_node_name() -> &'static str {
+    "iasm_play"
+}
 
 /// iasm: from a robot's multichannel recordings to a map of the sound sources around it.
 #[derive(Debug, Parser)]
@@ -118,4 +181,8 @@ pub enum Command {
     /// robot published it (to try the node without a robot).
     #[cfg(feature = "ros2")]
     Ros2Play(Ros2PlayArgs),
+    /// Ask a running node: list, get or set its parameters, save, print or clear its map
+    /// (what `ros2 param` and `ros2 service call` do, with no ROS installed).
+    #[cfg(feature = "ros2")]
+    Ros2Call(Ros2CallArgs),
 }

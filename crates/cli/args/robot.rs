@@ -42,6 +42,20 @@ pub struct Ros2Args {
     /// warning (a minute of six channels at 48 kHz is 35 MB).
     #[arg(long, value_name = "S", default_value_t = bag::live::PENDING_AUDIO_S, value_parser = parse_seconds)]
     pub pending_audio: f64,
+    /// Take the time from /clock (rosgraph_msgs/Clock), as `ros2 bag play --clock`
+    /// publishes it, instead of the system clock (the parameter use_sim_time).
+    #[arg(long)]
+    pub use_sim_time: bool,
+    /// Where the node's save_map service writes the map (JSON).
+    #[arg(long, value_name = "FILE", default_value = "iasm_map.json")]
+    pub save_to: PathBuf,
+    /// The `--ros-args` block (namespace, node name, remaps; its parameters are flags).
+    #[arg(skip)]
+    pub ros: super::ros::RosArgs,
+    /// The command line of `iasm ros2` with every parameter as its flag, from which a
+    /// parameter set while the node runs is parsed again.
+    #[arg(skip)]
+    pub command_line: Vec<std::ffi::OsString>,
 }
 
 /// `iasm ros2-play`.
@@ -63,6 +77,62 @@ pub struct Ros2PlayArgs {
     /// ends the listening sooner (half a second later), and the sources heard are written.
     #[arg(long = "linger", default_value_t = 5.0, value_name = "S")]
     pub linger_s: f64,
+    /// Publish /clock (rosgraph_msgs/Clock) at the bag's time and keep the messages'
+    /// stamps as recorded, as `ros2 bag play --clock` does (for a node with
+    /// use_sim_time), instead of moving them to now.
+    #[arg(long)]
+    pub clock: bool,
+    /// The `--ros-args` block: `-r __ns:=/robot1` puts the bag's topics in that namespace
+    /// (as if recorded relative to it), `-r from:=to` renames one.
+    #[arg(skip)]
+    pub ros: super::ros::RosArgs,
+}
+
+/// `iasm ros2-call`.
+#[cfg(feature = "ros2")]
+#[derive(Debug, Clone, Args)]
+pub struct Ros2CallArgs {
+    /// The node, fully qualified (`/iasm`, `/robot1/mapper`).
+    pub node: String,
+    /// What to ask of it.
+    #[command(subcommand)]
+    pub what: Ros2CallWhat,
+    /// The DDS domain (ROS_DOMAIN_ID).
+    #[arg(long, env = "ROS_DOMAIN_ID", default_value_t = 0, global = true)]
+    pub domain_id: u16,
+    /// How long to wait for the answer (s).
+    #[arg(long, default_value_t = 10.0, value_name = "S", value_parser = parse_seconds, global = true)]
+    pub timeout: f64,
+}
+
+/// What `iasm ros2-call` asks of the node.
+#[cfg(feature = "ros2")]
+#[derive(Debug, Clone, clap::Subcommand)]
+pub enum Ros2CallWhat {
+    /// Its parameters' names (`ros2 param list`).
+    List,
+    /// A parameter's value (`ros2 param get`).
+    Get {
+        /// The parameter.
+        name: String,
+    },
+    /// Sets a parameter (`ros2 param set`): the value is read as YAML (`8` an integer,
+    /// `0.5` a double, `true` a boolean); the node's refusal, with its reason, exits 2.
+    Set {
+        /// The parameter.
+        name: String,
+        /// Its value.
+        value: String,
+    },
+    /// Writes the current map to the node's save_to path (`~/save_map`).
+    #[command(name = "save_map")]
+    SaveMap,
+    /// Prints the current map's JSON (`~/get_map`).
+    #[command(name = "get_map")]
+    GetMap,
+    /// Forgets every stop (`~/clear_map`).
+    #[command(name = "clear_map")]
+    ClearMap,
 }
 
 /// `iasm bag`.

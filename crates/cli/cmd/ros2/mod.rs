@@ -21,7 +21,9 @@
 //! were searched in is `/iasm/map` (transient local), so that the node never becomes a
 //! second publisher of the robot's `/map`.
 
+mod call;
 mod node;
+mod params;
 mod play;
 
 use std::time::{SystemTime, UNIX_EPOCH};
@@ -31,6 +33,7 @@ use rustdds::no_key::{DataReader, DataWriter};
 use rustdds::policy::{Durability, History, Reliability};
 use rustdds::{DomainParticipant, QosPolicies, QosPolicyBuilder, TopicKind};
 
+pub use call::call_node;
 pub use node::run;
 pub use play::play;
 
@@ -171,18 +174,21 @@ fn now_ns() -> i64 {
         .map_or(0, |d| i64::try_from(d.as_nanos()).unwrap_or(i64::MAX))
 }
 
-/// The participant and node, on `domain`.
+/// The participant and the node `namespace`/`name`, on `domain`, with `options`.
 fn participant(
     domain: u16,
+    namespace: &str,
     name: &str,
+    options: ros2_client::NodeOptions,
 ) -> Result<(ros2_client::Context, ros2_client::Node, DomainParticipant)> {
     let ctx =
         ros2_client::Context::with_options(ros2_client::ContextOptions::new().domain_id(domain))
             .map_err(|e| anyhow!("cannot start DDS on domain {domain}: {e}"))?;
     let node = ctx
         .new_node(
-            ros2_client::NodeName::new("/", name).map_err(|e| anyhow!("node name {name}: {e}"))?,
-            ros2_client::NodeOptions::new(),
+            ros2_client::NodeName::new(namespace, name)
+                .map_err(|e| anyhow!("node name {namespace} {name}: {e}"))?,
+            options,
         )
         .map_err(|e| anyhow!("cannot create the node {name}: {e:?}"))?;
     let dp = ctx.domain_participant();

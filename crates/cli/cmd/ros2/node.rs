@@ -13,10 +13,44 @@ use rustdds::policy::Durability;
 
 use crate::Outcome;
 use crate::args::Ros2Args;
+use crate::args::ros::RosArgs;
 use crate::live::LiveMapper;
 use crate::rosmap::{self, MapMessages};
 
-use super::{Reader, Writer, now_ns, participant, qos, raw, reader, ros_names, writer};
+use super::params::{Ask, Clock, NodeParams, Services, TriggerResponse};
+use super::{Reader, Writer, participant, qos, raw, reader, ros_names, writer};
+
+/// The node's names as its `--ros-args` resolve them: its own, and those of its topics.
+struct Names {
+    ros: RosArgs,
+    /// The node's name.
+    node: String,
+}
+
+impl Names {
+    /// The graph's name of the node's topic `own` (`/iasm/sources` is relative to the
+    /// namespace: `/robot1/iasm/sources`), remapped.
+    fn topic(&self, own: &str) -> String {
+        self.ros.remapped(own.trim_start_matches('/'), &self.node)
+    }
+
+    /// The node's fully qualified name.
+    fn fq(&self) -> String {
+        self.ros.fully_qualified(&self.node)
+    }
+
+    /// A topic of the run's options (`--audio-topic`, ...) as the mapper knows the topics:
+    /// resolved in the namespace; "" (none) stays.
+    fn option(&self, t: Option<String>) -> Option<String> {
+        t.map(|t| {
+            if t.is_empty() {
+                t
+            } else {
+                self.ros.resolve(&t, &self.node)
+            }
+        })
+    }
+}
 
 /// The node's publishers.
 struct Outputs {
@@ -33,23 +67,22 @@ struct Outputs {
 pub const NODE_MAP_TOPIC: &str = "/iasm/map";
 
 impl Outputs {
-    fn new(dp: &DomainParticipant) -> Result<Self> {
+    fn new(dp: &DomainParticipant, names: &Names) -> Result<Self> {
         let p = dp
             .create_publisher(&qos(true, false, 10))
             .map_err(|e| anyhow!("a DDS publisher: {e}"))?;
         let ma = "visualization_msgs/msg/MarkerArray";
+        let w = |own: &str, ty: &str, latched: bool| writer(dp, &p, &names.topic(own), ty, latched);
         Ok(Self {
-            sources: writer(dp, &p, rosmap::SOURCES_TOPIC, ma, false)?,
-            doas: writer(dp, &p, rosmap::DOAS_TOPIC, ma, false)?,
-            path: writer(dp, &p, rosmap::PATH_TOPIC, "nav_msgs/msg/Path", false)?,
-            source_poses: writer(
-                dp,
-                &p,
+            sources: w(rosmap::SOURCES_TOPIC, ma, false)?,
+            doas: w(rosmap::DOAS_TOPIC, ma, false)?,
+            path: w(rosmap::PATH_TOPIC, "nav_msgs/msg/Path", false)?,
+            source_poses: w(
                 rosmap::SOURCE_POSES_TOPIC,
                 "geometry_msgs/msg/PoseArray",
                 false,
             )?,
-            map: writer(dp, &p, NODE_MAP_TOPIC, "nav_msgs/msg/OccupancyGrid", true)?,
+            map: w(NODE_MAP_TOPIC, "nav_msgs/msg/OccupancyGrid", true)?,
             grid_sent: None,
         })
     }
@@ -124,8 +157,8 @@ impl Log {
 /// The node's subscriptions, and when each kind of message last came.
 struct Inputs {
     subscriber: rustdds::Subscriber,
-    /// Topic -> (type, reader).
-    readers: BTreeMap<String, (String, Reader)>,
+    /// The graph's topic -> (the node's name of it, type, reader).
+    readers: BTreeMap<String, (String, String, Reader)>,
     last_message: Option<Instant>,
     last_pose: Option<Instant>,
     last_audio: Option<Instant>,
@@ -147,18 +180,23 @@ impl Inputs {
     }
 
     /// Subscribes to every topic DDS discovery has found a publisher of, of a type the bag
-    /// reader knows (not ours): best effort, or reliable and transient local where the
+    /// reader knows, that is the node's to read (in its namespace, or named by a remap;
+    /// not its own outputs): best effort, or reliable and transient local where the
     /// publisher offers that.
-    fn discover(&mut self, dp: &DomainParticipant) -> Result<()> {
+    fn discover(&mut self, dp: &DomainParticipant, names: &Names) -> Result<()> {
+        let ours = names.ros.resolve("iasm/", &names.node);
         for w in dp.discovered_writers() {
             let d = &w.publication_topic_data;
             let Some((topic, ty)) = ros_names(&d.topic_name, &d.type_name) else {
                 continue;
             };
-            if self.readers.contains_key(&topic)
-                || Kind::of(&ty).is_none()
-                || topic.starts_with("/iasm/")
-            {
+            if self.readers.contains_key(&topic) || Kind::of(&ty).is_none() {
+                continue;
+            }
+            let Some(own) = names.ros.own_name(&topic, &names.node) else {
+                continue;
+            };
+            if own.starts_with(&ours) || topic.starts_with("/iasm/") {
                 continue;
             }
             let latched = matches!(d.durability, Some(Durability::TransientLocal));
@@ -170,18 +208,24 @@ impl Inputs {
                 q,
             )?;
             eprintln!(
-                "subscribed to {topic} ({ty}{})",
+                "subscribed to {topic}{} ({ty}{})",
+                if own == topic {
+                    String::new()
+                } else {
+                    format!(" as {own}")
+                },
                 if latched { ", transient local" } else { "" }
             );
-            self.readers.insert(topic, (ty, r));
+            self.readers.insert(topic, (own, ty, r));
         }
         Ok(())
     }
 
     /// Hands every message waiting to `live`; how many there were.
-    fn take(&mut self, live: &mut LiveMapper, log: &mut Log) -> usize {
+    fn take(&mut self, live: &mut LiveMapper, log: &mut Log, now_ns: i64) -> usize {
         let mut got = 0usize;
-        for (topic, (ty, r)) in &mut self.readers {
+        for (own, ty, r) in self.readers.values_mut() {
+            let topic = own.as_str();
             loop {
                 match r.take_next_sample() {
                     Ok(Some(s)) => {
@@ -192,7 +236,7 @@ impl Inputs {
                         } else if kind.is_some_and(Kind::is_audio) {
                             self.last_audio = Some(Instant::now());
                         }
-                        if let Some(w) = live.push(topic, ty, now_ns(), &s.value().0) {
+                        if let Some(w) = live.push(topic, ty, now_ns, &s.value().0) {
                             log.warn(&w);
                         }
                     }
@@ -233,41 +277,86 @@ impl Inputs {
 /// Settings refused, DDS that cannot start, or outputs that cannot be written.
 pub fn run(a: &Ros2Args) -> Result<Outcome> {
     let settings = a.settings.settings()?;
-    let mut live = LiveMapper::new(
-        settings,
-        a.run.read_options()?,
-        a.run.stop_options()?,
-        a.seed,
-    )?
-    .with_pending_audio(a.pending_audio)?;
+    let names = Names {
+        ros: a.ros.clone(),
+        node: a.node_name.clone(),
+    };
+    let mut read = a.run.read_options()?;
+    read.audio_topic = names.option(read.audio_topic);
+    read.pose_topic = names.option(read.pose_topic);
+    read.odom_topic = names.option(read.odom_topic);
+    read.map_topic = names.option(read.map_topic);
+    let mut live = LiveMapper::new(settings, read, a.run.stop_options()?, a.seed)?
+        .with_pending_audio(a.pending_audio)?;
     let stop = Arc::new(AtomicBool::new(false));
     {
         let stop = Arc::clone(&stop);
         let _ = ctrlc::set_handler(move || stop.store(true, Ordering::SeqCst));
     }
-    let (_ctx, _node, dp) = participant(a.domain_id, &a.node_name)?;
+    let params = NodeParams::new(&a.command_line)?;
+    let node_name = a.ros.node_name.as_deref().unwrap_or(&a.node_name);
+    let (_ctx, mut node, dp) = participant(
+        a.domain_id,
+        a.ros.namespace(),
+        node_name,
+        params.node_options(),
+    )?;
+    // ros2-client's spinner answers the parameter services; it runs until the node goes.
+    let spinner = node
+        .spinner()
+        .map_err(|e| anyhow!("the node's parameter services: {e:?}"))?;
+    std::thread::spawn(move || futures::executor::block_on(spinner.spin()));
+    let mut services = Services::new(&mut node, &names.fq())?;
     let mut inputs = Inputs::new(&dp)?;
+    let mut clock = Clock::new(&dp, &inputs.subscriber)?;
+    let sim_time = || {
+        matches!(
+            node.get_parameter("use_sim_time"),
+            Some(ros2_client::ParameterValue::Boolean(true))
+        )
+    };
     let mut sink = Sink {
-        out: Outputs::new(&dp)?,
+        out: Outputs::new(&dp, &names)?,
         mcap: a.mcap.as_deref().map(rosmap::McapFile::new).transpose()?,
         json: a.out.clone(),
+        current: None,
+        now_ns: 0,
     };
+    let mut save_to = a.save_to.clone();
     let mut log = Log::default();
     let mut last_discovery = Instant::now() - Duration::from_secs(10);
     let mut last_step = Instant::now();
     // --until-idle counts from the last message, or from the node's start when none came.
     let started = Instant::now();
     eprintln!(
-        "iasm ros2: node /{} on DDS domain {}; listening for audio, poses and the map (Ctrl-C ends the run with its final map)",
-        a.node_name, a.domain_id
+        "iasm ros2: node {} on DDS domain {}; listening for audio, poses and the map (Ctrl-C ends the run with its final map)",
+        names.fq(),
+        a.domain_id
     );
     while !stop.load(Ordering::SeqCst) {
+        sink.now_ns = clock.now_ns(sim_time());
         if last_discovery.elapsed() >= Duration::from_millis(250) {
             last_discovery = Instant::now();
-            inputs.discover(&dp)?;
+            inputs.discover(&dp, &names)?;
         }
-        let got = inputs.take(&mut live, &mut log);
+        let got = inputs.take(&mut live, &mut log, sink.now_ns);
         inputs.check_poses(&mut log);
+        if let Some(changed) = params.take_changed() {
+            match changed.and_then(|c| {
+                live.set_settings(c.settings.settings()?, c.seed)?;
+                Ok(c)
+            }) {
+                Ok(c) => {
+                    save_to = c.save_to;
+                    eprintln!(
+                        "parameters changed: the settings take effect at the next stop (method {})",
+                        live.settings().ssl.method
+                    );
+                }
+                Err(e) => log.warn(&format!("parameters: not applied: {e:#}")),
+            }
+        }
+        services.serve(|ask| answer(ask, &mut live, &mut sink, &save_to));
         if last_step.elapsed() >= Duration::from_millis(200) {
             last_step = Instant::now();
             step(&mut live, &mut sink, &mut log, false)?;
@@ -302,6 +391,52 @@ pub fn run(a: &Ros2Args) -> Result<Outcome> {
     std::thread::sleep(Duration::from_millis(200));
     out.wait_for_acknowledgments(Duration::from_secs(5));
     Ok(Outcome::Success)
+}
+
+/// What a service call did.
+fn answer(
+    ask: Ask,
+    live: &mut LiveMapper,
+    sink: &mut Sink,
+    save_to: &std::path::Path,
+) -> TriggerResponse {
+    let json = |map: &asm::MapResult| serde_json::to_string_pretty(&live.report(map, false));
+    let (success, message) = match (ask, &sink.current) {
+        (Ask::Clear, _) => {
+            let n = live.clear();
+            sink.current = None;
+            (true, format!("cleared: {n} stops forgotten"))
+        }
+        (_, None) => (false, "no stop mapped yet".to_owned()),
+        (Ask::Get, Some(map)) => match json(map) {
+            Ok(j) => (true, j),
+            Err(e) => (false, e.to_string()),
+        },
+        (Ask::Save, Some(map)) => match json(map)
+            .map_err(anyhow::Error::from)
+            .and_then(|j| crate::output::write_atomic(save_to, j.as_bytes()))
+        {
+            Ok(()) => (
+                true,
+                format!(
+                    "{} sources over {} stops written to {}",
+                    map.sources.len(),
+                    live.stops().len(),
+                    save_to.display()
+                ),
+            ),
+            Err(e) => (false, format!("{}: {e:#}", save_to.display())),
+        },
+    };
+    eprintln!(
+        "service {ask:?}: {}",
+        if success && ask == Ask::Get {
+            "the map sent"
+        } else {
+            &message
+        }
+    );
+    TriggerResponse { success, message }
 }
 
 /// Publishes and writes the final map (the full map over every stop), says it, and ends
@@ -351,16 +486,21 @@ fn announce(live: &LiveMapper, u: &crate::live::Update) {
     );
 }
 
-/// Where each map update goes: the topics, the MCAP file, the JSON.
+/// Where each map update goes: the topics, the MCAP file, the JSON; and the map now.
 struct Sink {
     out: Outputs,
     mcap: Option<rosmap::McapFile>,
     json: Option<std::path::PathBuf>,
+    /// The last map published (the services' "current map").
+    current: Option<asm::MapResult>,
+    /// The node's time now (ns since the epoch): the system's, or /clock's.
+    now_ns: i64,
 }
 
 impl Sink {
     fn publish(&mut self, live: &LiveMapper, map: &asm::MapResult, final_map: bool) -> Result<()> {
-        let t = now_ns();
+        self.current = Some(map.clone());
+        let t = self.now_ns;
         if let Some(m) = live.messages(map, t) {
             self.out.publish(&m)?;
             if let Some(f) = self.mcap.as_mut() {

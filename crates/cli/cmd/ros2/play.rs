@@ -161,14 +161,14 @@ struct Listener {
 }
 
 impl Listener {
-    /// A listener to the node's sources ([`rosmap::SOURCE_POSES_TOPIC`]) when `listen`,
-    /// else one that hears nothing.
-    fn new(dp: &DomainParticipant, listen: bool) -> Result<Self> {
+    /// A listener to the node's sources on `topic` ([`rosmap::SOURCE_POSES_TOPIC`] in the
+    /// namespace) when `listen`, else one that hears nothing.
+    fn new(dp: &DomainParticipant, listen: bool, topic: &str) -> Result<Self> {
         let reader = if listen {
             let sub = dp
                 .create_subscriber(&qos(true, false, 10))
                 .map_err(|e| anyhow!("a DDS subscriber: {e}"))?;
-            let names = dds_names(rosmap::SOURCE_POSES_TOPIC, "geometry_msgs/msg/PoseArray");
+            let names = dds_names(topic, "geometry_msgs/msg/PoseArray");
             Some(reader(dp, &sub, names, qos(true, false, 10))?)
         } else {
             None
@@ -201,7 +201,12 @@ impl Listener {
     /// second more: what the node sent last (its final map, just before it ended) may
     /// still be on its way from the reader's DDS thread. Writes the last sources heard to
     /// `path` as JSON.
-    fn linger_and_write(mut self, linger_s: f64, path: &std::path::Path) -> Result<()> {
+    fn linger_and_write(
+        mut self,
+        linger_s: f64,
+        path: &std::path::Path,
+        topic: &str,
+    ) -> Result<()> {
         let stop = Arc::new(AtomicBool::new(false));
         {
             let stop = Arc::clone(&stop);
@@ -225,9 +230,8 @@ impl Listener {
         let json = serde_json::json!({ "frame_id": rosmap::FRAME, "sources": sources });
         crate::output::write_atomic(path, serde_json::to_string_pretty(&json)?.as_bytes())?;
         println!(
-            "heard {} sources on {} (the last of {} updates)",
+            "heard {} sources on {topic} (the last of {} updates)",
             self.heard.len(),
-            rosmap::SOURCE_POSES_TOPIC,
             self.updates
         );
         Ok(())
@@ -252,25 +256,51 @@ fn play_writers(
 }
 
 /// Runs `iasm ros2-play`: the bag's messages published on their topics at their pace, stamps
-/// moved to now, as the robot that recorded them published them.
+/// moved to now, as the robot that recorded them published them (with `--clock`: stamps
+/// kept, and `/clock` at the bag's time before each message, as `ros2 bag play --clock`
+/// publishes it). Under `--ros-args -r __ns:=/robot1` the bag's topics are taken as
+/// relative to the namespace (`/audio` is played on `/robot1/audio`), and remaps rename
+/// them.
 ///
 /// # Errors
 /// A bag that cannot be read or is not a ROS 2 bag, or DDS that cannot start.
 pub fn play(a: &Ros2PlayArgs) -> Result<Outcome> {
-    let msgs = bag_messages(&a.bag)?;
+    let node = crate::args::play_node_name();
+    let topic = |t: &str| a.ros.remapped(t.trim_start_matches('/'), node);
+    let mut msgs = bag_messages(&a.bag)?;
+    for m in &mut msgs {
+        m.0 = topic(&m.0);
+    }
     let Some(first) = msgs.first().map(|m| m.2) else {
         bail!("{}: no message of a type iasm reads", a.bag.display());
     };
-    let (_ctx, _node, dp) = participant(a.domain_id, "iasm_play")?;
+    let (_ctx, _node, dp) = participant(
+        a.domain_id,
+        a.ros.namespace(),
+        a.ros.node_name.as_deref().unwrap_or(node),
+        ros2_client::NodeOptions::new(),
+    )?;
     let publisher = dp
         .create_publisher(&qos(true, false, 100))
         .map_err(|e| anyhow!("a DDS publisher: {e}"))?;
     let writers = play_writers(&dp, &publisher, &msgs)?;
+    let clock = if a.clock {
+        Some(writer(
+            &dp,
+            &publisher,
+            "/clock",
+            "rosgraph_msgs/msg/Clock",
+            false,
+        )?)
+    } else {
+        None
+    };
     // The node's sources, when asked.
-    let mut listener = Listener::new(&dp, a.listen.is_some())?;
+    let listen_on = topic(rosmap::SOURCE_POSES_TOPIC);
+    let mut listener = Listener::new(&dp, a.listen.is_some(), &listen_on)?;
     wait_for_subscribers(&dp, &writers, a.wait_s);
     let start = Instant::now();
-    let shift = now_ns() - first;
+    let shift = if a.clock { 0 } else { now_ns() - first };
     let due = play_times(msgs.iter().map(|m| m.2));
     let mut skipped: BTreeMap<String, usize> = BTreeMap::new();
     for ((topic, ty, t, mut data), due) in msgs.into_iter().zip(due) {
@@ -288,6 +318,10 @@ pub fn play(a: &Ros2PlayArgs) -> Result<Outcome> {
                     .saturating_sub(start.elapsed())
                     .min(Duration::from_millis(5)),
             );
+        }
+        if let Some(c) = &clock {
+            c.write(super::params::clock_message(t), None)
+                .map_err(|e| anyhow!("publishing on /clock: {e:?}"))?;
         }
         // A message that is not little-endian CDR of its type (as a node refuses it) is
         // skipped and counted; the run goes on.
@@ -313,7 +347,7 @@ pub fn play(a: &Ros2PlayArgs) -> Result<Outcome> {
         start.elapsed().as_secs_f64()
     );
     if let Some(path) = &a.listen {
-        listener.linger_and_write(a.linger_s, path)?;
+        listener.linger_and_write(a.linger_s, path, &listen_on)?;
     }
     Ok(Outcome::Success)
 }
