@@ -4,6 +4,7 @@
 mod audio;
 mod eval;
 mod inputs;
+mod runs;
 mod tables;
 
 use std::path::Path;

@@ -153,8 +153,11 @@ pub enum AngleUnit {
 #[derive(Debug, Clone, Args)]
 pub struct InputArgs {
     /// A data set folder in the published layout (map/, pose/, audio/, azimuth/, src_gt*).
+    /// Repeat it for several runs of one building (several robots, or one robot's runs,
+    /// their poses in the building's map frame): their stops are mapped as one survey,
+    /// each run localised with its own array and noise.
     #[arg(long, value_name = "DIR")]
-    pub dataset: Option<PathBuf>,
+    pub dataset: Vec<PathBuf>,
     /// ROS occupancy map YAML (overrides the data set's). Without one (and without a
     /// map/ folder in the data set) the sources are searched within --open-margin of the
     /// stops.
@@ -209,19 +212,24 @@ impl InputArgs {
     /// # Errors
     /// As [`SettingsArgs::settings`].
     pub fn settings(&self) -> Result<Settings> {
+        self.settings_of(self.dataset.first().map(PathBuf::as_path))
+    }
+
+    /// The settings for the data set `dataset` (its array and robot noise).
+    fn settings_of(&self, dataset: Option<&std::path::Path>) -> Result<Settings> {
         let mut s = self
             .settings
             .settings()?
-            .with_dataset_array(self.dataset.as_deref())
-            .with_dataset_noise(self.dataset.as_deref())?;
+            .with_dataset_array(dataset)
+            .with_dataset_noise(dataset)?;
         s.iasm.refine |= self.refine;
         Ok(s)
     }
 
-    /// Where the survey comes from.
+    /// Where the survey comes from (the first data set's).
     pub fn survey_inputs(&self) -> SurveyInputs {
         SurveyInputs {
-            dataset: self.dataset.clone(),
+            dataset: self.dataset.first().cloned(),
             map: self.map.clone(),
             poses: self.poses.clone(),
             theta_in_radians: self.theta_unit == AngleUnit::Rad,
@@ -232,6 +240,46 @@ impl InputArgs {
             window_s: self.window,
             open_margin_m: self.open_margin,
         }
+    }
+
+    /// Each run to map (a name, where its survey comes from, its settings): one per
+    /// `--dataset`, or the one the files give.
+    ///
+    /// # Errors
+    /// Settings refused; a file of one run's own (`--poses`, `--doas`, `--audio`,
+    /// `--recording`) given with several data sets.
+    pub fn runs(&self) -> Result<Vec<(String, SurveyInputs, Settings)>> {
+        if self.dataset.len() <= 1 {
+            let name = self
+                .dataset
+                .first()
+                .or(self.poses.as_ref())
+                .map_or_else(|| "survey".to_owned(), |p| crate::dataset::file_name(p));
+            return Ok(vec![(name, self.survey_inputs(), self.settings()?)]);
+        }
+        for (flag, given) in [
+            ("--poses", self.poses.is_some()),
+            ("--doas", self.doas.is_some()),
+            ("--audio", self.audio.is_some()),
+            ("--recording", self.recording.is_some()),
+        ] {
+            anyhow::ensure!(
+                !given,
+                "{flag} with {} data sets: each run's own {} are its data set's (map one run with {flag}, or give each run's files in its folder)",
+                self.dataset.len(),
+                &flag[2..]
+            );
+        }
+        self.dataset
+            .iter()
+            .map(|d| {
+                let inputs = SurveyInputs {
+                    dataset: Some(d.clone()),
+                    ..self.survey_inputs()
+                };
+                Ok((d.display().to_string(), inputs, self.settings_of(Some(d))?))
+            })
+            .collect()
     }
 }
 

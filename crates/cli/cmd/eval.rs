@@ -7,7 +7,7 @@ use serde::Serialize;
 
 use crate::Outcome;
 use crate::args::EvalArgs;
-use crate::pipeline::{Survey, VariantStats, evaluate};
+use crate::pipeline::{VariantStats, evaluate, load_runs};
 
 /// Version of the JSON `iasm eval` prints.
 pub const SCHEMA_VERSION: u32 = 1;
@@ -31,8 +31,9 @@ struct EvalReport<'a> {
 /// Bad survey or settings.
 pub fn run(a: &EvalArgs) -> Result<Outcome> {
     ensure!(a.runs > 0, "--runs must be at least 1");
-    let settings = a.input.settings()?;
-    let survey = Survey::load(&a.input.survey_inputs(), &settings)?;
+    let runs = a.input.runs()?;
+    let settings = runs[0].2.clone();
+    let (survey, _) = load_runs(&runs)?;
     if let Some(note) = survey.map_note() {
         eprintln!("{note}");
     }

@@ -14,7 +14,7 @@ use crate::args::MapArgs;
 use crate::dataset::file_name;
 use crate::explain::{Explanation, explain};
 use crate::figure::MapFigure;
-use crate::pipeline::Survey;
+use crate::pipeline::{RunSpan, Survey};
 use crate::settings::DEFAULT_ARRAY;
 
 /// Version of the JSON `iasm map` writes.
@@ -56,6 +56,10 @@ struct MapReport<'a> {
     /// With `--explain`: where every DoA went (see `iasm::explain`).
     #[serde(skip_serializing_if = "Option::is_none")]
     explain: Option<Explanation>,
+    /// With several `--dataset`: each run's stops in the union (its first stop, counted
+    /// from 1, and how many), in the order of the stops `explain` counts.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    runs: Option<&'a [RunSpan]>,
 }
 
 #[derive(Clone, Copy, Serialize)]
@@ -74,7 +78,7 @@ pub fn run(a: &MapArgs) -> Result<Outcome> {
     if let Some(png) = &a.png {
         crate::figure::Format::of(png)?;
     }
-    let (settings, survey) = gather(a)?;
+    let (settings, survey, runs) = gather(a)?;
     let localised = a.input.doas.is_none();
     let config = &survey.mapper_config(&settings.iasm);
     let t0 = std::time::Instant::now();
@@ -83,7 +87,10 @@ pub fn run(a: &MapArgs) -> Result<Outcome> {
     for w in crate::pipeline::map_warnings(&survey.map, &survey.poses, config, &result) {
         eprintln!("warning: {w}");
     }
-    let report = report(a, &survey, &settings, config, &result, localised);
+    let mut report = report(a, &survey, &settings, config, &result, localised);
+    if runs.len() > 1 {
+        report.runs = Some(&runs);
+    }
     write_files(a, &survey, &report, &result)?;
     if a.report.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
@@ -93,13 +100,15 @@ pub fn run(a: &MapArgs) -> Result<Outcome> {
     Ok(Outcome::Success)
 }
 
-/// The settings (with `--variant`) and the survey, the notes a user should see said.
-fn gather(a: &MapArgs) -> Result<(crate::settings::Settings, Survey)> {
-    let mut settings = a.input.settings()?;
+/// The settings (the first run's, with `--variant`), the survey (of every run, one after
+/// the other) and where each run's stops lie, the notes a user should see said.
+fn gather(a: &MapArgs) -> Result<(crate::settings::Settings, Survey, Vec<RunSpan>)> {
+    let runs = a.input.runs()?;
+    let mut settings = runs[0].2.clone();
     if let Some(v) = a.variant {
         settings.iasm.variant = v;
     }
-    let survey = Survey::load(&a.input.survey_inputs(), &settings)?;
+    let (survey, spans) = crate::pipeline::load_runs(&runs)?;
     if let Some(note) = survey.map_note() {
         eprintln!("{note}");
     }
@@ -114,7 +123,7 @@ fn gather(a: &MapArgs) -> Result<(crate::settings::Settings, Survey)> {
     {
         eprintln!("{note}");
     }
-    Ok((settings, survey))
+    Ok((settings, survey, spans))
 }
 
 /// The run's report: the map, and against the truth when there is one.
@@ -167,6 +176,7 @@ fn report<'a>(
         alignment,
         open_margin_m: survey.open_margin_m,
         explain,
+        runs: None,
     }
 }
 
@@ -220,12 +230,15 @@ fn write_figure(
     report: &MapReport<'_>,
     result: &MapResult,
 ) -> Result<()> {
-    let inputs = a.input.survey_inputs();
-    let data = inputs
-        .dataset
-        .as_deref()
-        .or(inputs.poses.as_deref())
-        .map_or_else(|| "survey".to_owned(), file_name);
+    let data = match (&a.input.dataset[..], &a.input.poses) {
+        ([], Some(p)) => file_name(p),
+        ([], None) => "survey".to_owned(),
+        (d, _) => d
+            .iter()
+            .map(|p| file_name(p))
+            .collect::<Vec<_>>()
+            .join(" + "),
+    };
     let doas = survey
         .doa_source
         .strip_prefix("ssl:")
@@ -255,6 +268,20 @@ fn write_figure(
 /// The map on the terminal: a line on the run, a row per source, the score, where the
 /// DoAs went (`--explain`) and the frames' agreement.
 fn print_map(a: &MapArgs, survey: &Survey, report: &MapReport<'_>, result: &MapResult, dt: f64) {
+    if let Some(runs) = report.runs {
+        let each: Vec<String> = runs
+            .iter()
+            .map(|r| {
+                format!(
+                    "{} (stops {}-{})",
+                    r.name,
+                    r.first_stop,
+                    r.first_stop + r.stops - 1
+                )
+            })
+            .collect();
+        println!("{} runs mapped as one: {}", runs.len(), each.join(", "));
+    }
     println!(
         "I-ASM ({}) on {} stops, DoAs from {}: {} sources in {} rounds of {} particles ({:.0} ms, seed {})",
         report.params.variant.name(),

@@ -36,11 +36,13 @@ use std::sync::{Arc, Mutex};
 
 mod evaluate;
 mod localise;
+mod runs;
 mod scene;
 mod survey;
 
 pub use crate::robot_noise::RobotNoise;
 pub use evaluate::*;
 pub use localise::*;
+pub use runs::*;
 pub use scene::*;
 pub use survey::*;

@@ -87,6 +87,38 @@ def test_a_map_is_the_clis_map_for_the_same_seed(dataset, tmp_path):
     assert iasm.ospa(found, scene.truth).total < 0.1
 
 
+def test_two_robots_runs_map_as_the_clis_union(tmp_path):
+    # Two robots in one L-shaped building (fixtures/buildings): the union of their stops
+    # is the CLI's `--dataset A --dataset B` map, and holds the talker only one robot heard.
+    outs = []
+    for which in ("west", "wing"):
+        out = tmp_path / which
+        subprocess.run([cli(), "simulate", str(ROOT / "fixtures" / "buildings" / f"two_robots_{which}.toml"),
+                        "--out", str(out)], check=True, capture_output=True, text=True)
+        outs.append(out)
+    report = tmp_path / "map.json"
+    subprocess.run(
+        [cli(), "map", "--dataset", str(outs[0]), "--dataset", str(outs[1]), "--method", "mvdr",
+         "--num", "4", "--seed", "7", "--out", str(report)],
+        check=True, capture_output=True, text=True,
+    )
+    want = json.loads(report.read_text())
+    runs = []
+    for out in outs:
+        ds = iasm.read_dataset(out)
+        rows = [iasm.locate_row(*iasm.read_wav(p), out / "array.toml", "mvdr", 4) for p in ds.recordings]
+        doas = [[d.azimuth for d in r.doas] + [d.azimuth for d in r.extra] for r in rows]
+        runs.append((ds.poses, doas, [r.cut for r in rows]))
+    got = iasm.map_runs(runs, iasm.read_dataset(outs[0]).map, names=["west", "wing"], num=4, seed=7)
+    assert [(s["x"], s["y"]) for s in got["sources"]] == [(s["x"], s["y"]) for s in want["sources"]]
+    assert got["runs"] == [{"name": "west", "first_stop": 1, "stops": 7},
+                           {"name": "wing", "first_stop": 8, "stops": 6}]
+    found = np.array([[s["x"], s["y"]] for s in got["sources"]])
+    assert iasm.ospa(found, [[1.2, 2.5], [7.3, 7.2], [6.0, 0.6]]).total < 0.15
+    with pytest.raises(ValueError, match="cut flags"):
+        iasm.map_runs([(runs[0][0], runs[0][1], [True])])
+
+
 def test_the_online_mapper_consolidated_is_the_batch_map(dataset):
     scene, out = dataset
     rows = [iasm.locate(s, scene.fs, scene.array, "mvdr", 3) for s in scene.signals]

@@ -44,6 +44,7 @@ __all__ = [
     "locate_row",
     "angular_spectrum",
     "map_sources",
+    "map_runs",
     "ospa",
     "simulate",
     "read_wav",
@@ -555,6 +556,61 @@ def read_wav(path: Union[str, os.PathLike]) -> Tuple[np.ndarray, int]:
     """A WAV file as the CLI reads it: ``(M, samples)`` float32 in ``[-1, 1]``, and its
     sample rate."""
     return _iasm.read_wav(os.fspath(path))
+
+
+def map_runs(
+    runs: Sequence[Sequence[Any]],
+    map: Union[str, os.PathLike, ArrayLike, None] = None,
+    *,
+    names: Optional[Sequence[str]] = None,
+    resolution: Optional[float] = None,
+    origin: Optional[Sequence[float]] = None,
+    seed: int = 0,
+    num: Optional[int] = None,
+    settings: Optional[Mapping[str, Any]] = None,
+    **iasm_settings: Any,
+) -> Dict[str, Any]:
+    """Maps several runs of one building as one survey, as ``iasm map --dataset A --dataset
+    B`` does: several robots, or one robot's several runs, whose poses share the building's
+    map frame. ``runs``: each run's ``(poses, doas)`` or ``(poses, doas, cut)``, as
+    :func:`map_sources` takes them; their stops are mapped one run after the other (``cut``
+    is used when every run gives it). ``map``: the building's map, as for
+    :func:`map_sources`. ``names``: the runs' names (default ``run 1``, ``run 2``, ...).
+
+    Returns :func:`map_sources`' map, with ``runs``: each run's ``name``, its
+    ``first_stop`` in the union (counted from 1) and how many ``stops`` it has.
+    """
+    if len(runs) == 0:
+        raise ValueError("map_runs needs at least one run: (poses, doas) or (poses, doas, cut)")
+    if names is not None and len(names) != len(runs):
+        raise ValueError(f"{len(names)} names for {len(runs)} runs")
+    poses: List[np.ndarray] = []
+    doas: List[List[float]] = []
+    cuts: List[Optional[List[bool]]] = []
+    for k, run in enumerate(runs):
+        if len(run) not in (2, 3):
+            raise ValueError(f"run {k + 1}: expected (poses, doas) or (poses, doas, cut), got {len(run)} items")
+        p = _poses(run[0])
+        poses.append(p)
+        doas.extend(_rows(run[1], len(p)))
+        cuts.append(None if len(run) == 2 or run[2] is None else [bool(c) for c in run[2]])
+    for k, (p, c) in enumerate(zip(poses, cuts)):
+        if c is not None and len(c) != len(p):
+            raise ValueError(f"run {k + 1}: {len(c)} cut flags for {len(p)} poses")
+    cut: Optional[List[bool]] = None
+    if all(c is not None for c in cuts):
+        cut = [x for c in cuts if c is not None for x in c]
+    m = map_sources(
+        np.concatenate(poses), doas, map, resolution=resolution, origin=origin, cut=cut,
+        seed=seed, num=num, settings=settings, **iasm_settings,
+    )
+    first, spans = 1, []
+    for k, p in enumerate(poses):
+        name = names[k] if names is not None else f"run {k + 1}"
+        spans.append({"name": name, "first_stop": first, "stops": len(p)})
+        first += len(p)
+    m["runs"] = spans
+    return m
 
 
 def read_dataset(root: Union[str, os.PathLike], *, theta_degrees: bool = False) -> Dataset:
