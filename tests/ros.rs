@@ -518,7 +518,7 @@ fn a_ros_args_block_the_node_cannot_take_is_refused_with_its_reason() {
         (&["ros2", "--ros-args", "-x"], "\"-x\""),
         (
             &["map", "--ros-args", "-r", "a:=b"],
-            "iasm ros2 and iasm ros2-play only",
+            "iasm ros2, ros2-merge and ros2-play only",
         ),
     ] {
         let o = iasm(args);
@@ -652,6 +652,102 @@ wait $PLAY; echo "play $?"
             m.log_time
         );
     }
+}
+
+/// Two robots, one building, live: robot 1 (`/robot1`, the hall of
+/// `fixtures/buildings`) and robot 2 (`/robot2`, the wing) each map their own run and
+/// publish their stops on `~/stops`; `iasm ros2-merge` merges them. Robot 2 joins three
+/// seconds late, and robot 1 leaves the network as soon as its run is played, before robot
+/// 2 ends. The merged map keeps robot 1's stops and adds robot 2's; it holds every talker,
+/// within 0.02 m of `iasm map --dataset A --dataset B` on the two bags' data sets, and
+/// each robot's own map misses the talker only the other robot heard.
+#[cfg(feature = "ros2")]
+#[test]
+fn ros2_merge_maps_two_robots_live_as_map_maps_their_union() {
+    if !may_run_dds() {
+        return;
+    }
+    let dir = tempdir();
+    let work = dir.path();
+    let script = r#"
+set -u
+ip link set lo up multicast on
+ip route add 224.0.0.0/4 dev lo
+cd "$WORK"
+"$IASM" ros2-merge --seed 5 --map-topic /robot1/map --out merged.json > merge.log 2> merge.err &
+MERGE=$!
+"$IASM" ros2 --seed 5 --out r1.json --ros-args -r __ns:=/robot1 > r1.log 2> r1.err &
+R1=$!
+"$IASM" ros2-play "$BAG/building_west.mcap" --ros-args -r __ns:=/robot1 > play.log 2> play.err &
+P1=$!
+sleep 3
+"$IASM" ros2 --seed 5 --out r2.json --ros-args -r __ns:=/robot2 > node.log 2> node.err &
+R2=$!
+"$IASM" ros2-play "$BAG/building_wing.mcap" --ros-args -r __ns:=/robot2 > p2.log 2> p2.err &
+P2=$!
+wait $P1; echo "p1 $?"
+sleep 0.5
+kill -INT $R1; wait $R1; echo "r1 $?"
+wait $P2; echo "p2 $?"
+sleep 0.5
+kill -INT $R2; wait $R2; echo "r2 $?"
+sleep 1
+kill -INT $MERGE; wait $MERGE; echo "merge $?"
+"#;
+    let bags = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/bags");
+    let (o, logs) = in_own_network(
+        script,
+        work,
+        &bags,
+        &["merge.log", "merge.err", "r1.log", "r1.err"],
+    );
+    let out = String::from_utf8_lossy(&o.stdout);
+    for step in ["p1 0", "r1 0", "p2 0", "r2 0", "merge 0"] {
+        assert!(out.contains(step), "{step}\n{logs}");
+    }
+    let merged = json_file(&work.join("merged.json"));
+    assert_eq!(merged["final_map"].as_bool(), Some(true), "{logs}");
+    assert_eq!(merged["runs"]["/robot1/iasm"].as_u64(), Some(5), "{logs}");
+    assert_eq!(merged["runs"]["/robot2/iasm"].as_u64(), Some(5), "{logs}");
+    // The offline union of the same runs.
+    let mut args = vec!["map".to_owned()];
+    for (bag, ds) in [
+        ("building_west.mcap", "west"),
+        ("building_wing.mcap", "wing"),
+    ] {
+        let d = work.join(ds);
+        let o = iasm(&["bag", arg(&bags.join(bag)), "--out", arg(&d)]);
+        assert!(o.status.success(), "{}", show(&o));
+        args.extend(["--dataset".to_owned(), d.display().to_string()]);
+    }
+    args.extend(["--seed", "5", "--json"].map(str::to_owned));
+    let union = sources_of(&json(&iasm(
+        &args.iter().map(String::as_str).collect::<Vec<_>>(),
+    )));
+    let got = sources_of(&merged);
+    assert_eq!(got.len(), union.len(), "{got:?} {union:?}\n{logs}");
+    assert_eq!(union.len(), 3, "{union:?}");
+    for (g, w) in got.iter().zip(&union) {
+        let d = (g[0] - w[0]).hypot(g[1] - w[1]);
+        assert!(d < 0.02, "{g:?} is {d} m from {w:?}\n{logs}");
+    }
+    // Each robot's own map misses the other's talker; the merged map has it.
+    let near = |map: &[[f64; 2]], p: [f64; 2]| {
+        map.iter()
+            .map(|q| (q[0] - p[0]).hypot(q[1] - p[1]))
+            .fold(f64::INFINITY, f64::min)
+    };
+    let (hall, wing) = ([1.2, 2.5], [7.3, 7.2]);
+    let r1 = sources_of(&json_file(&work.join("r1.json")));
+    let r2 = sources_of(&json_file(&work.join("r2.json")));
+    assert!(
+        near(&r1, wing) > 0.5 && near(&r2, hall) > 0.5,
+        "{r1:?} {r2:?}"
+    );
+    assert!(
+        near(&got, wing) < 0.25 && near(&got, hall) < 0.25,
+        "{got:?}"
+    );
 }
 
 /// A node that never hears a message ends after `--until-idle`, counted from its start,

@@ -16,6 +16,8 @@
 //! - [`explain`]: which DoAs each source of a map explains, which none does, and where a
 //!   missed true source's DoAs went.
 //! - [`live`]: the live mapper behind `iasm ros2`, a robot's messages in, a map out.
+//! - [`merge`]: the merging mapper behind `iasm ros2-merge`, several robots' stops in, one
+//!   building's map out.
 //!
 //! Inside, for the commands only: `compare` (every SSL method side by side), `figure`
 //! (PNG and SVG), `online` (mapping while the robot records: a session, a folder
@@ -59,6 +61,7 @@ pub mod explain;
 pub(crate) mod figure;
 pub mod generated;
 pub mod live;
+pub mod merge;
 pub(crate) mod online;
 pub(crate) mod output;
 pub mod pipeline;
@@ -120,6 +123,8 @@ fn run(cli: &args::Cli) -> anyhow::Result<Outcome> {
         args::Command::Ros2Play(a) => cmd::ros2::play(a),
         #[cfg(feature = "ros2")]
         args::Command::Ros2Call(a) => cmd::ros2::call_node(a),
+        #[cfg(feature = "ros2")]
+        args::Command::Ros2Merge(a) => cmd::ros2::merge(a),
         args::Command::Simulate {
             scene,
             out,

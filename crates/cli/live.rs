@@ -28,7 +28,7 @@ use serde::Serialize;
 use ssl::Audio;
 
 use crate::online::{Session, StopRecord};
-use crate::rosmap::{MapMessages, Stops};
+use crate::rosmap::MapMessages;
 use crate::settings::Settings;
 
 /// A stop as the mapper took it.
@@ -304,19 +304,11 @@ impl LiveMapper {
     /// The messages of `result` over the stops so far, stamped `stamp_ns`.
     pub fn messages(&self, result: &MapResult, stamp_ns: i64) -> Option<MapMessages> {
         let (map, _) = self.map.as_ref()?;
-        let poses: Vec<Pose> = self.stops.iter().map(|s| s.pose).collect();
-        let stamps: Vec<i64> = self.stops.iter().map(|s| s.arrived_ns).collect();
-        let doas: Vec<Vec<f64>> = self.stops.iter().map(|s| s.doas_deg.clone()).collect();
-        Some(MapMessages::new(
-            result,
-            &Stops {
-                poses: &poses,
-                stamps_ns: &stamps,
-                doas_deg: &doas,
-            },
-            map,
-            stamp_ns,
-        ))
+        let stops = self
+            .stops
+            .iter()
+            .map(|s| (s.pose, s.arrived_ns, s.doas_deg.as_slice()));
+        Some(crate::rosmap::messages_over(result, stops, map, stamp_ns))
     }
 
     /// The map JSON of `result`.

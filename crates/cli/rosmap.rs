@@ -69,6 +69,32 @@ pub struct Stops<'a> {
     pub doas_deg: &'a [Vec<f64>],
 }
 
+/// The messages of `result` over `stops` (each stop's pose, time in ns and DoAs in
+/// degrees), on `map`, stamped `stamp_ns`.
+pub fn messages_over<'a>(
+    result: &MapResult,
+    stops: impl Iterator<Item = (Pose, i64, &'a [f64])>,
+    map: &OccupancyMap,
+    stamp_ns: i64,
+) -> MapMessages {
+    let (mut poses, mut stamps, mut doas) = (Vec::new(), Vec::new(), Vec::new());
+    for (p, t, d) in stops {
+        poses.push(p);
+        stamps.push(t);
+        doas.push(d.to_vec());
+    }
+    MapMessages::new(
+        result,
+        &Stops {
+            poses: &poses,
+            stamps_ns: &stamps,
+            doas_deg: &doas,
+        },
+        map,
+        stamp_ns,
+    )
+}
+
 /// The 2-sigma ellipse of a covariance: its diameters (major, minor) and the major axis's
 /// angle (rad); `None` when the covariance is not a finite positive semi-definite one.
 pub fn ellipse(cov: [[f64; 2]; 2]) -> Option<(f64, f64, f64)> {

@@ -55,7 +55,7 @@ fn two_robots_runs_map_as_one_building_better_than_either_alone() {
         );
         assert_eq!(u.len(), 3, "{method}: {u:?}");
         for t in [HALL_ONLY, WING_ONLY, BOTH] {
-            assert!(nearest(&u, t) < 0.15, "{method}: {t:?} in {u:?}");
+            assert!(nearest(&u, t) < 0.25, "{method}: {t:?} in {u:?}");
         }
         assert!(
             nearest(&a, WING_ONLY) > 0.5,
@@ -72,10 +72,10 @@ fn two_robots_runs_map_as_one_building_better_than_either_alone() {
         let ospa = |m: &serde_json::Value| m["ospa"]["total"].as_f64().unwrap();
         assert!(ospa(&both) < 0.15, "{method}: {}", ospa(&both));
         assert!(ospa(&alone_west) > 0.4 && ospa(&alone_wing) > 0.4);
-        // Stops 1-7 are the hall robot's, 8-13 the wing robot's.
+        // Stops 1-5 are the hall robot's, 6-10 the wing robot's.
         let runs = both["runs"].as_array().unwrap();
         let span = |i: usize| (runs[i]["first_stop"].as_u64(), runs[i]["stops"].as_u64());
-        assert_eq!((span(0), span(1)), ((Some(1), Some(7)), (Some(8), Some(6))));
+        assert_eq!((span(0), span(1)), ((Some(1), Some(5)), (Some(6), Some(5))));
         assert!(alone_west.get("runs").is_none());
     }
     // A run's own files cannot be given for two.

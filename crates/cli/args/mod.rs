@@ -19,7 +19,7 @@ pub use inputs::AngleUnit;
 pub use inputs::SettingsArgs;
 pub use robot::{BagArgs, WatchArgs};
 #[cfg(feature = "ros2")]
-pub use robot::{Ros2Args, Ros2CallArgs, Ros2CallWhat, Ros2PlayArgs};
+pub use robot::{Ros2Args, Ros2CallArgs, Ros2CallWhat, Ros2MergeArgs, Ros2PlayArgs};
 pub use survey::{CompareArgs, EvalArgs, FigureArgs, MapArgs, SslArgs};
 
 /// The command line `argv` (the program's name first) parsed, `iasm ros2`'s and `iasm
@@ -47,9 +47,10 @@ pub fn parse_from(argv: Vec<std::ffi::OsString>) -> Result<Cli, clap::Error> {
     let (sub, node) = match Cli::try_parse_from(&argv)?.command {
         Command::Ros2(a) => ("ros2", a.node_name),
         Command::Ros2Play(_) => ("ros2-play", play_node_name().to_owned()),
+        Command::Ros2Merge(a) => ("ros2-merge", a.node_name),
         _ => {
             return Err(ros_err(anyhow::anyhow!(
-                "--ros-args is read by iasm ros2 and iasm ros2-play only"
+                "--ros-args is read by iasm ros2, ros2-merge and ros2-play only"
             )));
         }
     };
@@ -69,6 +70,7 @@ pub fn parse_from(argv: Vec<std::ffi::OsString>) -> Result<Cli, clap::Error> {
             a.command_line = argv;
         }
         Command::Ros2Play(a) => a.ros = r,
+        Command::Ros2Merge(a) => a.ros = r,
         _ => unreachable!("checked above"),
     }
     Ok(cli)
@@ -181,6 +183,11 @@ pub enum Command {
     /// robot published it (to try the node without a robot).
     #[cfg(feature = "ros2")]
     Ros2Play(Ros2PlayArgs),
+    /// The building's map from several robots' stops, live: subscribes to each robot
+    /// node's ~/stops (poses and DoAs, no audio) and publishes the map of them all on its
+    /// own topics; Ctrl-C ends the run with its final map.
+    #[cfg(feature = "ros2")]
+    Ros2Merge(Ros2MergeArgs),
     /// Ask a running node: list, get or set its parameters, save, print or clear its map
     /// (what `ros2 param` and `ros2 service call` do, with no ROS installed).
     #[cfg(feature = "ros2")]

@@ -88,6 +88,44 @@ pub struct Ros2PlayArgs {
     pub ros: super::ros::RosArgs,
 }
 
+/// `iasm ros2-merge`.
+#[cfg(feature = "ros2")]
+#[derive(Debug, Clone, Args)]
+pub struct Ros2MergeArgs {
+    /// The robots' nodes whose stops to merge, fully qualified (`/robot1/iasm`)
+    /// [default: every node that publishes iasm_msgs/msg/Stop, as discovery finds them].
+    pub robots: Vec<String>,
+    /// The mapper's settings (the robots localise; `[iasm]` and --num apply here).
+    #[command(flatten)]
+    pub settings: SettingsArgs,
+    /// Seed of the particle filter.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// The building's occupancy grid (nav_msgs/OccupancyGrid, in the frame of the robots'
+    /// poses); "none" searches around the stops.
+    #[arg(long, value_name = "TOPIC", default_value = "/map")]
+    pub map_topic: String,
+    /// Write the map as JSON here after every stop, and the final map at the end.
+    #[arg(long, value_name = "FILE")]
+    pub out: Option<PathBuf>,
+    /// Write every update to this MCAP file (written when the run ends).
+    #[arg(long, value_name = "FILE")]
+    pub mcap: Option<PathBuf>,
+    /// The DDS domain (ROS_DOMAIN_ID).
+    #[arg(long, env = "ROS_DOMAIN_ID", default_value_t = 0)]
+    pub domain_id: u16,
+    /// The node's name.
+    #[arg(long, default_value = "iasm_merge")]
+    pub node_name: String,
+    /// End the run when no stop has arrived for this long (s), counted from the node's
+    /// start when none ever came [default: only on Ctrl-C].
+    #[arg(long, value_name = "S", value_parser = parse_seconds)]
+    pub until_idle: Option<f64>,
+    /// The `--ros-args` block (namespace, node name, remaps; its parameters are flags).
+    #[arg(skip)]
+    pub ros: super::ros::RosArgs,
+}
+
 /// `iasm ros2-call`.
 #[cfg(feature = "ros2")]
 #[derive(Debug, Clone, Args)]

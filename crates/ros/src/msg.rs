@@ -152,6 +152,17 @@ const DEFINITIONS: &[(&str, &str, &[&str])] = &[
         "visualization_msgs/Marker[] markers\n",
         &["visualization_msgs/Marker"],
     ),
+    (
+        "geometry_msgs/Pose2D",
+        "float64 x\nfloat64 y\nfloat64 theta\n",
+        &[],
+    ),
+    (
+        "iasm_msgs/Stop",
+        "std_msgs/Header header\nstring run\nuint32 index\ngeometry_msgs/Pose2D pose\n\
+         float64[] doas_deg\nbool cut\nstring method\n",
+        &["std_msgs/Header", "geometry_msgs/Pose2D"],
+    ),
 ];
 
 /// The `ros2msg` schema of `name` (`pkg/msg/Type` or `pkg/Type`).
@@ -710,6 +721,54 @@ mod tests {
     }
 
     #[test]
+    fn a_stop_is_laid_out_as_cdr_aligns_it_and_reads_back() {
+        let stop = Stop {
+            header: Header::new("map", 1_000_000_002),
+            run: "/r".into(),
+            index: 3,
+            pose: [1.0, 2.0, 0.5],
+            doas_deg: vec![10.0],
+            cut: true,
+            method: "mvdr".into(),
+        };
+        let b = stop.to_cdr();
+        let body = &b[4..];
+        // Header: stamp (8), frame "map" (4 + 4); run "/r" (4 + 3) ends at 23, so the
+        // index is aligned to 24, the pose's float64s to 32, the DoA after its count (56)
+        // to 64, the bool at 72, the method's length aligned to 76; 85 bytes.
+        let f64_at = |at: usize| f64::from_le_bytes(body[at..at + 8].try_into().unwrap());
+        assert_eq!(body.len(), 85);
+        assert_eq!(u32::from_le_bytes(body[24..28].try_into().unwrap()), 3);
+        assert_eq!([f64_at(32), f64_at(40), f64_at(48)], [1.0, 2.0, 0.5]);
+        assert_eq!(u32::from_le_bytes(body[56..60].try_into().unwrap()), 1);
+        assert_eq!(f64_at(64), 10.0);
+        assert_eq!(body[72], 1);
+        assert_eq!(&body[80..85], b"mvdr\0");
+        assert_eq!(Stop::from_cdr(&b).unwrap(), stop);
+        for n in 0..b.len() {
+            assert!(Stop::from_cdr(&b[..n]).is_err());
+        }
+        assert!(Stop::schema().contains("MSG: geometry_msgs/Pose2D\n"));
+    }
+
+    /// The interface package for the ROS tools (`docs/ros/iasm_msgs`) defines the fields
+    /// this module writes.
+    #[test]
+    fn the_stop_msg_file_defines_the_fields_written() {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../docs/ros/iasm_msgs/msg/Stop.msg"
+        );
+        let text = std::fs::read_to_string(path).unwrap();
+        let fields: String = text
+            .lines()
+            .filter(|l| !l.trim().is_empty() && !l.starts_with('#'))
+            .map(|l| format!("{l}\n"))
+            .collect();
+        assert_eq!(schema(Stop::NAME).split("=====").next().unwrap(), fields);
+    }
+
+    #[test]
     fn a_marker_reads_back_as_written() {
         let m = Marker {
             header: Header::new("map", 1_500_000_001),
@@ -757,5 +816,60 @@ mod tests {
         );
         assert_eq!(Time::from_ns(2_000_000_003).ns(), 2_000_000_003);
         assert_eq!(Time::from_ns(i64::MAX).sec, i32::MAX);
+    }
+}
+
+/// `iasm_msgs/msg/Stop`: what a robot's node heard at one stop, all a merging node needs to
+/// map it (`docs/ros/iasm_msgs/msg/Stop.msg`): no audio crosses the network.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Stop {
+    /// When the robot arrived; the frame of the pose (`map`).
+    pub header: Header,
+    /// The run: the publishing node's fully qualified name.
+    pub run: String,
+    /// The stop's place in its run, from 0.
+    pub index: u32,
+    /// Where the robot stood: x, y (m), heading (rad).
+    pub pose: [f64; 3],
+    /// The DoAs: azimuths (degrees, the array's frame), strongest first.
+    pub doas_deg: Vec<f64>,
+    /// Whether N cut the row (a further peak passed the thresholds).
+    pub cut: bool,
+    /// The SSL method that heard them.
+    pub method: String,
+}
+
+impl Message for Stop {
+    const NAME: &'static str = "iasm_msgs/msg/Stop";
+    fn encode(&self, w: &mut Writer) {
+        self.header.encode(w);
+        w.string(&self.run);
+        w.u32(self.index);
+        for v in self.pose {
+            w.f64(v);
+        }
+        w.len(self.doas_deg.len());
+        for &d in &self.doas_deg {
+            w.f64(d);
+        }
+        w.bool(self.cut);
+        w.string(&self.method);
+    }
+    fn decode(r: &mut Reader<'_>) -> Result<Self, Error> {
+        let header = Header::decode(r)?;
+        let run = r.string()?;
+        let index = r.u32()?;
+        let pose = [r.f64()?, r.f64()?, r.f64()?];
+        let n = r.len(8)?;
+        let doas_deg = (0..n).map(|_| r.f64()).collect::<Result<_, _>>()?;
+        Ok(Self {
+            header,
+            run,
+            index,
+            pose,
+            doas_deg,
+            cut: r.bool()?,
+            method: r.string()?,
+        })
     }
 }

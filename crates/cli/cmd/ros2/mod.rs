@@ -22,6 +22,7 @@
 //! second publisher of the robot's `/map`.
 
 mod call;
+mod merge;
 mod node;
 mod params;
 mod play;
@@ -34,6 +35,7 @@ use rustdds::policy::{Durability, History, Reliability};
 use rustdds::{DomainParticipant, QosPolicies, QosPolicyBuilder, TopicKind};
 
 pub use call::call_node;
+pub use merge::merge;
 pub use node::run;
 pub use play::play;
 
@@ -202,8 +204,19 @@ fn writer(
     msg_type: &str,
     latched: bool,
 ) -> Result<Writer> {
-    let (t, ty) = dds_names(topic, msg_type);
     let q = qos(true, latched, if latched { 1 } else { 10 });
+    writer_with(dp, publisher, topic, msg_type, q)
+}
+
+/// A writer of `topic` with `q`.
+fn writer_with(
+    dp: &DomainParticipant,
+    publisher: &rustdds::Publisher,
+    topic: &str,
+    msg_type: &str,
+    q: QosPolicies,
+) -> Result<Writer> {
+    let (t, ty) = dds_names(topic, msg_type);
     let topic_ = dp
         .create_topic(t, ty, &q, TopicKind::NoKey)
         .map_err(|e| anyhow!("topic {topic}: {e}"))?;

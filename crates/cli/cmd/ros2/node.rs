@@ -21,21 +21,29 @@ use super::params::{Ask, Clock, NodeParams, Services, TriggerResponse};
 use super::{Reader, Writer, participant, qos, raw, reader, ros_names, writer};
 
 /// The node's names as its `--ros-args` resolve them: its own, and those of its topics.
-struct Names {
-    ros: RosArgs,
+pub(super) struct Names {
+    pub ros: RosArgs,
     /// The node's name.
-    node: String,
+    pub node: String,
+    /// Whether the node's outputs are its own (`~/sources`, a merging node's) rather than
+    /// the namespace's (`iasm/sources`, a robot's).
+    pub private: bool,
 }
 
 impl Names {
     /// The graph's name of the node's topic `own` (`/iasm/sources` is relative to the
     /// namespace: `/robot1/iasm/sources`), remapped.
-    fn topic(&self, own: &str) -> String {
-        self.ros.remapped(own.trim_start_matches('/'), &self.node)
+    pub fn topic(&self, own: &str) -> String {
+        if self.private {
+            let last = own.rsplit('/').next().unwrap_or(own);
+            self.ros.remapped(&format!("~/{last}"), &self.node)
+        } else {
+            self.ros.remapped(own.trim_start_matches('/'), &self.node)
+        }
     }
 
     /// The node's fully qualified name.
-    fn fq(&self) -> String {
+    pub fn fq(&self) -> String {
         self.ros.fully_qualified(&self.node)
     }
 
@@ -53,7 +61,13 @@ impl Names {
 }
 
 /// The node's publishers.
-struct Outputs {
+pub(super) struct Outputs {
+    /// `~/stops`: each stop's pose and DoAs (`iasm_msgs/msg/Stop`), for a merging node
+    /// (none on a merging node).
+    stops: Option<Writer>,
+    /// The stops published so far (a stop's index in the run: never reset, not even by
+    /// `clear_map`, so that a merging node never takes a new stop for one it has).
+    stops_sent: u32,
     sources: Writer,
     doas: Writer,
     path: Writer,
@@ -66,14 +80,31 @@ struct Outputs {
 /// Where the node publishes its grid.
 pub const NODE_MAP_TOPIC: &str = "/iasm/map";
 
+/// The stops a node keeps for a merging node that joins late (reliable, transient local):
+/// a day of stops every ten seconds.
+pub const STOP_HISTORY: i32 = 10_000;
+
 impl Outputs {
-    fn new(dp: &DomainParticipant, names: &Names) -> Result<Self> {
+    pub fn new(dp: &DomainParticipant, names: &Names) -> Result<Self> {
         let p = dp
             .create_publisher(&qos(true, false, 10))
             .map_err(|e| anyhow!("a DDS publisher: {e}"))?;
         let ma = "visualization_msgs/msg/MarkerArray";
         let w = |own: &str, ty: &str, latched: bool| writer(dp, &p, &names.topic(own), ty, latched);
+        let stops = if names.private {
+            None
+        } else {
+            Some(super::writer_with(
+                dp,
+                &p,
+                &names.ros.remapped("~/stops", &names.node),
+                <iasm_ros::msg::Stop as iasm_ros::msg::Message>::NAME,
+                qos(true, true, STOP_HISTORY),
+            )?)
+        };
         Ok(Self {
+            stops,
+            stops_sent: 0,
             sources: w(rosmap::SOURCES_TOPIC, ma, false)?,
             doas: w(rosmap::DOAS_TOPIC, ma, false)?,
             path: w(rosmap::PATH_TOPIC, "nav_msgs/msg/Path", false)?,
@@ -87,7 +118,27 @@ impl Outputs {
         })
     }
 
-    fn publish(&mut self, m: &MapMessages) -> Result<()> {
+    /// Publishes the stop `s` of the run `run` on `~/stops`.
+    fn publish_stop(&mut self, run: &str, s: &crate::live::LiveStopRow) -> Result<()> {
+        use iasm_ros::msg::Message;
+        let m = iasm_ros::msg::Stop {
+            header: iasm_ros::msg::Header::new(rosmap::FRAME, s.arrived_ns),
+            run: run.to_owned(),
+            index: self.stops_sent,
+            pose: [s.pose.x, s.pose.y, s.pose.theta],
+            doas_deg: s.doas_deg.clone(),
+            cut: s.cut,
+            method: s.method.to_string(),
+        };
+        if let Some(w) = &self.stops {
+            w.write(raw::Cdr(m.to_cdr()), None)
+                .map_err(|e| anyhow!("publishing a stop: {e:?}"))?;
+        }
+        self.stops_sent += 1;
+        Ok(())
+    }
+
+    pub fn publish(&mut self, m: &MapMessages) -> Result<()> {
         use iasm_ros::msg::Message;
         let send = |w: &Writer, bytes: Vec<u8>, what: &str| {
             w.write(raw::Cdr(bytes), None)
@@ -109,14 +160,14 @@ impl Outputs {
 
     /// Waits until every reliable reader of every topic has acknowledged what was
     /// published, or until `max` has passed for a topic (a reader that vanished).
-    fn wait_for_acknowledgments(&self, max: Duration) {
-        for w in [
+    pub fn wait_for_acknowledgments(&self, max: Duration) {
+        for w in self.stops.iter().chain([
             &self.source_poses,
             &self.sources,
             &self.doas,
             &self.path,
             &self.map,
-        ] {
+        ]) {
             if !matches!(w.wait_for_acknowledgments(max), Ok(true)) {
                 eprintln!(
                     "warning: {}: not every subscriber acknowledged the final map within {} s",
@@ -131,12 +182,12 @@ impl Outputs {
 /// Warnings said on the log: the first of each kind, then at 10, 100, 1000... (every one
 /// is counted in the map's notes).
 #[derive(Default)]
-struct Log {
+pub(super) struct Log {
     seen: HashMap<String, u64>,
 }
 
 impl Log {
-    fn warn(&mut self, what: &str) {
+    pub fn warn(&mut self, what: &str) {
         // The kind: the message up to its first colon (a topic and what went wrong).
         let kind = what.split(':').take(2).collect::<Vec<_>>().join(":");
         let n = self.seen.entry(kind).or_default();
@@ -280,6 +331,7 @@ pub fn run(a: &Ros2Args) -> Result<Outcome> {
     let names = Names {
         ros: a.ros.clone(),
         node: a.node_name.clone(),
+        private: false,
     };
     let mut read = a.run.read_options()?;
     read.audio_topic = names.option(read.audio_topic);
@@ -317,6 +369,7 @@ pub fn run(a: &Ros2Args) -> Result<Outcome> {
     };
     let mut sink = Sink {
         out: Outputs::new(&dp, &names)?,
+        run: names.fq(),
         mcap: a.mcap.as_deref().map(rosmap::McapFile::new).transpose()?,
         json: a.out.clone(),
         current: None,
@@ -450,15 +503,7 @@ fn finish(live: &mut LiveMapper, mut sink: Sink, seed: u64) -> Result<Outputs> {
                 live.stops().len(),
                 fin.sources.len()
             );
-            for (k, s) in fin.sources.iter().enumerate() {
-                println!(
-                    "  s{} ({:.3}, {:.3}) m, {} DoAs",
-                    k + 1,
-                    s.x,
-                    s.y,
-                    s.observations
-                );
-            }
+            say_sources(&fin);
         }
         None => println!("no stop was mapped"),
     }
@@ -469,6 +514,19 @@ fn finish(live: &mut LiveMapper, mut sink: Sink, seed: u64) -> Result<Outputs> {
         f.finish()?;
     }
     Ok(sink.out)
+}
+
+/// The final map's sources, a line each.
+pub(super) fn say_sources(map: &asm::MapResult) {
+    for (k, s) in map.sources.iter().enumerate() {
+        println!(
+            "  s{} ({:.3}, {:.3}) m, {} DoAs",
+            k + 1,
+            s.x,
+            s.y,
+            s.observations
+        );
+    }
 }
 
 fn announce(live: &LiveMapper, u: &crate::live::Update) {
@@ -489,6 +547,8 @@ fn announce(live: &LiveMapper, u: &crate::live::Update) {
 /// Where each map update goes: the topics, the MCAP file, the JSON; and the map now.
 struct Sink {
     out: Outputs,
+    /// The run's name on `~/stops`: the node's fully qualified name.
+    run: String,
     mcap: Option<rosmap::McapFile>,
     json: Option<std::path::PathBuf>,
     /// The last map published (the services' "current map").
@@ -524,6 +584,9 @@ fn step(live: &mut LiveMapper, sink: &mut Sink, log: &mut Log, all: bool) -> Res
     }
     for u in updates {
         announce(live, &u);
+        if let Some(s) = live.stops().last() {
+            sink.out.publish_stop(&sink.run, s)?;
+        }
         sink.publish(live, &u.map, false)?;
     }
     Ok(())
