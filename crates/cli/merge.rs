@@ -8,7 +8,8 @@
 //! stop-by-stop mapper as it arrives, whichever robot it comes from, and
 //! [`MergeMapper::finish`] maps every stop at once in the order `iasm map --dataset A
 //! --dataset B` takes them (the runs by name, each run's stops in order), so that the final
-//! map is the offline union's. A robot that drops off the network leaves its stops; one
+//! map is the offline union's (one batch map, `iasm map`'s, not the stops added again one by
+//! one). A robot that drops off the network leaves its stops; one
 //! that joins late adds its own; a stop heard twice (a reader that joined late is sent the
 //! stops kept for it) is taken once.
 //!
@@ -217,12 +218,43 @@ impl MergeMapper {
     /// # Errors
     /// As [`MergeMapper::add`].
     pub fn finish(&mut self) -> Result<Option<MapResult>> {
+        use rand::SeedableRng;
         if self.order.is_empty() {
             return Ok(None);
         }
         let map = self.current_map()?;
-        let mut s = self.session_over(&map, self.stops.keys())?;
-        Ok(Some(s.finish()))
+        let config = asm::IasmConfig {
+            mirror_axis_deg: self
+                .settings
+                .iasm
+                .mirror_axis_deg
+                .or(self.settings.mic_array()?.mirror_axis_deg()),
+            ..self.settings.iasm.clone()
+        };
+        let n = config.num_doas;
+        // One batch map (`iasm map`'s), not the stops added again one by one: a row not
+        // cut is taken to N, as a table's row is.
+        let stops: Vec<&MergedStop> = self.stops.values().collect();
+        let poses: Vec<Pose> = stops.iter().map(|s| s.pose).collect();
+        let rows: Vec<Vec<f64>> = stops
+            .iter()
+            .map(|s| {
+                let keep = if s.cut {
+                    s.doas_deg.len()
+                } else {
+                    s.doas_deg.len().min(n)
+                };
+                s.doas_deg[..keep].iter().map(|a| a.to_radians()).collect()
+            })
+            .collect();
+        let cut: Vec<bool> = stops.iter().map(|s| s.cut).collect();
+        let mapper = asm::Mapper::new(&map, &config)?;
+        Ok(Some(mapper.run_rows(
+            &poses,
+            &rows,
+            Some(&cut),
+            &mut asm::MapRng::seed_from_u64(self.seed),
+        )?))
     }
 
     /// The messages of `result` over every stop (in the order they came), stamped
