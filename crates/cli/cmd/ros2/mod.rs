@@ -1,25 +1,29 @@
-//! `iasm ros2`: the live node; `iasm ros2-play`: a recorded run published as a robot
-//! publishes it.
+//! `iasm ros2`: the live node; `iasm ros2-merge`: several robots' stops made one map;
+//! `iasm ros2-play`: a recorded run published as a robot publishes it; `iasm ros2-call`: a
+//! node's parameters and services from a shell.
 //!
 //! **Transport.** ros2-client gives the node its place in the ROS graph (a DDS participant
-//! and a node named `iasm`); the topics themselves are RustDDS readers and writers with
+//! and a node, named and placed by `--ros-args`: [`crate::args::ros`]) and serves its
+//! parameters (module `params`); the topics themselves are RustDDS readers and writers with
 //! adapters of our own that pass CDR bytes through untouched. What arrives is decoded by the
 //! `bag` crate, the code that reads the same messages out of bags; what leaves is encoded by
 //! `iasm-ros`, the code that writes them to MCAP. Nothing of ROS needs to be installed, and
 //! the node talks to Humble's and Jazzy's default DDS (RTPS over UDP).
 //!
 //! **Topics in.** The node subscribes to every topic a robot's publishers offer whose type
-//! the bag reader knows (audio, poses, `/tf`, the occupancy grid), as DDS discovery finds
-//! them, and the live mapper chooses among them by the rules of `iasm bag` (`--audio-topic`
-//! and the other flags of `iasm bag` choose where those rules would not). Audio and poses
-//! are read best effort (a lost buffer is a gap, which the mapper cuts the audio at; a
-//! reliable reader would stall the stream on the robot's network); a topic its publisher
-//! offers transient local (`/map`, `/tf_static`, `/amcl_pose`) is read reliable and
-//! transient local, so that what was published before the node started is received.
+//! the bag reader knows (audio, poses, `/tf`, the occupancy grid), in its namespace or
+//! named by a remap, as DDS discovery finds them, and the live mapper chooses among them by
+//! the rules of `iasm bag` (`--audio-topic` and the other flags of `iasm bag` choose where
+//! those rules would not). Audio and poses are read best effort (a lost buffer is a gap,
+//! which the mapper cuts the audio at; a reliable reader would stall the stream on the
+//! robot's network); a topic its publisher offers transient local (`/map`, `/tf_static`,
+//! `/amcl_pose`) is read reliable and transient local, so that what was published before
+//! the node started is received.
 //!
-//! **Topics out** (reliable): those of `--mcap` (`crate::rosmap`), but the grid the sources
-//! were searched in is `/iasm/map` (transient local), so that the node never becomes a
-//! second publisher of the robot's `/map`.
+//! **Topics out** (reliable, relative to the namespace): those of `--mcap`
+//! (`crate::rosmap`), but the grid the sources were searched in is `iasm/map` (transient
+//! local), so that the node never becomes a second publisher of the robot's `/map`; and
+//! each stop on `~/stops` (`iasm_msgs/msg/Stop`, transient local) for a merging node.
 
 mod call;
 mod merge;
