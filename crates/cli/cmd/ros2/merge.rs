@@ -200,14 +200,7 @@ pub fn merge(a: &Ros2MergeArgs) -> Result<Outcome> {
         if got > 0 {
             inputs.last_message = Some(Instant::now());
         }
-        if let Some(idle) = a.until_idle
-            && inputs
-                .last_message
-                .unwrap_or(started)
-                .elapsed()
-                .as_secs_f64()
-                > idle
-        {
+        if let Some(idle) = super::node::idle_for(a.until_idle, inputs.last_message, started) {
             eprintln!("no stop for {idle} s: the run is over");
             break;
         }

@@ -414,14 +414,7 @@ pub fn run(a: &Ros2Args) -> Result<Outcome> {
             last_step = Instant::now();
             step(&mut live, &mut sink, &mut log, false)?;
         }
-        if let Some(idle) = a.until_idle
-            && inputs
-                .last_message
-                .unwrap_or(started)
-                .elapsed()
-                .as_secs_f64()
-                > idle
-        {
+        if let Some(idle) = idle_for(a.until_idle, inputs.last_message, started) {
             match inputs.last_message {
                 Some(_) => eprintln!("no message for {idle} s: the run is over"),
                 None => eprintln!(
@@ -444,6 +437,16 @@ pub fn run(a: &Ros2Args) -> Result<Outcome> {
     std::thread::sleep(Duration::from_millis(200));
     out.wait_for_acknowledgments(Duration::from_secs(5));
     Ok(Outcome::Success)
+}
+
+/// `--until-idle S` when it has run out: S seconds since the last message, or since
+/// `started` when none came.
+pub(super) fn idle_for(
+    until_idle: Option<f64>,
+    last_message: Option<Instant>,
+    started: Instant,
+) -> Option<f64> {
+    until_idle.filter(|&idle| last_message.unwrap_or(started).elapsed().as_secs_f64() > idle)
 }
 
 /// What a service call did.
