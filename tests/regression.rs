@@ -3,12 +3,20 @@
 //! localised with every method and mapped, against the thresholds in its `[expect]` table.
 //! The same suite runs as `iasm regress`.
 
-#[test]
-fn every_scene_meets_its_thresholds() {
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/rooms");
+/// The suite of the scenes in `fixtures/<folder>`, run with the default settings; panics
+/// with the table and every breach when a scene misses its thresholds, or when the folder
+/// does not hold `scenes` scenes.
+fn suite_holds(folder: &str, scenes: usize) -> iasm::suite::SuiteReport {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("fixtures")
+        .join(folder);
     let report = iasm::suite::run_suite(&dir, &iasm::settings::Settings::default(), None).unwrap();
     println!("{}", report.table());
-    assert_eq!(report.rows.len(), 2 * 16, "sixteen scenes, two methods");
+    assert_eq!(
+        report.rows.len(),
+        2 * scenes,
+        "{scenes} scenes, two methods"
+    );
     let breaches = report.breaches();
     assert!(
         breaches.is_empty(),
@@ -16,6 +24,32 @@ fn every_scene_meets_its_thresholds() {
         report.table(),
         breaches.join("\n")
     );
+    report
+}
+
+#[test]
+fn every_scene_meets_its_thresholds() {
+    let report = suite_holds("rooms", 16);
+    // None of the suite's scenes changes while the robot drives.
+    assert!(report.rows.iter().all(|r| r.ospa_now.is_none()));
+}
+
+/// The scenes that change while the robot drives (`fixtures/changes`: a talker who moves,
+/// a source that stops and one that starts, a machine that runs for the first third; a box
+/// and an L of each): every place mapped, and the map's time fields judged against the
+/// changes the scene file states (`iasm::changes`: the active sources against those
+/// sounding at the last stop, and each change dated within two stops), against each
+/// scene's thresholds.
+#[test]
+fn every_change_scene_meets_its_thresholds() {
+    let report = suite_holds("changes", 6);
+    for r in &report.rows {
+        assert!(
+            r.ospa_now.is_some() && r.changes_found.is_some(),
+            "{}",
+            r.scene
+        );
+    }
 }
 
 /// The generated benchmark's small draw (`iasm regress --generated --count 6 --seed 0

@@ -195,11 +195,15 @@ fn markers_are_the_jsons(data: &[u8], sources: &[serde_json::Value]) {
         );
         assert!((sphere.pose.position.x - x).abs() < 1e-12);
         assert!((sphere.pose.position.y - y).abs() < 1e-12);
+        // The label names the source, its DoAs and, for one silent at the end, since when;
+        // a silent source's sphere is grey.
         let label = find("labels");
-        assert_eq!(
-            label.text,
-            format!("s{}: {} DoAs", k + 1, s["observations"])
-        );
+        let mut text = format!("s{}: {} DoAs", k + 1, s["observations"]);
+        if s["state"] == "silent" {
+            text += &format!(", silent since stop {}", s["since"]);
+        }
+        assert_eq!(label.text, text);
+        assert_eq!(s["state"] == "silent", sphere.color.r < 0.6, "{s}");
         // The ellipse's diameters are 4 sigma along its axes: R diag((a/4)², (b/4)²) Rᵀ is
         // the JSON's covariance.
         let e = find("ellipses");

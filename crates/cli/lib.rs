@@ -54,6 +54,7 @@
 
 pub(crate) mod args;
 pub(crate) mod bagset;
+pub mod changes;
 pub(crate) mod cmd;
 pub(crate) mod compare;
 pub mod dataset;

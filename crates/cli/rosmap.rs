@@ -3,7 +3,7 @@
 //!
 //! | topic | type | what |
 //! |---|---|---|
-//! | `/iasm/sources` | `visualization_msgs/MarkerArray` | a sphere per source (`ns` `sources`), its 2-sigma ellipse (`ellipses`, a flat cylinder), a label with its id and DoA count (`labels`); led by a `DELETEALL`, so that a source gone from the map is gone from the display |
+//! | `/iasm/sources` | `visualization_msgs/MarkerArray` | a sphere per source (`ns` `sources`), its 2-sigma ellipse (`ellipses`, a flat cylinder), a label with its id, DoA count and, for a source silent at the end, since which stop (`labels`; a silent source's sphere is grey); led by a `DELETEALL`, so that a source gone from the map is gone from the display |
 //! | `/iasm/doas` | `visualization_msgs/MarkerArray` | each stop's DoAs as rays from the robot (`ns` `doas`, one `LINE_LIST` per stop, id the stop's index) |
 //! | `/iasm/path` | `nav_msgs/Path` | the stops, in order, with the robot's heading |
 //! | `/iasm/source_poses` | `geometry_msgs/PoseArray` | the sources, for programs (in the map JSON's order) |
@@ -137,6 +137,27 @@ pub fn grid(map: &OccupancyMap, header: Header) -> OccupancyGrid {
     }
 }
 
+/// A source silent at the end of the run ([`asm::SourceState::Silent`]): grey, where
+/// active ones are red.
+pub const SILENT_COLOUR: Color = Color {
+    r: 0.55,
+    g: 0.55,
+    b: 0.55,
+    a: 1.0,
+};
+
+/// Source `k`'s label: its id, DoA count and, when it fell silent, since which stop.
+pub fn label(k: usize, s: &asm::Source) -> String {
+    match s.history.silent_since() {
+        Some(since) => format!(
+            "s{}: {} DoAs, silent since stop {since}",
+            k + 1,
+            s.observations
+        ),
+        None => format!("s{}: {} DoAs", k + 1, s.observations),
+    }
+}
+
 fn marker(header: &Header, ns: &str, id: usize, kind: i32) -> Marker {
     Marker {
         header: header.clone(),
@@ -168,7 +189,11 @@ impl MapMessages {
             markers.push(Marker {
                 pose: RosPose::planar(s.x, s.y, 0.0, 0.0),
                 scale: Point::new(SPHERE_M, SPHERE_M, SPHERE_M),
-                color: source_colour,
+                color: if s.history.is_active() {
+                    source_colour
+                } else {
+                    SILENT_COLOUR
+                },
                 ..marker(&header, "sources", k, Marker::SPHERE)
             });
             if let Some((major, minor, angle)) = ellipse(s.covariance) {
@@ -183,7 +208,7 @@ impl MapMessages {
                 pose: RosPose::planar(s.x, s.y, LABEL_Z_M, 0.0),
                 scale: Point::new(0.0, 0.0, 0.25),
                 color: Color::new(0.1, 0.1, 0.1, 1.0),
-                text: format!("s{}: {} DoAs", k + 1, s.observations),
+                text: label(k, s),
                 ..marker(&header, "labels", k, Marker::TEXT_VIEW_FACING)
             });
         }

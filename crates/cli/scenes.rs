@@ -39,6 +39,13 @@ pub struct Expect {
     pub found_min: Option<usize>,
     /// Most sources any seed's map may find.
     pub found_max: Option<usize>,
+    /// For a scene whose sources start, stop or move: the highest acceptable mean OSPA (m)
+    /// of the maps' active sources against the places sounding at the last stop
+    /// ([`crate::changes`]).
+    pub ospa_now_max: Option<f64>,
+    /// For such a scene: the lowest acceptable share of maps that date every change within
+    /// [`crate::changes::CHANGE_TOLERANCE_STOPS`].
+    pub changes_found_min: Option<f64>,
     /// Settings the suite runs this scene with, over its own (a settings file's tables:
     /// `[expect.settings.ssl]`, `[expect.settings.iasm]`), for scenes that exercise a
     /// setting off by default.

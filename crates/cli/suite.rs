@@ -65,6 +65,14 @@ pub struct SceneResult {
     pub ospa: f64,
     /// The worst map's OSPA (m).
     pub ospa_worst: f64,
+    /// For a scene whose sources start, stop or move ([`crate::changes`]): the mean OSPA
+    /// (m) of the maps' active sources against the places sounding at the last stop.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ospa_now: Option<f64>,
+    /// For such a scene: the share of maps that dated every change within
+    /// [`crate::changes::CHANGE_TOLERANCE_STOPS`] stops.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub changes_found: Option<f64>,
     /// Whether the scene's thresholds were checked: not when the suite ran with another N
     /// than the scene's own (`iasm regress --num`), for which they were not set.
     pub judged: bool,
@@ -115,6 +123,12 @@ impl SuiteReport {
             "status"
         );
         for r in &self.rows {
+            let dated = match (r.ospa_now, r.changes_found) {
+                (Some(now), Some(share)) => {
+                    format!(" (now {now:.3} m, changes dated in {:.0}%)", 100.0 * share)
+                }
+                _ => String::new(),
+            };
             let status = if !r.judged {
                 "not judged (thresholds set for another N)".to_owned()
             } else if r.breaches.is_empty() {
@@ -140,7 +154,7 @@ impl SuiteReport {
                 100.0 * r.right_count,
                 r.ospa,
                 r.ospa_worst,
-                status
+                status + &dated
             ));
         }
         s
@@ -178,6 +192,16 @@ fn breaches(e: &Expect, r: &SceneResult) -> Vec<String> {
         && r.ospa_worst > max
     {
         out.push(format!("worst OSPA {:.3} > {max}", r.ospa_worst));
+    }
+    if let (Some(max), Some(now)) = (e.ospa_now_max, r.ospa_now)
+        && now > max
+    {
+        out.push(format!("mean OSPA now {now:.3} > {max}"));
+    }
+    if let (Some(min), Some(share)) = (e.changes_found_min, r.changes_found)
+        && share < min
+    {
+        out.push(format!("changes found in {share:.2} of maps < {min}"));
     }
     let (lo, hi) = found_range(&r.found);
     if let Some(min) = e.found_min
@@ -219,8 +243,10 @@ pub fn run_scene(path: &Path, base: &Settings, num: Option<usize>) -> Result<Vec
         "scene {}: expect.map_seeds must be at least 1",
         path.display()
     );
-    let sources = scene.room_sources().count();
+    // What a map of the whole run should hold: every place a source stood at.
+    let sources = scene.places().len();
     let stops = scene.stops.len();
+    let changing = !crate::changes::changes(&scene.places(), stops).is_empty();
     let own_n = e.num.unwrap_or(user_n(sources));
     let n = num.unwrap_or(own_n);
     anyhow::ensure!(n >= 1, "--num: N must be at least 1, got 0");
@@ -240,16 +266,20 @@ pub fn run_scene(path: &Path, base: &Settings, num: Option<usize>) -> Result<Vec
         };
         let sim = Simulated::render(prepared, stem.clone())?;
         name.get_or_insert_with(|| sim.name.clone());
-        let per_method: Vec<(f64, Vec<(usize, f64)>)> = Method::PAPER
+        let judged = |map: &asm::MapResult| MapJudged {
+            found: map.sources.len(),
+            ospa: asm::ospa::ospa(&map.positions(), &sim.truth, 1.0, 1.0).total,
+            changes: crate::changes::judge(map, &sim.places, stops),
+        };
+        let per_method: Vec<(f64, Vec<MapJudged>)> = Method::PAPER
             .iter()
             .map(|&method| {
                 let settings = scene_settings(base, method, n);
                 let r = sim.run(&settings, seed)?;
-                let mut maps = vec![(r.map.sources.len(), r.ospa.total)];
+                let mut maps = vec![judged(&r.map)];
                 for j in 1..map_seeds as u64 {
                     let map = r.survey.map(&settings.iasm, seed + MAP_SEED_STRIDE * j)?;
-                    let ospa = asm::ospa::ospa(&map.positions(), &sim.truth, 1.0, 1.0);
-                    maps.push((map.sources.len(), ospa.total));
+                    maps.push(judged(&map));
                 }
                 Ok((r.score.score, maps))
             })
@@ -262,8 +292,9 @@ pub fn run_scene(path: &Path, base: &Settings, num: Option<usize>) -> Result<Vec
         .iter()
         .enumerate()
         .map(|(m, &method)| {
-            let maps: Vec<(usize, f64)> = runs.iter().flat_map(|r| r[m].1.clone()).collect();
+            let maps: Vec<MapJudged> = runs.iter().flat_map(|r| r[m].1.clone()).collect();
             let count = maps.len() as f64;
+            let mean = |f: &dyn Fn(&MapJudged) -> f64| maps.iter().map(f).sum::<f64>() / count;
             let mut r = SceneResult {
                 scene: name.clone(),
                 method: method.name(),
@@ -273,10 +304,13 @@ pub fn run_scene(path: &Path, base: &Settings, num: Option<usize>) -> Result<Vec
                 seeds: seeds.clone(),
                 map_seeds,
                 doa_score: runs.iter().map(|r| r[m].0).sum::<f64>() / k,
-                found: maps.iter().map(|c| c.0).collect(),
-                right_count: maps.iter().filter(|c| c.0 == sources).count() as f64 / count,
-                ospa: maps.iter().map(|c| c.1).sum::<f64>() / count,
-                ospa_worst: maps.iter().map(|c| c.1).fold(0.0, f64::max),
+                found: maps.iter().map(|c| c.found).collect(),
+                right_count: maps.iter().filter(|c| c.found == sources).count() as f64 / count,
+                ospa: mean(&|c| c.ospa),
+                ospa_worst: maps.iter().map(|c| c.ospa).fold(0.0, f64::max),
+                ospa_now: changing.then(|| mean(&|c| c.changes.ospa_now)),
+                changes_found: changing
+                    .then(|| mean(&|c| f64::from(u8::from(c.changes.all_found())))),
                 judged: n == own_n,
                 breaches: Vec::new(),
             };
@@ -286,6 +320,17 @@ pub fn run_scene(path: &Path, base: &Settings, num: Option<usize>) -> Result<Vec
             r
         })
         .collect())
+}
+
+/// What one map of a scene is judged by.
+#[derive(Clone, Copy, Debug)]
+struct MapJudged {
+    /// Sources found.
+    found: usize,
+    /// OSPA against every place (m).
+    ospa: f64,
+    /// Against the scene's changes.
+    changes: crate::changes::ChangeScore,
 }
 
 /// `base` with the scene's `[expect.settings]` laid over it, key by key.

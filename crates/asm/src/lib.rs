@@ -51,8 +51,8 @@ pub mod pf;
 pub use error::{ConfigError, Error, MapError, Result};
 pub use geom::{Pose, wrap_rad};
 pub use mapper::{
-    IasmConfig, MAX_PARTICLES, MapResult, Mapper, Profile, Refusal, Refused, Round, Source, Stage,
-    Stops, Trim, Variant,
+    History, IasmConfig, MAX_PARTICLES, MapResult, Mapper, Profile, Refusal, Refused, Round,
+    Source, SourceState, Stage, Stops, Trim, Variant,
 };
 pub use online::{OnlineMapper, StopUpdate};
 

@@ -303,6 +303,7 @@ impl OnlineMapper {
     pub fn map(&self) -> MapResult {
         let mut sources = self.sources.clone();
         self.mapper.mark_mirrors(&mut sources);
+        self.mapper.date(&mut sources, &self.stops);
         MapResult {
             sources,
             rounds: self.rounds,

@@ -300,20 +300,21 @@ fn print_map(a: &MapArgs, survey: &Survey, report: &MapReport<'_>, result: &MapR
         );
     }
     println!(
-        "{:>3} {:>8} {:>8} {:>6} {:>9} {:>9} {:>6}",
+        "{:>3} {:>8} {:>8} {:>6} {:>9} {:>9} {:>6}  heard at stops",
         "#", "x (m)", "y (m)", "DoAs", "particles", "2σ (m)", "round"
     );
     for (i, s) in result.sources.iter().enumerate() {
         let two_sigma = 2.0 * asm::pf::max_eigenvalue(s.covariance).sqrt();
         println!(
-            "{:>3} {:>8.3} {:>8.3} {:>6} {:>9} {:>9.3} {:>6}",
+            "{:>3} {:>8.3} {:>8.3} {:>6} {:>9} {:>9.3} {:>6}  {}",
             i + 1,
             s.x,
             s.y,
             s.observations,
             s.particles,
             two_sigma,
-            s.round
+            s.round,
+            heard(&s.history)
         );
         if let Some([x, y]) = s.mirror {
             println!(
@@ -453,11 +454,36 @@ fn refusal(rule: &asm::Refusal) -> String {
     }
 }
 
+/// When a source was heard, as the map's table says it: its first and last stop (from
+/// 0), whether it appeared or fell silent, and where it moved.
+fn heard(h: &asm::History) -> String {
+    let mut out = format!("{}-{}", h.first_stop, h.last_stop);
+    if let Some(k) = h.appeared_at {
+        out += &format!(", appeared at {k}");
+    }
+    match h.silent_since() {
+        Some(k) => out += &format!(", silent since {k}"),
+        None => out += ", active",
+    }
+    if let Some(j) = h.moved_from {
+        out += &format!(", moved here from #{}", j + 1);
+    }
+    if let Some(j) = h.moved_to {
+        out += &format!(", moved to #{}", j + 1);
+    }
+    out
+}
+
 fn write_sources_csv(path: &Path, r: &MapResult) -> Result<()> {
-    let mut s = String::from("x_m,y_m,observations,particles,cov_xx,cov_xy,cov_yy,round\n");
+    // The stops that heard each source and its state at the run's end (`asm::History`)
+    // come after the columns of earlier versions, so that a reader by position still works.
+    let mut s = String::from(
+        "x_m,y_m,observations,particles,cov_xx,cov_xy,cov_yy,round,first_stop,last_stop,heard_stops,heard_share,state,silent_since\n",
+    );
     for src in &r.sources {
+        let h = &src.history;
         s.push_str(&format!(
-            "{:.4},{:.4},{},{},{:.6},{:.6},{:.6},{}\n",
+            "{:.4},{:.4},{},{},{:.6},{:.6},{:.6},{},{},{},{},{:.3},{},{}\n",
             src.x,
             src.y,
             src.observations,
@@ -465,7 +491,13 @@ fn write_sources_csv(path: &Path, r: &MapResult) -> Result<()> {
             src.covariance[0][0],
             src.covariance[0][1],
             src.covariance[1][1],
-            src.round
+            src.round,
+            h.first_stop,
+            h.last_stop,
+            h.heard_stops,
+            h.heard_share,
+            if h.is_active() { "active" } else { "silent" },
+            h.silent_since().map_or(String::new(), |k| k.to_string()),
         ));
     }
     crate::output::write_atomic(path, s.as_bytes())

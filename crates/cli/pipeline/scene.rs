@@ -13,8 +13,10 @@ pub struct Simulated {
     pub audio: Vec<Audio>,
     /// The scene's array.
     pub array: MicArray,
-    /// True source positions (m).
+    /// True source positions (m): every place a source stands at during the run.
     pub truth: Vec<[f64; 2]>,
+    /// Where each source stands and at which stops ([`sim::scene::Place`]).
+    pub places: Vec<sim::scene::Place>,
     /// The scene's occupancy map.
     pub map: OccupancyMap,
     /// For a scene with sources on the robot: the robot alone, rendered at the first stop
@@ -59,7 +61,8 @@ impl Simulated {
             })
             .collect::<Result<_>>()?;
         let array = MicArray::new(name.clone(), scene.mics.clone())?;
-        let truth = scene.room_sources().map(|s| [s.pos[0], s.pos[1]]).collect();
+        let places = scene.places();
+        let truth = places.iter().map(|p| [p.pos[0], p.pos[1]]).collect();
         let map = crate::scenes::scene_map(&scene);
         let noise = scene
             .render_robot_alone(0)
@@ -80,6 +83,7 @@ impl Simulated {
             audio,
             array,
             truth,
+            places,
             map,
             noise,
         })

@@ -183,6 +183,7 @@ pub fn draw(seed: u64, config: &DrawConfig) -> Result<Drawn, SimError> {
             active_s: None,
             at_stops: None,
             on_robot: false,
+            moves: Vec::new(),
         };
         match kind {
             SourceKind::Talker => {

@@ -99,6 +99,7 @@ use crate::pf::{Likelihood, ParticleFilter, covariance, mean};
 use crate::wrap_rad;
 
 mod config;
+mod history;
 mod reassociation;
 mod refine;
 mod reflection;
@@ -112,6 +113,10 @@ mod tests;
 mod vote;
 
 pub use config::*;
+pub use history::{
+    HEARD_SIGMAS, History, MASKING_RATIO, MOVE_STOPS, REACH_FACTOR, RECALL_RANGE, SILENT_P,
+    SourceState,
+};
 pub use refine::*;
 pub use rounds::*;
 pub use stages::Stage;
@@ -162,6 +167,9 @@ pub struct Source {
     /// its others meet. Empty for most sources.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub images: Vec<usize>,
+    /// When it was heard, and its state at the end of the run (see [`History`]).
+    #[serde(flatten)]
+    pub history: History,
 }
 
 /// A source the mapper found and did not keep ([`MapResult::refused`]): where it was, the
@@ -192,7 +200,8 @@ pub enum Refusal {
     ThinlyHeard,
     /// Stops that heard other sources and nothing near its bearing, no further from it
     /// than the stops that heard it and not masked by a nearer source
-    /// ([`IasmConfig::absence_ratio`]; the first of them is forgiven).
+    /// ([`IasmConfig::absence_ratio`]; the first of them is forgiven), and, before the
+    /// first stop that heard it or after the last, nearer it than every stop that did.
     SpokenAgainst {
         /// Those stops (from 0).
         against: Vec<usize>,
@@ -277,8 +286,9 @@ pub struct Mapper {
 /// What one filtering round ends with.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Round {
-    /// A source, with the DoAs it explains (already removed from the bearings).
-    Found(Source),
+    /// A source, with the DoAs it explains (already removed from the bearings); boxed, as
+    /// it is ten times the size of the other variants.
+    Found(Box<Source>),
     /// DBSCAN found no cluster in the round's cloud.
     NoCluster,
     /// The largest cluster's estimate explains no remaining DoA: the cloud settled where

@@ -59,6 +59,7 @@ impl Mapper {
         let count = removed.len();
         refused.extend(removed);
         self.mark_mirrors(&mut sources);
+        self.date(&mut sources, stops);
         let refused = self.one_per_place(refused, &sources);
         MapResult {
             sources,
@@ -106,7 +107,7 @@ impl Mapper {
                         .is_none_or(|k| s.rays.iter().any(|r| r.stop == k)) =>
                 {
                     failed = 0;
-                    sources.push(s);
+                    sources.push(*s);
                 }
                 // One retry policy for every round that finds no source: each is one
                 // random draw's bad luck until `retries + 1` happen in a row (see the
@@ -193,7 +194,7 @@ impl Mapper {
         if rays.len() < self.config.min_observations {
             return Round::Clutter(rays);
         }
-        Round::Found(Source {
+        Round::Found(Box::new(Source {
             x: est[0],
             y: est[1],
             observations: rays.len(),
@@ -206,7 +207,8 @@ impl Mapper {
             mirror: None,
             blends: Vec::new(),
             images: Vec::new(),
-        })
+            history: History::default(),
+        }))
     }
 
     /// The filtering step: `M` particles drawn from the map's known cells, then the stops

@@ -413,7 +413,8 @@ impl Mapper {
     /// [`Refusal::SpokenAgainst`] when the stops that heard nothing near a source at `q`
     /// explaining `rays` leave it fewer than [`IasmConfig::min_observations`] (the first of
     /// them forgiven), with the sources at `others` masking (see
-    /// [`IasmConfig::absence_ratio`]).
+    /// [`IasmConfig::absence_ratio`]). Before its first hearing and after its last, only
+    /// stops nearer it than every stop that heard it speak (it may not have sounded then).
     pub(super) fn spoken_against(
         &self,
         q: [f64; 2],
@@ -425,7 +426,31 @@ impl Mapper {
             .iter()
             .map(|r| (r.from[0] - q[0]).hypot(r.from[1] - q[1]))
             .fold(0.0, f64::max);
-        let against = self.absences(q, reach, stops, others);
+        // Outside the stretch of the run that heard it, a stop speaks against it only from
+        // nearer than every stop that did: a source may start or fall silent while the
+        // robot drives (`history.rs`), and a source that sounded then would have been
+        // heard by the nearer stops of its own time too; a reflection heard only from
+        // afar, missed by the stops beside its place, is refused still.
+        // (Stray hearings far from the others are kept here, unlike in the map's dating:
+        // leaving them out let reflections heard along part of the run through, the
+        // suite's two talkers in a box among them, and moved no drawn scene beyond its
+        // spread; docs/decisions/0015.)
+        let (first, last) = rays
+            .iter()
+            .fold((usize::MAX, 0), |(a, b), r| (a.min(r.stop), b.max(r.stop)));
+        let nearest = rays
+            .iter()
+            .map(|r| (r.from[0] - q[0]).hypot(r.from[1] - q[1]))
+            .fold(f64::INFINITY, f64::min);
+        let poses = stops.poses();
+        let against: Vec<usize> = self
+            .absences(q, reach, stops, others)
+            .into_iter()
+            .filter(|&k| {
+                (first..=last).contains(&k)
+                    || (poses[k].x - q[0]).hypot(poses[k].y - q[1]) < nearest
+            })
+            .collect();
         (rays.len() < self.config.min_observations + against.len().saturating_sub(1))
             .then_some(Refusal::SpokenAgainst { against })
     }

@@ -82,6 +82,7 @@ impl Mapper {
             mirror: None,
             blends: Vec::new(),
             images: Vec::new(),
+            history: History::default(),
         })
     }
 

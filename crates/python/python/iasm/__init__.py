@@ -407,8 +407,10 @@ def map_sources(
     settings' default, 4, when not given). Any ``[iasm]`` setting by its name.
 
     Returns the map as ``iasm map``'s JSON holds it: ``sources`` (each with ``x``, ``y``,
-    ``covariance``, ``observations``, ...), ``refused`` (with the rule), ``rounds``,
-    ``unexplained_doas``, ...
+    ``covariance``, ``observations``, ..., and when it was heard: ``first_stop``,
+    ``last_stop``, ``heard_stops``, ``heard_share``, ``state`` (``"active"`` or
+    ``"silent"`` with ``since``), ``appeared_at``, ``moved_to``, ``moved_from`` where
+    they apply), ``refused`` (with the rule), ``rounds``, ``unexplained_doas``, ...
     """
     p = _poses(poses)
     rows = _rows(doas, len(p))

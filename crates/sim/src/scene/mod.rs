@@ -28,6 +28,7 @@
 //! level_db = 65.0       # dB SPL at 1 m
 //! active_s = [0.0, 0.8] # plays only then (s into each clip); the decay follows
 //! at_stops = [0, 5]     # plays at stops 0 to 5 only (a talker who leaves)
+//! # moves = [{ from_stop = 12, pos = [4.0, 2.5, 1.2] }]   # from stop 12 on, it is there
 //! [[sources]]           # the robot's own noise (a fan): carried with the array
 //! on_robot = true       # pos is then [forward, left, up] (m) in the array frame
 //! pos = [-0.15, 0.05, -0.25]
@@ -172,6 +173,62 @@ pub struct SourceSpec {
     /// to tell the SSL what its own noise sounds like). Default: false.
     #[serde(default)]
     pub on_robot: bool,
+    /// Where the source goes during the run (a talker who walks to another desk between
+    /// two stops): each entry a stop (from 0) from which on it stands at `pos`, in stop
+    /// order, after the first stop it plays at and no later than its last. It plays the same
+    /// signal at every place, rendered with the same image model. Default: it stays at
+    /// `pos`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub moves: Vec<SourceMove>,
+}
+
+/// A source's move ([`SourceSpec::moves`]).
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SourceMove {
+    /// The first stop (from 0) at which the source stands at `pos`.
+    pub from_stop: usize,
+    /// Its position from then on (m).
+    pub pos: [f64; 3],
+}
+
+/// Where a source of the room stands over a stretch of the run: what a map of the room at
+/// a stop of `stops` should hold ([`PreparedScene::places`]).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Place {
+    /// The source (its index among the scene's sources in the room, not on the robot).
+    pub source: usize,
+    /// Where it stands (m).
+    pub pos: [f64; 3],
+    /// The stops (from 0, inclusive) at which it plays there.
+    pub stops: [usize; 2],
+}
+
+impl Place {
+    /// Whether the source plays here at stop `k`.
+    pub fn plays_at(&self, k: usize) -> bool {
+        (self.stops[0]..=self.stops[1]).contains(&k)
+    }
+}
+
+impl SourceSpec {
+    /// The places this source stands at over a run of `n_stops` stops: its `pos` from the
+    /// first stop it plays at (`at_stops`, or 0), then each of its `moves`, up to the last
+    /// stop it plays at. `source` is recorded in each. Expects a checked scene.
+    pub fn places(&self, source: usize, n_stops: usize) -> Vec<Place> {
+        let [first, last] = self.at_stops.unwrap_or([0, n_stops.saturating_sub(1)]);
+        let mut starts: Vec<(usize, [f64; 3])> = vec![(first, self.pos)];
+        starts.extend(self.moves.iter().map(|m| (m.from_stop, m.pos)));
+        starts
+            .iter()
+            .enumerate()
+            .map(|(i, &(from, pos))| Place {
+                source,
+                pos,
+                stops: [from, starts.get(i + 1).map_or(last, |&(next, _)| next - 1)],
+            })
+            .collect()
+    }
 }
 
 fn default_f0() -> f64 {
@@ -383,15 +440,16 @@ impl PreparedScene {
     /// The scene's sources ready to render (built once, on first use).
     pub fn renderer(&self) -> &Renderer {
         self.renderer.get_or_init(|| {
-            let sc = &self.scene;
-            let sources: Vec<RoomSource> = sc
-                .sources
-                .iter()
-                .zip(&self.signals)
+            let room_signals: Vec<&Vec<f64>> = (self.scene.sources.iter().zip(&self.signals))
                 .filter(|(s, _)| !s.on_robot)
-                .map(|(s, x)| RoomSource {
-                    pos: s.pos,
-                    signal: x.clone(),
+                .map(|(_, x)| x)
+                .collect();
+            let sources: Vec<RoomSource> = self
+                .places()
+                .iter()
+                .map(|p| RoomSource {
+                    pos: p.pos,
+                    signal: room_signals[p.source].clone(),
                 })
                 .collect();
             Renderer::new_in(
@@ -419,6 +477,24 @@ impl PreparedScene {
     /// The sources in the room (every one not `on_robot`): what a map should find.
     pub fn room_sources(&self) -> impl Iterator<Item = &SourceSpec> {
         self.scene.sources.iter().filter(|s| !s.on_robot)
+    }
+
+    /// Every place a source of the room stands at during the run, source by source
+    /// ([`SourceSpec::places`]): one per source that does not move. The renderer renders
+    /// each as a source of its own, playing at its stops.
+    pub fn places(&self) -> Vec<Place> {
+        self.room_sources()
+            .enumerate()
+            .flat_map(|(i, s)| s.places(i, self.stops.len()))
+            .collect()
+    }
+
+    /// The places a map made after stop `k` should hold as sounding then.
+    pub fn places_at(&self, k: usize) -> Vec<Place> {
+        self.places()
+            .into_iter()
+            .filter(|p| p.plays_at(k))
+            .collect()
     }
 
     /// Whether any source is carried by the robot (`on_robot`).
@@ -478,14 +554,9 @@ impl PreparedScene {
     /// # Panics
     /// If `k` is not a stop.
     pub fn render_stop(&self, k: usize) -> Vec<Vec<f64>> {
-        let sc = &self.scene;
         let mics = self.mics_at(k);
-        let playing: Vec<bool> = sc
-            .sources
-            .iter()
-            .filter(|s| !s.on_robot)
-            .map(|s| s.at_stops.is_none_or(|[a, b]| (a..=b).contains(&k)))
-            .collect();
+        let places = self.places();
+        let playing: Vec<bool> = places.iter().map(|p| p.plays_at(k)).collect();
         let mut out = self.renderer().render_playing(&mics, &playing);
         self.add_sensor_noise_of(k, &mics, &mut out, &playing, 0);
         if let Some(robot) = self.render_on_robot(k, &self.signals, &mics) {
@@ -501,14 +572,14 @@ impl PreparedScene {
     /// Adds stop `k`'s sensor noise to `out` (heard at `mics`), its generator's seed mixed
     /// with `salt`.
     fn add_sensor_noise(&self, k: usize, mics: &[[f64; 3]], out: &mut [Vec<f64>], salt: u64) {
-        let n_room = self.room_sources().count();
-        self.add_sensor_noise_of(k, mics, out, &vec![false; n_room], salt);
+        let n_places = self.places().len();
+        self.add_sensor_noise_of(k, mics, out, &vec![false; n_places], salt);
     }
 
     /// Adds sensor noise at the scene's SNR against what the room's sources give at `mics`
-    /// with every one playing (`out` already holds it when every flag of `playing` is
-    /// set): a stop where one is silent hears the same noise, and the robot's own sources
-    /// do not change it.
+    /// with every one playing, each at its first place (`out` already holds it when every
+    /// flag of `playing`, one per [`Place`], is set and no source moves): a stop where one
+    /// is silent hears the same noise, and the robot's own sources do not change it.
     fn add_sensor_noise_of(
         &self,
         k: usize,
@@ -521,10 +592,16 @@ impl PreparedScene {
         let Some(snr) = sc.snr_db else {
             return;
         };
-        let everyone = if playing.iter().all(|&p| p) {
+        let places = self.places();
+        // Each source at its first place: the level the noise is set against does not
+        // change as a source moves.
+        let reference: Vec<bool> = (0..places.len())
+            .map(|i| i == 0 || places[i - 1].source != places[i].source)
+            .collect();
+        let everyone = if playing == reference.as_slice() {
             None
         } else {
-            Some(self.renderer().render(mics))
+            Some(self.renderer().render_playing(mics, &reference))
         };
         let full = everyone.as_deref().unwrap_or(out);
         let p =

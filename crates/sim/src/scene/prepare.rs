@@ -178,6 +178,9 @@ impl Scene {
                 ));
             }
         }
+        for (i, src) in self.sources.iter().enumerate() {
+            src.check_moves(i, room, stops.len())?;
+        }
         for (k, st) in stops.iter().enumerate() {
             for (m, p) in mics.iter().enumerate() {
                 let w = mic_world(*st, self.array.height, *p);
@@ -310,6 +313,40 @@ impl Scene {
 }
 
 impl SourceSpec {
+    /// Source `i`'s moves, each to a place in the room, at stops in order after the first
+    /// it plays at and no later than its last; none for a source on the robot.
+    fn check_moves(&self, i: usize, room: &Space, n_stops: usize) -> Result<(), SimError> {
+        if self.moves.is_empty() {
+            return Ok(());
+        }
+        if self.on_robot {
+            return Err(invalid(
+                format!("sources[{i}].moves"),
+                "a source on the robot moves with it; it has no moves of its own",
+            ));
+        }
+        let [first, last] = self.at_stops.unwrap_or([0, n_stops.saturating_sub(1)]);
+        let mut after = first;
+        for (j, m) in self.moves.iter().enumerate() {
+            let field = format!("sources[{i}].moves[{j}]");
+            if !(m.from_stop > after && m.from_stop <= last) {
+                return Err(invalid(
+                    field,
+                    format!(
+                        "from_stop {} must lie after stop {after} and no later than the \
+                         source's last stop, {last}",
+                        m.from_stop
+                    ),
+                ));
+            }
+            if !room.contains(m.pos) {
+                return Err(invalid(field, format!("{:?} is outside the room", m.pos)));
+            }
+            after = m.from_stop;
+        }
+        Ok(())
+    }
+
     /// The source's RMS pressure (Pa) at its `level_db`: 94 dB SPL is 1 Pa RMS.
     fn rms_pa(&self) -> f64 {
         10f64.powf((self.level_db - 94.0) / 20.0)

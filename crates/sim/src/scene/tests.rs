@@ -144,6 +144,77 @@ fn a_source_heard_at_some_stops_only_leaves_the_others_to_the_sensor_noise() {
 }
 
 #[test]
+fn a_source_that_moves_is_heard_at_each_place_from_its_stop_on() {
+    // A talker at (1.5, 3.0) who walks to (4.5, 2.5) before stop 3: the array hears at
+    // stops 0-2 what it hears of a talker who stays at the first place, and from stop 3 on
+    // what it hears of one who stood at the second all along (no sensor noise: the same
+    // samples, to rounding).
+    let moving = SCENE.replace(
+        "pos = [1.5, 3.0, 1.2]",
+        "pos = [1.5, 3.0, 1.2]\nmoves = [{ from_stop = 3, pos = [4.5, 2.5, 1.2] }]",
+    );
+    let p = Scene::from_toml(&moving)
+        .unwrap()
+        .prepare(two_mics)
+        .unwrap();
+    let first = Scene::from_toml(SCENE).unwrap().prepare(two_mics).unwrap();
+    let second = SCENE.replace("pos = [1.5, 3.0, 1.2]", "pos = [4.5, 2.5, 1.2]");
+    let second = Scene::from_toml(&second)
+        .unwrap()
+        .prepare(two_mics)
+        .unwrap();
+    let n = p.stops.len();
+    assert!(n > 4);
+    assert_eq!(
+        p.places(),
+        vec![
+            Place {
+                source: 0,
+                pos: [1.5, 3.0, 1.2],
+                stops: [0, 2]
+            },
+            Place {
+                source: 0,
+                pos: [4.5, 2.5, 1.2],
+                stops: [3, n - 1]
+            },
+        ]
+    );
+    assert_eq!(p.places_at(n - 1).len(), 1);
+    let close = |a: &[Vec<f64>], b: &[Vec<f64>]| {
+        let peak = b.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+        a.iter()
+            .flatten()
+            .zip(b.iter().flatten())
+            .all(|(x, y)| (x - y).abs() <= 1e-9 * peak)
+    };
+    for k in 0..n {
+        let want = if k < 3 { &first } else { &second };
+        assert!(close(&p.render_stop(k), &want.render_stop(k)), "stop {k}");
+    }
+    // A move before the source plays, at a stop out of order, or out of the room is
+    // refused, naming the move.
+    for (moves, says) in [
+        ("[{ from_stop = 0, pos = [4.5, 2.5, 1.2] }]", "moves[0]"),
+        (
+            "[{ from_stop = 3, pos = [4.5, 2.5, 1.2] }, { from_stop = 2, pos = [2.0, 2.0, 1.0] }]",
+            "moves[1]",
+        ),
+        (
+            "[{ from_stop = 3, pos = [9.0, 2.5, 1.2] }]",
+            "outside the room",
+        ),
+    ] {
+        let bad = SCENE.replace(
+            "pos = [1.5, 3.0, 1.2]",
+            &format!("pos = [1.5, 3.0, 1.2]\nmoves = {moves}"),
+        );
+        let e = refusal(&bad, std::path::Path::new("."));
+        assert!(e.contains(says), "{moves}: {e}");
+    }
+}
+
+#[test]
 fn a_source_on_the_robot_goes_where_the_robot_goes() {
     let fan = "\n[[sources]]\non_robot = true\npos = [-0.3, 0.1, -0.2]\nsignal = \"pink_noise\"\n";
     let anechoic = SCENE.replace(

@@ -116,6 +116,7 @@ pub(super) fn heard_from(q: [f64; 2], poses: &[Pose], stops: &[usize]) -> Source
         mirror: None,
         blends: Vec::new(),
         images: Vec::new(),
+        history: History::default(),
     }
 }
 
@@ -223,6 +224,7 @@ pub(super) fn ray_towards(stop: usize, from: [f64; 2], to: [f64; 2], off_deg: f6
     }
 }
 
+mod history;
 mod plausibility;
 pub(in crate::mapper) mod reflection;
 mod room;

@@ -674,3 +674,32 @@ fn a_doa_that_two_sources_lie_on_is_evidence_for_both() {
     heard[5][0] += 3f64.to_radians();
     assert!(vote(IasmConfig::default(), &heard, &complete).is_none());
 }
+
+#[test]
+fn a_source_that_starts_while_the_robot_drives_is_not_spoken_against_by_the_stops_before() {
+    // A talker at (4, -3) heard by every stop, and one at (5, 1.5) who starts talking at
+    // stop 5 and is heard by stops 5-8 (1.5-3.4 m away). Stops 2-4, 1.8-3.4 m from him and
+    // with room in their rows, missed him: before he spoke. They are no nearer than the
+    // stops that heard him, so they say nothing (a source heard by them had it sounded
+    // then would also have been heard from the nearer stops of its own time).
+    let (mapper, ..) = ghost_survey(&[]);
+    let poses: Vec<Pose> = (0..9).map(|i| Pose::new(i as f64, 0.0, 0.0)).collect();
+    let (talker, starter) = ([4.0, -3.0], [5.0, 1.5]);
+    let heard = rows(&poses, talker, starter, |k| k >= 5);
+    let stops = by_length(&mapper, &poses, &heard);
+    let mut sources = vec![
+        heard_from(talker, &poses, &(0..9).collect::<Vec<_>>()),
+        heard_from(starter, &poses, &[5, 6, 7, 8]),
+    ];
+    // The stops that missed him are absences by place: within his reach, rows complete.
+    let absent = mapper.absences(starter, 3.4, &stops, &[talker]);
+    assert!([2, 3, 4].iter().all(|k| absent.contains(k)), "{absent:?}");
+    let mut left = vec![Vec::new(); poses.len()];
+    assert_eq!(
+        mapper
+            .drop_implausible(&mut sources, &stops, &mut left)
+            .len(),
+        0
+    );
+    assert_eq!(sources.len(), 2);
+}

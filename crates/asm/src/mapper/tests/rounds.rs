@@ -368,6 +368,7 @@ fn close_estimates_merge_into_their_mean() {
         mirror: None,
         blends: Vec::new(),
         images: Vec::new(),
+        history: History::default(),
     };
     let mut v = vec![s(0.0, 0.0), s(0.3, 0.0), s(3.0, 0.0)];
     merge_close(&mut v, 0.5);
