@@ -234,3 +234,27 @@ def test_the_readmes_example_runs_as_written(tmp_path, monkeypatch):
     code = code.replace('"map.png"', repr(str(tmp_path / "map.png")))
     exec(compile(code, "README.md", "exec"), {})
     assert (tmp_path / "map.png").stat().st_size > 0
+
+
+def test_a_talker_who_falls_silent_is_dated_in_the_map():
+    # 30 stops along y = 0, turning 0.3 rad a stop; a talker at (1.5, 1.2) heard at stops
+    # 0-14 and silent from 15 on, a machine at (3, -1.5) heard at every stop. Exact
+    # bearings, in degrees in the array frame, computed here.
+    k = np.arange(30)
+    poses = np.stack([6.0 * k / 29, np.zeros(30), 0.3 * k], axis=1)
+    talker, machine = np.array([1.5, 1.2]), np.array([3.0, -1.5])
+
+    def bearing(p, q):
+        a = np.degrees(np.arctan2(q[1] - p[1], q[0] - p[0]) - p[2])
+        return float((a + 180.0) % 360.0 - 180.0)
+
+    doas = [[bearing(p, talker)] * (i < 15) + [bearing(p, machine)] for i, p in enumerate(poses)]
+    got = iasm.map_sources(poses, doas, num=3, seed=1)
+    assert len(got["sources"]) == 2
+    at = {("talker" if s["y"] > 0 else "machine"): s for s in got["sources"]}
+    assert np.hypot(at["talker"]["x"] - 1.5, at["talker"]["y"] - 1.2) < 0.1
+    t, m = at["talker"], at["machine"]
+    assert (t["first_stop"], t["last_stop"], t["heard_stops"]) == (0, 14, 15)
+    assert (t["state"], t["since"]) == ("silent", 15)
+    assert (m["first_stop"], m["last_stop"], m["state"]) == (0, 29, "active")
+    assert "since" not in m and "appeared_at" not in m
