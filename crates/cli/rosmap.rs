@@ -139,7 +139,7 @@ pub fn grid(map: &OccupancyMap, header: Header) -> OccupancyGrid {
 
 /// A source silent at the end of the run ([`asm::SourceState::Silent`]): grey, where
 /// active ones are red.
-pub const SILENT_COLOUR: Color = Color {
+const SILENT_COLOUR: Color = Color {
     r: 0.55,
     g: 0.55,
     b: 0.55,
@@ -147,7 +147,7 @@ pub const SILENT_COLOUR: Color = Color {
 };
 
 /// Source `k`'s label: its id, DoA count and, when it fell silent, since which stop.
-pub fn label(k: usize, s: &asm::Source) -> String {
+fn label(k: usize, s: &asm::Source) -> String {
     match s.history.silent_since() {
         Some(since) => format!(
             "s{}: {} DoAs, silent since stop {since}",

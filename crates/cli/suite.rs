@@ -244,9 +244,10 @@ pub fn run_scene(path: &Path, base: &Settings, num: Option<usize>) -> Result<Vec
         path.display()
     );
     // What a map of the whole run should hold: every place a source stood at.
-    let sources = scene.places().len();
+    let places = scene.places();
+    let sources = places.len();
     let stops = scene.stops.len();
-    let changing = !crate::changes::changes(&scene.places(), stops).is_empty();
+    let changing = !crate::changes::changes(&places, stops).is_empty();
     let own_n = e.num.unwrap_or(user_n(sources));
     let n = num.unwrap_or(own_n);
     anyhow::ensure!(n >= 1, "--num: N must be at least 1, got 0");
@@ -254,7 +255,7 @@ pub fn run_scene(path: &Path, base: &Settings, num: Option<usize>) -> Result<Vec
     // The first seed is the scene as loaded; the others are prepared anew from it.
     let mut loaded = Some(scene);
     let mut name = None;
-    let mut runs = Vec::new(); // per seed, per method: (score, [(found, ospa) per map])
+    let mut runs = Vec::new(); // per seed, per method: (score, [MapJudged per map])
     for &seed in &seeds {
         let prepared = match loaded.take() {
             Some(p) => p,

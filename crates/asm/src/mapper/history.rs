@@ -107,6 +107,13 @@ pub(super) fn dating(heard: &[usize]) -> Vec<usize> {
     }
 }
 
+/// Whether `misses` stops that could have heard a source sounding, heard at each with
+/// probability `p`, would all have missed it with a chance of at most [`SILENT_P`]: then it
+/// did not sound.
+fn all_missed_unlikely(p: f64, misses: usize) -> bool {
+    (1.0 - p).powi(i32::try_from(misses).unwrap_or(i32::MAX)) <= SILENT_P
+}
+
 /// A source's state at the end of the run.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case", tag = "state")]
@@ -249,7 +256,9 @@ impl Mapper {
                 });
             room_in_row
                 && d <= reach
-                && !self.walled_off(p.position(), q)
+                && self
+                    .wall_short_of(p.position(), q, self.config.room_margin_m)
+                    .is_none()
                 && !places.iter().enumerate().any(|(j, &o)| {
                     let dj = dist(p, o);
                     j != me
@@ -263,7 +272,7 @@ impl Mapper {
         let p = recall.clamp(RECALL_RANGE.0, RECALL_RANGE.1);
         let missed_after: Vec<usize> = (last + 1..poses.len()).filter(|&k| could(k)).collect();
         let state = match missed_after.first() {
-            Some(&since) if (1.0 - p).powi(missed_after.len() as i32) <= SILENT_P => {
+            Some(&since) if all_missed_unlikely(p, missed_after.len()) => {
                 SourceState::Silent { since }
             }
             _ => SourceState::Active,
@@ -275,19 +284,9 @@ impl Mapper {
             heard_stops: mine.len(),
             heard_share: recall,
             state,
-            appeared_at: ((1.0 - p).powi(missed_before as i32) <= SILENT_P).then_some(first),
+            appeared_at: all_missed_unlikely(p, missed_before).then_some(first),
             moved_to: None,
             moved_from: None,
         }
-    }
-
-    /// Whether the map holds a wall between `a` and a source at `b`, leaving out the
-    /// [`IasmConfig::room_margin_m`] at `b` (its own wall).
-    fn walled_off(&self, a: [f64; 2], b: [f64; 2]) -> bool {
-        let d = [b[0] - a[0], b[1] - a[1]];
-        let keep = (1.0 - self.config.room_margin_m / d[0].hypot(d[1]).max(1e-9)).max(0.0);
-        self.map
-            .first_occupied(a, [a[0] + keep * d[0], a[1] + keep * d[1]])
-            .is_some()
     }
 }

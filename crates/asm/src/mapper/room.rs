@@ -49,16 +49,28 @@ impl Mapper {
     /// own (the wall it stands at, the furniture it stands on).
     fn seen_in_the_open(&self, p: [f64; 2], rays: &[Ray]) -> bool {
         let margin = self.config.room_margin_m;
-        rays.iter().any(|r| {
-            let d = [p[0] - r.from[0], p[1] - r.from[1]];
-            let len = d[0].hypot(d[1]);
-            let keep = 1.0 - margin / len;
-            len <= margin
-                || self
-                    .map
-                    .first_occupied(r.from, [r.from[0] + keep * d[0], r.from[1] + keep * d[1]])
-                    .is_none()
-        })
+        rays.iter()
+            .any(|r| self.wall_short_of(r.from, p, margin).is_none())
+    }
+
+    /// The first occupied cell on the straight way from `from` to `to`, leaving out the
+    /// last `margin` metres at `to` (the wall or furniture a source there stands at); `None`
+    /// when the way is clear or no longer than `margin`. What a stop sees of a place: the
+    /// room rule, the wall rule and the map's dating ask it alike.
+    pub(super) fn wall_short_of(
+        &self,
+        from: [f64; 2],
+        to: [f64; 2],
+        margin: f64,
+    ) -> Option<[f64; 2]> {
+        let d = [to[0] - from[0], to[1] - from[1]];
+        let len = d[0].hypot(d[1]);
+        if len <= margin {
+            return None;
+        }
+        let keep = 1.0 - margin / len;
+        self.map
+            .first_occupied(from, [from[0] + keep * d[0], from[1] + keep * d[1]])
     }
 
     /// Whether `p` lies in unknown space just behind a wall's face: the free cell nearest

@@ -329,19 +329,7 @@ impl Mapper {
         let clearance = self.config.wall_clearance_m;
         let hits: Vec<[f64; 2]> = rays
             .iter()
-            .filter_map(|r| {
-                let d = [p[0] - r.from[0], p[1] - r.from[1]];
-                let len = d[0].hypot(d[1]);
-                let keep = 1.0 - clearance / len;
-                (len > clearance)
-                    .then(|| {
-                        self.map.first_occupied(
-                            r.from,
-                            [r.from[0] + keep * d[0], r.from[1] + keep * d[1]],
-                        )
-                    })
-                    .flatten()
-            })
+            .filter_map(|r| self.wall_short_of(r.from, p, clearance))
             .collect();
         if hits.len() < 2 || hits.len() + 1 < rays.len() {
             return false;
@@ -422,10 +410,12 @@ impl Mapper {
         stops: &Stops,
         others: &[[f64; 2]],
     ) -> Option<Refusal> {
-        let reach = rays
+        let (nearest, reach) = rays
             .iter()
             .map(|r| (r.from[0] - q[0]).hypot(r.from[1] - q[1]))
-            .fold(0.0, f64::max);
+            .fold((f64::INFINITY, 0.0f64), |(lo, hi), d| {
+                (lo.min(d), hi.max(d))
+            });
         // Outside the stretch of the run that heard it, a stop speaks against it only from
         // nearer than every stop that did: a source may start or fall silent while the
         // robot drives (`history.rs`), and a source that sounded then would have been
@@ -438,10 +428,6 @@ impl Mapper {
         let (first, last) = rays
             .iter()
             .fold((usize::MAX, 0), |(a, b), r| (a.min(r.stop), b.max(r.stop)));
-        let nearest = rays
-            .iter()
-            .map(|r| (r.from[0] - q[0]).hypot(r.from[1] - q[1]))
-            .fold(f64::INFINITY, f64::min);
         let poses = stops.poses();
         let against: Vec<usize> = self
             .absences(q, reach, stops, others)

@@ -212,11 +212,17 @@ impl Place {
 }
 
 impl SourceSpec {
+    /// The first and last stop (inclusive) at which the source plays over a run of
+    /// `n_stops` stops: `at_stops`, or every stop.
+    pub fn stop_range(&self, n_stops: usize) -> [usize; 2] {
+        self.at_stops.unwrap_or([0, n_stops.saturating_sub(1)])
+    }
+
     /// The places this source stands at over a run of `n_stops` stops: its `pos` from the
-    /// first stop it plays at (`at_stops`, or 0), then each of its `moves`, up to the last
-    /// stop it plays at. `source` is recorded in each. Expects a checked scene.
+    /// first stop it plays at ([`SourceSpec::stop_range`]), then each of its `moves`, up to
+    /// the last stop it plays at. `source` is recorded in each. Expects a checked scene.
     pub fn places(&self, source: usize, n_stops: usize) -> Vec<Place> {
-        let [first, last] = self.at_stops.unwrap_or([0, n_stops.saturating_sub(1)]);
+        let [first, last] = self.stop_range(n_stops);
         let mut starts: Vec<(usize, [f64; 3])> = vec![(first, self.pos)];
         starts.extend(self.moves.iter().map(|m| (m.from_stop, m.pos)));
         starts

@@ -325,7 +325,7 @@ impl SourceSpec {
                 "a source on the robot moves with it; it has no moves of its own",
             ));
         }
-        let [first, last] = self.at_stops.unwrap_or([0, n_stops.saturating_sub(1)]);
+        let [first, last] = self.stop_range(n_stops);
         let mut after = first;
         for (j, m) in self.moves.iter().enumerate() {
             let field = format!("sources[{i}].moves[{j}]");
