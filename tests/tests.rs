@@ -3,6 +3,7 @@
 mod bag;
 mod cli;
 mod compare;
+mod diff;
 mod map;
 mod near;
 mod noise;

@@ -16,6 +16,8 @@
 //! - [`explain`]: which DoAs each source of a map explains, which none does, and where a
 //!   missed true source's DoAs went.
 //! - [`live`]: the live mapper behind `iasm ros2`, a robot's messages in, a map out.
+//! - [`mapfile`]: a map's JSON read back (positions, covariances, states), for `iasm
+//!   diff` and the live node's prior.
 //! - [`merge`]: the merging mapper behind `iasm ros2-merge`, several robots' stops in, one
 //!   building's map out.
 //!
@@ -24,7 +26,7 @@
 //! follower), `robot_noise` (the recording of the robot alone), `rosmap` (a map as ROS 2
 //! messages), `bagset` (a bag as a data set), `output` (files written whole: a temporary
 //! name, then a rename), `args` (the command line), and `cmd`, the commands, one module
-//! each (`ssl`, `map`, `eval`, `compare`, `simulate`, `regress`, `demo`, `watch`, `bag`,
+//! each (`ssl`, `map`, `diff`, `eval`, `compare`, `simulate`, `regress`, `demo`, `watch`, `bag`,
 //! `ros2`); none imports another. [`main`] runs the command line.
 //!
 //! Where these docs say why a default is what it is, they state the measurement that chose
@@ -62,6 +64,7 @@ pub mod explain;
 pub(crate) mod figure;
 pub mod generated;
 pub mod live;
+pub mod mapfile;
 pub mod merge;
 pub(crate) mod online;
 pub(crate) mod output;
@@ -118,6 +121,7 @@ fn run(cli: &args::Cli) -> anyhow::Result<Outcome> {
             figure,
         } => cmd::demo::run(*seed, png, mcap.as_deref(), figure),
         args::Command::Map(a) => cmd::map::run(a),
+        args::Command::Diff(a) => cmd::diff::run(a),
         #[cfg(feature = "ros2")]
         args::Command::Ros2(a) => cmd::ros2::run(a),
         #[cfg(feature = "ros2")]

@@ -11,6 +11,7 @@
 //! - [`online`]: the same, one stop at a time while the robot drives.
 //! - [`ospa`]: the OSPA metric with its localisation and cardinality parts.
 //! - [`align`]: how far a map lies from the truth once their frames agree (a diagnostic).
+//! - [`diff`]: two maps of one building compared: sources kept, moved, removed, added.
 //!
 //! # Example
 //!
@@ -41,6 +42,7 @@
 pub mod align;
 pub mod assoc;
 pub mod dbscan;
+pub mod diff;
 pub mod error;
 pub mod map;
 pub mod mapper;

@@ -2,6 +2,7 @@
 //! validated values ([`Settings`], [`SurveyInputs`]): ripgrep's two stages, so that the
 //! library stays callable without a command line.
 
+mod diff;
 mod generated;
 mod inputs;
 mod robot;
@@ -13,6 +14,7 @@ use std::path::PathBuf;
 
 use clap::{Parser, Subcommand};
 
+pub use diff::DiffArgs;
 pub use generated::{DrawArgs, GeneratedArgs, ScenesCommand};
 pub use inputs::AngleUnit;
 #[cfg(feature = "ros2")]
@@ -161,6 +163,10 @@ pub enum Command {
     },
     /// Map the sound sources with I-ASM from DoA tables or raw audio.
     Map(MapArgs),
+    /// Two maps of one building compared (say last week's and today's): the sources kept,
+    /// moved, removed and added, each with its distance and a confidence from the maps'
+    /// covariances; as a table, JSON and a figure of both maps.
+    Diff(DiffArgs),
     /// The paper's Monte Carlo evaluation: OSPA of CA, WS and WDP over many seeds.
     Eval(EvalArgs),
     /// Every SSL method side by side on one data set: DoA score, errors by distance,

@@ -6,6 +6,7 @@
 pub mod bag;
 pub mod compare;
 pub mod demo;
+pub mod diff;
 pub mod eval;
 pub mod map;
 pub mod regress;

@@ -157,23 +157,7 @@ pub fn maps(report: &Report, path: &Path) -> Result<()> {
         .iter()
         .chain(&report.path)
         .chain(report.rows.iter().flat_map(|r| r.map_seed0.iter()));
-    let (mut x0, mut x1, mut y0, mut y1) = (
-        f64::INFINITY,
-        f64::NEG_INFINITY,
-        f64::INFINITY,
-        f64::NEG_INFINITY,
-    );
-    for p in pts {
-        x0 = x0.min(p[0]);
-        x1 = x1.max(p[0]);
-        y0 = y0.min(p[1]);
-        y1 = y1.max(p[1]);
-    }
-    if !x0.is_finite() {
-        (x0, x1, y0, y1) = (-1.0, 1.0, -1.0, 1.0);
-    }
-    let pad = 0.5;
-    let (x0, x1, y0, y1) = (x0 - pad, x1 + pad, y0 - pad, y1 + pad);
+    let (x0, x1, y0, y1) = super::bounds(pts.copied(), 0.5).unwrap_or((-1.5, 1.5, -1.5, 1.5));
     // Equal scale in x and y: panels take the data's aspect.
     let panel_w = 420u32;
     let panel_h =

@@ -41,15 +41,15 @@ pub struct MapFigure<'a> {
 }
 
 /// World region `(x0, x1, y0, y1)` drawn.
-type Region = (f64, f64, f64, f64);
+pub(super) type Region = (f64, f64, f64, f64);
 
 /// The map's chart: world metres on both axes.
-type Chart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+pub(super) type Chart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
 
 /// Occupied cells.
-const OCCUPIED: RGBColor = RGBColor(60, 60, 60);
+pub(super) const OCCUPIED: RGBColor = RGBColor(60, 60, 60);
 /// Unknown cells.
-const UNKNOWN: RGBColor = RGBColor(215, 215, 215);
+pub(super) const UNKNOWN: RGBColor = RGBColor(215, 215, 215);
 /// The trajectory and its stops.
 const ROBOT: RGBColor = RGBColor(40, 70, 200);
 /// The true sources.
@@ -83,22 +83,7 @@ impl MapFigure<'_> {
             .map(|p| [p.x, p.y])
             .chain(self.truth.unwrap_or(&[]).iter().copied())
             .chain(self.result.sources.iter().map(|s| [s.x, s.y]));
-        let (mut x0, mut x1, mut y0, mut y1) = (
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-        );
-        for p in pts.filter(|p| p[0].is_finite() && p[1].is_finite()) {
-            x0 = x0.min(p[0]);
-            x1 = x1.max(p[0]);
-            y0 = y0.min(p[1]);
-            y1 = y1.max(p[1]);
-        }
-        if !x0.is_finite() {
-            return full;
-        }
-        (x0 - MARGIN_M, x1 + MARGIN_M, y0 - MARGIN_M, y1 + MARGIN_M)
+        super::bounds(pts, MARGIN_M).unwrap_or(full)
     }
 
     /// Pixels around the plot: (left, right, top, bottom); the legend is on the right.
@@ -115,11 +100,7 @@ impl MapFigure<'_> {
 
 impl Draw for MapFigure<'_> {
     fn size(&self) -> (u32, u32) {
-        let (x0, x1, y0, y1) = self.region();
-        let (l, r, t, b) = self.decoration();
-        let plot_w = f64::from(self.width.saturating_sub(l + r).max(100));
-        let plot_h = (plot_w * (y1 - y0) / (x1 - x0)).clamp(100.0, 4.0 * plot_w);
-        (self.width, plot_h.round() as u32 + t + b)
+        metric_size(self.width, self.region(), self.decoration())
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()> {
@@ -127,25 +108,9 @@ impl Draw for MapFigure<'_> {
         let (l, _, _, b) = self.decoration();
         let small = self.font(13);
         let (plot, side) = root.split_horizontally(root.dim_in_pixel().0 - self.legend_width());
-        let mut chart = ChartBuilder::on(&plot)
-            .caption(&self.title, ("sans-serif", self.font(18)))
-            .margin_right(20)
-            .margin_left(10)
-            .margin_top(5)
-            .x_label_area_size(b - 10)
-            .y_label_area_size(l - 10)
-            .build_cartesian_2d(x0..x1, y0..y1)
-            .map_err(fail)?;
-        chart
-            .configure_mesh()
-            .x_desc("x (m)")
-            .y_desc("y (m)")
-            .label_style(("sans-serif", small))
-            .axis_desc_style(("sans-serif", self.font(15)))
-            .light_line_style(WHITE.mix(0.0))
-            .bold_line_style(BLACK.mix(0.08))
-            .draw()
-            .map_err(fail)?;
+        let mut chart = metric_chart(&plot, &self.title, (x0, x1, y0, y1), (l, b), |f| {
+            self.font(f)
+        })?;
         self.draw_grid(&mut chart, (x0, x1, y0, y1))?;
         self.draw_clouds(&mut chart)?;
         self.draw_robot(
@@ -173,56 +138,13 @@ impl Draw for MapFigure<'_> {
 
 /// The layers of the picture, each drawn on the chart in turn.
 impl MapFigure<'_> {
-    /// The occupancy map within `region`: unknown cells grey, occupied dark, free left
-    /// white; one rectangle per run of equal cells in a row.
+    /// The occupancy map within `region` ([`draw_grid`]).
     fn draw_grid<DB: DrawingBackend>(
         &self,
         chart: &mut Chart<'_, DB>,
         region: Region,
     ) -> Result<()> {
-        let res = self.map.resolution();
-        chart
-            .draw_series(self.runs(region).iter().map(|&(c, xa, xb, yt)| {
-                let fill = if c == Cell::Occupied {
-                    OCCUPIED
-                } else {
-                    UNKNOWN
-                };
-                Rectangle::new([(xa, yt), (xb, yt - res)], fill.filled())
-            }))
-            .map_err(fail)?;
-        Ok(())
-    }
-
-    /// The runs of equal cells, occupied or unknown, in each row of the map within
-    /// `(x0, x1, y0, y1)`: their cell, their left and right edges and their row's top (m).
-    fn runs(&self, (x0, x1, y0, y1): Region) -> Vec<(Cell, f64, f64, f64)> {
-        let m = self.map;
-        let res = m.resolution();
-        let (ox, oy) = (m.origin()[0], m.origin()[1]);
-        let col = |x: f64| ((x - ox) / res).floor().clamp(0.0, m.width() as f64) as usize;
-        let (i0, i1) = (col(x0), col(x1));
-        let row_of = |y: f64| {
-            let fr = ((y - oy) / res).floor().clamp(0.0, m.height() as f64) as usize;
-            m.height() - fr.min(m.height())
-        };
-        let (j0, j1) = (row_of(y1).saturating_sub(1), row_of(y0).min(m.height()));
-        let mut runs = Vec::new();
-        for j in j0..j1 {
-            let ytop = oy + (m.height() - j) as f64 * res;
-            let mut i = i0;
-            while i < i1.min(m.width()) {
-                let c = m.cell(i, j);
-                let start = i;
-                while i < i1.min(m.width()) && m.cell(i, j) == c {
-                    i += 1;
-                }
-                if c != Cell::Free {
-                    runs.push((c, ox + start as f64 * res, ox + i as f64 * res, ytop));
-                }
-            }
-        }
-        runs
+        draw_grid(chart, self.map, region)
     }
 
     /// Each source's particle cloud, one colour per source.
@@ -307,8 +229,103 @@ impl MapFigure<'_> {
     }
 }
 
+/// The size (px) of a figure `width` wide whose plot shows `region` at one scale in x and
+/// y, with `(left, right, top, bottom)` pixels around the plot.
+pub(super) fn metric_size(
+    width: u32,
+    (x0, x1, y0, y1): Region,
+    (l, r, t, b): (u32, u32, u32, u32),
+) -> (u32, u32) {
+    let plot_w = f64::from(width.saturating_sub(l + r).max(100));
+    let plot_h = (plot_w * (y1 - y0) / (x1 - x0)).clamp(100.0, 4.0 * plot_w);
+    (width, plot_h.round() as u32 + t + b)
+}
+
+/// A chart of world metres over `region` on `plot`, titled, with its axes described and a
+/// light grid; `(l, b)` are the pixels left of and below the plot, `font` scales a font
+/// size with the figure.
+pub(super) fn metric_chart<'a, DB: DrawingBackend>(
+    plot: &'a DrawingArea<DB, Shift>,
+    title: &str,
+    (x0, x1, y0, y1): Region,
+    (l, b): (u32, u32),
+    font: impl Fn(u32) -> u32,
+) -> Result<Chart<'a, DB>> {
+    let mut chart = ChartBuilder::on(plot)
+        .caption(title, ("sans-serif", font(18)))
+        .margin_right(20)
+        .margin_left(10)
+        .margin_top(5)
+        .x_label_area_size(b - 10)
+        .y_label_area_size(l - 10)
+        .build_cartesian_2d(x0..x1, y0..y1)
+        .map_err(fail)?;
+    chart
+        .configure_mesh()
+        .x_desc("x (m)")
+        .y_desc("y (m)")
+        .label_style(("sans-serif", font(13)))
+        .axis_desc_style(("sans-serif", font(15)))
+        .light_line_style(WHITE.mix(0.0))
+        .bold_line_style(BLACK.mix(0.08))
+        .draw()
+        .map_err(fail)?;
+    Ok(chart)
+}
+
+/// The occupancy map within `region`: unknown cells grey, occupied dark, free left white;
+/// one rectangle per run of equal cells in a row.
+pub(super) fn draw_grid<DB: DrawingBackend>(
+    chart: &mut Chart<'_, DB>,
+    map: &OccupancyMap,
+    region: Region,
+) -> Result<()> {
+    let res = map.resolution();
+    chart
+        .draw_series(runs(map, region).iter().map(|&(c, xa, xb, yt)| {
+            let fill = if c == Cell::Occupied {
+                OCCUPIED
+            } else {
+                UNKNOWN
+            };
+            Rectangle::new([(xa, yt), (xb, yt - res)], fill.filled())
+        }))
+        .map_err(fail)?;
+    Ok(())
+}
+
+/// The runs of equal cells, occupied or unknown, in each row of `m` within
+/// `(x0, x1, y0, y1)`: their cell, their left and right edges and their row's top (m).
+fn runs(m: &OccupancyMap, (x0, x1, y0, y1): Region) -> Vec<(Cell, f64, f64, f64)> {
+    let res = m.resolution();
+    let (ox, oy) = (m.origin()[0], m.origin()[1]);
+    let col = |x: f64| ((x - ox) / res).floor().clamp(0.0, m.width() as f64) as usize;
+    let (i0, i1) = (col(x0), col(x1));
+    let row_of = |y: f64| {
+        let fr = ((y - oy) / res).floor().clamp(0.0, m.height() as f64) as usize;
+        m.height() - fr.min(m.height())
+    };
+    let (j0, j1) = (row_of(y1).saturating_sub(1), row_of(y0).min(m.height()));
+    let mut runs = Vec::new();
+    for j in j0..j1 {
+        let ytop = oy + (m.height() - j) as f64 * res;
+        let mut i = i0;
+        while i < i1.min(m.width()) {
+            let c = m.cell(i, j);
+            let start = i;
+            while i < i1.min(m.width()) && m.cell(i, j) == c {
+                i += 1;
+            }
+            if c != Cell::Free {
+                runs.push((c, ox + start as f64 * res, ox + i as f64 * res, ytop));
+            }
+        }
+    }
+    runs
+}
+
 /// The 2-sigma ellipse of covariance `cov` around `m`, as a closed polyline.
-fn ellipse(m: [f64; 2], cov: [[f64; 2]; 2]) -> Vec<(f64, f64)> {
+pub(super) fn ellipse(m: [f64; 2], cov: [[f64; 2]; 2]) -> Vec<(f64, f64)> {
     let (a, b, d) = (cov[0][0], cov[0][1], cov[1][1]);
     let l1 = asm::pf::max_eigenvalue(cov).max(0.0);
     let l2 = (a + d - l1).max(0.0);
@@ -336,7 +353,7 @@ pub fn map(path: &std::path::Path, fig: &MapFigure<'_>) -> Result<()> {
 
 /// A legend entry's mark.
 #[derive(Clone, Copy)]
-enum Glyph {
+pub(super) enum Glyph {
     Box(RGBColor),
     Line(RGBColor),
     Dot(RGBColor),
@@ -346,7 +363,7 @@ enum Glyph {
 }
 
 /// The legend as a column of entries, framed, at the top of `area`.
-fn legend_panel<DB: DrawingBackend>(
+pub(super) fn legend_panel<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     entries: &[(Glyph, &str)],
     font_px: u32,

@@ -6,6 +6,7 @@
 //! | [`comparison()`]: `ospa.svg` | `iasm compare --out` | which DoA source gives the best maps, and how the seeds spread |
 //! | [`comparison()`]: `error_by_distance.svg` | `iasm compare --out` | at what range a method's DoAs fail |
 //! | [`comparison()`]: `maps.svg` | `iasm compare --out` | what each method's errors look like on the map |
+//! | [`diff()`] | `iasm diff --png` | what changed between two maps of one building |
 //! | [`curve()`] | `iasm watch --replay --curve` | how fast the map converges as the robot moves |
 //!
 //! A figure goes to SVG or PNG by its file's extension. SVG keeps text as text (a reader or
@@ -16,6 +17,7 @@
 
 mod comparison;
 mod curve;
+mod diff;
 mod map;
 
 use std::path::Path;
@@ -27,6 +29,7 @@ use plotters::prelude::*;
 
 pub use comparison::comparison;
 pub use curve::{Curve, curve};
+pub use diff::{DiffFigure, diff};
 pub use map::{MapFigure, map};
 
 /// Colours of successive rows or sources (colour-blind-safe, Okabe & Ito).
@@ -43,6 +46,28 @@ const PALETTE: [RGBColor; 8] = [
 
 fn colour(i: usize) -> RGBColor {
     PALETTE[i % PALETTE.len()]
+}
+
+/// The bounding box `(x0, x1, y0, y1)` of the finite points among `pts`, widened by
+/// `margin` on every side; `None` when there is none.
+fn bounds(pts: impl IntoIterator<Item = [f64; 2]>, margin: f64) -> Option<(f64, f64, f64, f64)> {
+    let (mut x0, mut x1, mut y0, mut y1) = (
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+    );
+    for p in pts
+        .into_iter()
+        .filter(|p| p[0].is_finite() && p[1].is_finite())
+    {
+        x0 = x0.min(p[0]);
+        x1 = x1.max(p[0]);
+        y0 = y0.min(p[1]);
+        y1 = y1.max(p[1]);
+    }
+    x0.is_finite()
+        .then_some((x0 - margin, x1 + margin, y0 - margin, y1 + margin))
 }
 
 /// A plotters error as ours (its drawing errors are `Debug` only).

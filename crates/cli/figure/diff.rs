@@ -1,0 +1,182 @@
+//! The comparison of two maps (`iasm diff --png`): both maps' sources with their 2-sigma
+//! ellipses, the earlier as rings and the later as dots, coloured by what happened to each
+//! (kept, moved with an arrow from its old place to its new one, removed, added), over the
+//! occupancy map when one is given; world axes in metres at one scale.
+
+use anyhow::Result;
+use asm::diff::{Change, ChangeKind, Placed};
+use asm::map::OccupancyMap;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+
+use super::map::{
+    Chart, Glyph, OCCUPIED, Region, draw_grid, ellipse, legend_panel, metric_chart, metric_size,
+};
+use super::{Draw, fail};
+
+/// What the comparison's figure shows.
+pub struct DiffFigure<'a> {
+    /// The title: the two maps and the counts.
+    pub title: String,
+    /// The occupancy map to draw under the sources, if any.
+    pub map: Option<&'a OccupancyMap>,
+    /// The earlier map's sources.
+    pub before: &'a [Placed],
+    /// The later map's sources.
+    pub after: &'a [Placed],
+    /// What happened to each (`asm::diff::diff` of the two).
+    pub changes: &'a [Change],
+    /// Width (px).
+    pub width: u32,
+}
+
+/// Margin around the sources (m).
+const MARGIN_M: f64 = 1.0;
+
+/// Colour-blind-safe (Okabe & Ito) colours of the four kinds.
+fn kind_colour(k: ChangeKind) -> RGBColor {
+    match k {
+        ChangeKind::Kept => RGBColor(0, 114, 178),
+        ChangeKind::Moved => RGBColor(230, 159, 0),
+        ChangeKind::Removed => RGBColor(213, 94, 0),
+        ChangeKind::Added => RGBColor(0, 158, 115),
+    }
+}
+
+impl DiffFigure<'_> {
+    fn font(&self, base: u32) -> u32 {
+        (f64::from(base) * f64::from(self.width) / 1000.0)
+            .round()
+            .max(8.0) as u32
+    }
+
+    fn legend_width(&self) -> u32 {
+        self.font(13) * 13
+    }
+
+    fn region(&self) -> Region {
+        let pts = self.before.iter().chain(self.after).map(|p| [p.x, p.y]);
+        super::bounds(pts, MARGIN_M).unwrap_or_else(|| match self.map {
+            Some(m) => (
+                m.origin()[0],
+                m.origin()[0] + m.width() as f64 * m.resolution(),
+                m.origin()[1],
+                m.origin()[1] + m.height() as f64 * m.resolution(),
+            ),
+            None => (-1.0, 1.0, -1.0, 1.0),
+        })
+    }
+
+    fn decoration(&self) -> (u32, u32, u32, u32) {
+        let f = self.font(16);
+        (f * 4 + 10, 20 + self.legend_width(), f * 3, f * 3 + 10)
+    }
+
+    fn draw_sources<DB: DrawingBackend>(&self, chart: &mut Chart<'_, DB>) -> Result<()> {
+        for c in self.changes {
+            let col = kind_colour(c.kind);
+            let old = c.before.map(|i| self.before[i]);
+            let new = c.after.map(|j| self.after[j]);
+            for p in old.iter().chain(new.iter()) {
+                chart
+                    .draw_series(LineSeries::new(
+                        ellipse([p.x, p.y], p.covariance),
+                        col.mix(0.6).stroke_width(1),
+                    ))
+                    .map_err(fail)?;
+            }
+            if let (ChangeKind::Moved, Some(a), Some(b)) = (c.kind, old, new) {
+                chart
+                    .draw_series(std::iter::once(PathElement::new(
+                        vec![(a.x, a.y), (b.x, b.y)],
+                        col.stroke_width(2),
+                    )))
+                    .map_err(fail)?;
+                // The arrow's head: two strokes back from the new place.
+                let (dx, dy) = (b.x - a.x, b.y - a.y);
+                let len = dx.hypot(dy).max(1e-9);
+                let (ux, uy) = (dx / len, dy / len);
+                let h = 0.15_f64.min(0.4 * len);
+                for s in [1.0, -1.0] {
+                    let (hx, hy) = (
+                        b.x - h * (ux * 0.87 - s * uy * 0.5),
+                        b.y - h * (uy * 0.87 + s * ux * 0.5),
+                    );
+                    chart
+                        .draw_series(std::iter::once(PathElement::new(
+                            vec![(b.x, b.y), (hx, hy)],
+                            col.stroke_width(2),
+                        )))
+                        .map_err(fail)?;
+                }
+            }
+            if let Some(a) = old {
+                chart
+                    .draw_series(std::iter::once(Circle::new(
+                        (a.x, a.y),
+                        7,
+                        col.stroke_width(2),
+                    )))
+                    .map_err(fail)?;
+                if c.kind == ChangeKind::Removed {
+                    chart
+                        .draw_series(std::iter::once(Cross::new(
+                            (a.x, a.y),
+                            6,
+                            col.stroke_width(2),
+                        )))
+                        .map_err(fail)?;
+                }
+            }
+            if let Some(b) = new {
+                chart
+                    .draw_series(std::iter::once(Circle::new((b.x, b.y), 4, col.filled())))
+                    .map_err(fail)?;
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Draw for DiffFigure<'_> {
+    fn size(&self) -> (u32, u32) {
+        metric_size(self.width, self.region(), self.decoration())
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()> {
+        let region = self.region();
+        let (l, _, _, b) = self.decoration();
+        let small = self.font(13);
+        let (plot, side) = root.split_horizontally(root.dim_in_pixel().0 - self.legend_width());
+        let mut chart = metric_chart(&plot, &self.title, region, (l, b), |f| self.font(f))?;
+        if let Some(map) = self.map {
+            draw_grid(&mut chart, map, region)?;
+        }
+        self.draw_sources(&mut chart)?;
+        let mut entries = Vec::new();
+        if self.map.is_some() {
+            entries.push((Glyph::Box(OCCUPIED), "occupied"));
+        }
+        entries.extend([
+            (Glyph::Ring(BLACK, 2), "earlier map"),
+            (Glyph::Dot(BLACK), "later map"),
+            (Glyph::Ring(kind_colour(ChangeKind::Kept), 1), "kept"),
+            (
+                Glyph::Line(kind_colour(ChangeKind::Moved)),
+                "moved (to the dot)",
+            ),
+            (Glyph::Cross(kind_colour(ChangeKind::Removed)), "removed"),
+            (Glyph::Dot(kind_colour(ChangeKind::Added)), "added"),
+            (Glyph::None, "ellipses: 2 sigma"),
+        ]);
+        legend_panel(&side, &entries, small)
+    }
+}
+
+/// Draws `fig` to `path` (PNG or SVG by the extension), whole.
+///
+/// # Errors
+/// As [`super::write`].
+pub fn diff(path: &std::path::Path, fig: &DiffFigure<'_>) -> Result<()> {
+    super::write(path, fig)
+}
