@@ -402,6 +402,88 @@ fn the_live_mapper_fed_a_bag_maps_what_bag_then_map_maps() {
     }
 }
 
+/// A prior map (`iasm ros2 --prior`): every map of the run is compared with it. The bag's
+/// talkers stand at (2.0, 4.0) and (4.5, 1.0); the prior has the first where it is, the
+/// second 2 m north (so it moved), and a third at (0.5, 0.5) that the run does not hear
+/// (removed). The JSON lists the changes and the messages carry them as markers.
+#[test]
+fn a_live_mapper_with_a_prior_says_what_changed_against_it() {
+    let bag_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/bags/sim_run.mcap");
+    let dir = tempdir();
+    let prior_path = path(&dir, "prior.json");
+    std::fs::write(&prior_path, PRIOR_MAP).unwrap();
+    let prior = iasm::mapfile::MapFile::read(&prior_path).unwrap();
+    let mut live = iasm::live::LiveMapper::new(
+        iasm::settings::Settings::default(),
+        bag::ReadOptions::default(),
+        bag::StopOptions::default(),
+        5,
+    )
+    .unwrap()
+    .with_prior(prior);
+    bag::ros2::scan_files(&bag_path, |m| {
+        live.push(
+            &m.connection.topic,
+            &m.connection.msg_type,
+            m.time_ns,
+            m.data,
+        );
+        live.step(false);
+        Ok(())
+    })
+    .unwrap();
+    live.step(true);
+    let fin = live.finish().unwrap();
+    let report = serde_json::to_value(live.report(&fin, true)).unwrap();
+    assert_eq!(report["prior"], arg(&prior_path));
+    let kinds: Vec<(&str, u64)> = report["changes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| {
+            (
+                c["kind"].as_str().unwrap(),
+                c["before"].as_u64().unwrap_or(99),
+            )
+        })
+        .collect();
+    assert_eq!(
+        kinds,
+        [("kept", 0), ("moved", 1), ("removed", 2)],
+        "{report:#}"
+    );
+    let moved = &report["changes"][1];
+    assert!(
+        (moved["distance_m"].as_f64().unwrap() - 2.0).abs() < 0.15,
+        "{moved}"
+    );
+    let m = live.messages(&fin, 7).unwrap();
+    let markers = m.changes.expect("the changes' markers").markers;
+    let ns = |n: &str| markers.iter().filter(|k| k.ns == n).count();
+    assert_eq!(
+        (
+            ns("kept"),
+            ns("moved"),
+            ns("removed"),
+            ns("added"),
+            ns("change_arrows")
+        ),
+        (1, 1, 1, 0, 1)
+    );
+    let removed = markers.iter().find(|k| k.ns == "removed").unwrap();
+    assert_eq!(
+        (removed.pose.position.x, removed.pose.position.y),
+        (0.5, 0.5)
+    );
+    assert!(markers.iter().all(|k| k.header.frame_id == "map"));
+}
+
+/// The prior map of the tests above (frame `map`).
+const PRIOR_MAP: &str = r#"{"frame_id": "map", "sources": [
+    {"x": 2.0, "y": 4.0, "covariance": [[0.004, 0.0], [0.0, 0.004]]},
+    {"x": 4.5, "y": 3.0, "covariance": [[0.004, 0.0], [0.0, 0.004]]},
+    {"x": 0.5, "y": 0.5, "covariance": [[0.004, 0.0], [0.0, 0.004]]}]}"#;
+
 /// Whether this process may make a network namespace of its own (root, or a user namespace
 /// allowed): the DDS tests run only inside one, so that no packet leaves the machine.
 #[cfg(feature = "ros2")]
@@ -449,6 +531,8 @@ fn ros2_node_maps_a_robot_run_live_as_map_maps_the_bag() {
     }
     let dir = tempdir();
     let bag_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/bags/sim_run.mcap");
+    // With a prior map: every update also says what changed against it.
+    std::fs::write(dir.path().join("prior.json"), PRIOR_MAP).unwrap();
     let logs = run_node_and_player(dir.path(), &bag_path);
 
     let ds = path(&dir, "ds");
@@ -487,6 +571,23 @@ fn ros2_node_maps_a_robot_run_live_as_map_maps_the_bag() {
         .filter(|m| m.topic == "/iasm/source_poses")
         .collect();
     assert_eq!(updates.len(), 7, "{logs}");
+    let changes: Vec<&Read> = msgs.iter().filter(|m| m.topic == "/iasm/changes").collect();
+    assert_eq!(changes.len(), 7, "{logs}");
+    let last_changes = MarkerArray::from_cdr(&changes[6].data).unwrap();
+    let ns: Vec<&str> = last_changes
+        .markers
+        .iter()
+        .filter(|k| k.kind == Marker::SPHERE && k.action == Marker::ADD)
+        .map(|k| k.ns.as_str())
+        .collect();
+    assert_eq!(ns, ["kept", "moved", "removed"], "{logs}");
+    let kinds: Vec<&str> = node["changes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c["kind"].as_str().unwrap())
+        .collect();
+    assert_eq!(kinds, ["kept", "moved", "removed"], "{logs}");
     let last = PoseArray::from_cdr(&updates[6].data).unwrap();
     assert_eq!(last.header.frame_id, "map");
     close(
@@ -502,7 +603,8 @@ fn ros2_node_maps_a_robot_run_live_as_map_maps_the_bag() {
 /// A `--ros-args` block the node cannot take is refused before any DDS starts, with what
 /// is wrong in it: a parameter that is no setting (the list of those that are), a value
 /// the setting's flag refuses, a parameters file that is not there, an option rcl has
-/// and iasm does not read, and the block given to a command that is no node.
+/// and iasm does not read, the block given to a command that is no node, and a prior map
+/// that is not there.
 #[cfg(feature = "ros2")]
 #[test]
 fn a_ros_args_block_the_node_cannot_take_is_refused_with_its_reason() {
@@ -520,6 +622,10 @@ fn a_ros_args_block_the_node_cannot_take_is_refused_with_its_reason() {
             "/nonexistent/p.yaml",
         ),
         (&["ros2", "--ros-args", "-x"], "\"-x\""),
+        (
+            &["ros2", "--prior", "/nonexistent/prior.json"],
+            "/nonexistent/prior.json",
+        ),
         (
             &["map", "--ros-args", "-r", "a:=b"],
             "iasm ros2, ros2-merge and ros2-play only",
@@ -821,7 +927,8 @@ set -u
 ip link set lo up multicast on
 ip route add 224.0.0.0/4 dev lo
 cd "$WORK"
-"$IASM" ros2 --seed 5 --out node.json --mcap node.mcap > node.log 2> node.err &
+PRIOR=""; [ -f prior.json ] && PRIOR="--prior prior.json"
+"$IASM" ros2 --seed 5 --out node.json --mcap node.mcap $PRIOR > node.log 2> node.err &
 NODE=$!
 "$IASM" ros2-play "$BAG" --listen heard.json --linger 120 > play.log 2> play.err &
 PLAY=$!

@@ -68,6 +68,8 @@ pub struct LiveMapper {
     notes: BTreeMap<String, usize>,
     /// The last "not yet" state of the run (no audio yet, ...), said once.
     waiting: Option<String>,
+    /// A map of an earlier run that each map is compared with (`iasm ros2 --prior`).
+    prior: Option<crate::mapfile::MapFile>,
 }
 
 /// The map JSON the node writes.
@@ -93,6 +95,13 @@ pub struct LiveReport<'a> {
     pub refused: &'a [asm::Refused],
     /// What went wrong on the way, counted.
     pub notes: Vec<String>,
+    /// With a prior map: the file.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub prior: Option<&'a std::path::Path>,
+    /// With a prior map: what changed against it (as `iasm diff` lists it, `before`
+    /// indexing the prior's sources and `after` these).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub changes: Option<Vec<asm::diff::Change>>,
 }
 
 impl LiveMapper {
@@ -120,7 +129,28 @@ impl LiveMapper {
             stops: Vec::new(),
             notes: BTreeMap::new(),
             waiting: None,
+            prior: None,
         })
+    }
+
+    /// Compares every map with `prior`, a map of an earlier run in the same frame (`iasm
+    /// ros2 --prior`): the messages then carry what changed ([`MapMessages::changes`]) and
+    /// the JSON its list ([`LiveReport::changes`]).
+    #[must_use]
+    pub fn with_prior(mut self, prior: crate::mapfile::MapFile) -> Self {
+        self.prior = Some(prior);
+        self
+    }
+
+    /// What changed between the prior map and `result` (`None` without a prior).
+    pub fn changes(&self, result: &MapResult) -> Option<Vec<asm::diff::Change>> {
+        let prior = self.prior.as_ref()?;
+        let now: Vec<asm::diff::Placed> = result.sources.iter().map(Into::into).collect();
+        Some(asm::diff::diff(
+            &prior.placed(),
+            &now,
+            &asm::diff::DiffConfig::default(),
+        ))
     }
 
     /// Keeps audio at most `seconds` while no pose comes (`iasm ros2 --pending-audio`).
@@ -308,7 +338,17 @@ impl LiveMapper {
             .stops
             .iter()
             .map(|s| (s.pose, s.arrived_ns, s.doas_deg.as_slice()));
-        Some(crate::rosmap::messages_over(result, stops, map, stamp_ns))
+        let mut m = crate::rosmap::messages_over(result, stops, map, stamp_ns);
+        if let (Some(prior), Some(changes)) = (&self.prior, self.changes(result)) {
+            let now: Vec<asm::diff::Placed> = result.sources.iter().map(Into::into).collect();
+            m.changes = Some(crate::rosmap::change_markers(
+                &prior.placed(),
+                &now,
+                &changes,
+                &m.sources.markers[0].header,
+            ));
+        }
+        Some(m)
     }
 
     /// The map JSON of `result`.
@@ -324,6 +364,8 @@ impl LiveMapper {
             sources: &result.sources,
             refused: &result.refused,
             notes: self.notes(),
+            prior: self.prior.as_ref().map(|p| p.path.as_path()),
+            changes: self.changes(result),
         }
     }
 }

@@ -8,6 +8,7 @@
 //! | `/iasm/path` | `nav_msgs/Path` | the stops, in order, with the robot's heading |
 //! | `/iasm/source_poses` | `geometry_msgs/PoseArray` | the sources, for programs (in the map JSON's order) |
 //! | `/map` | `nav_msgs/OccupancyGrid` | the occupancy map the sources were searched in |
+//! | `/iasm/changes` | `visualization_msgs/MarkerArray` | with a prior map (`iasm ros2 --prior`): what changed against it (`asm::diff`), a sphere per change in the namespace of its kind (`kept`, `moved`, `removed`, `added`; id its index in the comparison), coloured by kind, a `moved` arrow from the old place to the new, and a label (`change_labels`) saying what and how sure; led by a `DELETEALL` |
 //!
 //! Source `k` of the map JSON (from 0) is marker id `k` in each namespace and is labelled
 //! `s{k+1}`. The ellipse's axes are 4 sigma long (the 2-sigma ellipse's diameters) along the
@@ -35,6 +36,8 @@ pub const PATH_TOPIC: &str = "/iasm/path";
 pub const SOURCE_POSES_TOPIC: &str = "/iasm/source_poses";
 /// The occupancy map.
 pub const MAP_TOPIC: &str = "/map";
+/// What changed against a prior map.
+pub const CHANGES_TOPIC: &str = "/iasm/changes";
 /// How far a DoA's ray is drawn from the robot (m): across a room, short of the next.
 pub const RAY_LENGTH_M: f64 = 5.0;
 /// A source's sphere (m across).
@@ -57,6 +60,8 @@ pub struct MapMessages {
     pub source_poses: PoseArray,
     /// The occupancy map.
     pub grid: OccupancyGrid,
+    /// What changed against a prior map, when there is one ([`change_markers`]).
+    pub changes: Option<MarkerArray>,
 }
 
 /// The stops of a map: each pose, when it was heard, and its DoAs (degrees, array frame).
@@ -271,6 +276,7 @@ impl MapMessages {
             path,
             source_poses,
             grid: grid(map, header),
+            changes: None,
         }
     }
 
@@ -307,8 +313,81 @@ impl MapMessages {
         w.write(PATH_TOPIC, Qos::Reliable, t, &self.path)?;
         w.write(DOAS_TOPIC, Qos::Reliable, t, &self.doas)?;
         w.write(SOURCES_TOPIC, Qos::Reliable, t, &self.sources)?;
+        if let Some(changes) = &self.changes {
+            w.write(CHANGES_TOPIC, Qos::Reliable, t, changes)?;
+        }
         w.write(SOURCE_POSES_TOPIC, Qos::Reliable, t, &self.source_poses)
     }
+}
+
+/// Colour-blind-safe (Okabe & Ito) colours of the four kinds of change, as `iasm diff`'s
+/// figure draws them.
+fn change_colour(k: asm::diff::ChangeKind) -> Color {
+    use asm::diff::ChangeKind;
+    match k {
+        ChangeKind::Kept => Color::new(0.0, 0.447, 0.698, 1.0),
+        ChangeKind::Moved => Color::new(0.902, 0.624, 0.0, 1.0),
+        ChangeKind::Removed => Color::new(0.835, 0.369, 0.0, 1.0),
+        ChangeKind::Added => Color::new(0.0, 0.620, 0.451, 1.0),
+    }
+}
+
+/// What changed between `prior` and `now` (`changes`, from `asm::diff::diff` of the two),
+/// as markers stamped with `header`: per change a sphere at its place now (at its old
+/// place when removed) in the namespace of its kind, a label in `change_labels`, and for a
+/// moved source an arrow from its old place to its new one in `change_arrows`; id the
+/// change's index.
+pub fn change_markers(
+    prior: &[asm::diff::Placed],
+    now: &[asm::diff::Placed],
+    changes: &[asm::diff::Change],
+    header: &Header,
+) -> MarkerArray {
+    use asm::diff::ChangeKind;
+    let mut markers = vec![Marker {
+        action: Marker::DELETEALL,
+        ..marker(header, "", 0, Marker::SPHERE)
+    }];
+    for (k, c) in changes.iter().enumerate() {
+        let old = c.before.map(|i| prior[i]);
+        let new = c.after.map(|j| now[j]);
+        let Some(at) = new.or(old) else { continue };
+        let colour = change_colour(c.kind);
+        markers.push(Marker {
+            pose: RosPose::planar(at.x, at.y, 0.0, 0.0),
+            scale: Point::new(SPHERE_M * 1.4, SPHERE_M * 1.4, SPHERE_M * 0.4),
+            color: colour,
+            ..marker(header, c.kind.name(), k, Marker::SPHERE)
+        });
+        if let (ChangeKind::Moved, Some(a), Some(b)) = (c.kind, old, new) {
+            markers.push(Marker {
+                scale: Point::new(0.05, 0.12, 0.15),
+                color: colour,
+                points: vec![Point::new(a.x, a.y, 0.0), Point::new(b.x, b.y, 0.0)],
+                ..marker(header, "change_arrows", k, Marker::ARROW)
+            });
+        }
+        let name = |i: Option<usize>| i.map_or("-".to_owned(), |i| format!("s{}", i + 1));
+        let text = match c.kind {
+            ChangeKind::Kept => format!("kept: prior {} is {}", name(c.before), name(c.after)),
+            ChangeKind::Moved => format!(
+                "moved {:.1} m: prior {} is {}",
+                c.distance_m.unwrap_or(0.0),
+                name(c.before),
+                name(c.after)
+            ),
+            ChangeKind::Removed => format!("removed: prior {}", name(c.before)),
+            ChangeKind::Added => format!("added: {}", name(c.after)),
+        };
+        markers.push(Marker {
+            pose: RosPose::planar(at.x, at.y, LABEL_Z_M + 0.3, 0.0),
+            scale: Point::new(0.0, 0.0, 0.2),
+            color: colour,
+            text: format!("{text} ({:.0} %)", 100.0 * c.confidence),
+            ..marker(header, "change_labels", k, Marker::TEXT_VIEW_FACING)
+        });
+    }
+    MarkerArray { markers }
 }
 
 fn stamp_of(stops: &Stops<'_>, i: usize, fallback: i64) -> i64 {

@@ -28,6 +28,12 @@ pub struct Ros2Args {
     /// Write every update to this MCAP file (written when the run ends).
     #[arg(long, value_name = "FILE")]
     pub mcap: Option<PathBuf>,
+    /// A map of an earlier run through the same building (JSON of `iasm map --out`, `iasm
+    /// watch --out` or this node, in frame `map`): after every stop, what changed against it
+    /// (kept, moved, removed, added; `asm::diff`) is published on `/iasm/changes` and
+    /// listed in the map JSON.
+    #[arg(long, value_name = "FILE")]
+    pub prior: Option<PathBuf>,
     /// The DDS domain (ROS_DOMAIN_ID).
     #[arg(long, env = "ROS_DOMAIN_ID", default_value_t = 0)]
     pub domain_id: u16,

@@ -573,6 +573,9 @@ pub struct Marker {
 impl Marker {
     /// A sphere.
     pub const SPHERE: i32 = 2;
+    /// An arrow from `points[0]` to `points[1]` (`scale`: shaft and head diameters, head
+    /// length).
+    pub const ARROW: i32 = 0;
     /// A cylinder (a flat one draws an ellipse).
     pub const CYLINDER: i32 = 3;
     /// A line through `points`.

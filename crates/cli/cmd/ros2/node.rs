@@ -6,7 +6,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-use anyhow::{Result, anyhow};
+use anyhow::{Context, Result, anyhow};
 use bag::msg::Kind;
 use rustdds::DomainParticipant;
 use rustdds::policy::Durability;
@@ -73,6 +73,8 @@ pub(super) struct Outputs {
     path: Writer,
     source_poses: Writer,
     map: Writer,
+    /// `/iasm/changes`, with a prior map.
+    changes: Option<Writer>,
     /// The last grid sent (it is latched: sent again only when it changes).
     grid_sent: Option<iasm_ros::msg::OccupancyGrid>,
 }
@@ -114,8 +116,31 @@ impl Outputs {
                 false,
             )?,
             map: w(NODE_MAP_TOPIC, "nav_msgs/msg/OccupancyGrid", true)?,
+            changes: None,
             grid_sent: None,
         })
+    }
+
+    /// With `prior`, publishes what changed against a prior map on `/iasm/changes` too.
+    pub fn with_changes(
+        mut self,
+        dp: &DomainParticipant,
+        names: &Names,
+        prior: bool,
+    ) -> Result<Self> {
+        if prior {
+            let p = dp
+                .create_publisher(&qos(true, false, 10))
+                .map_err(|e| anyhow!("a DDS publisher: {e}"))?;
+            self.changes = Some(writer(
+                dp,
+                &p,
+                &names.topic(rosmap::CHANGES_TOPIC),
+                "visualization_msgs/msg/MarkerArray",
+                false,
+            )?);
+        }
+        Ok(self)
     }
 
     /// Publishes the stop `s` of the run `run` on `~/stops`.
@@ -151,6 +176,9 @@ impl Outputs {
         send(&self.path, m.path.to_cdr(), rosmap::PATH_TOPIC)?;
         send(&self.doas, m.doas.to_cdr(), rosmap::DOAS_TOPIC)?;
         send(&self.sources, m.sources.to_cdr(), rosmap::SOURCES_TOPIC)?;
+        if let (Some(w), Some(changes)) = (&self.changes, &m.changes) {
+            send(w, changes.to_cdr(), rosmap::CHANGES_TOPIC)?;
+        }
         send(
             &self.source_poses,
             m.source_poses.to_cdr(),
@@ -161,7 +189,7 @@ impl Outputs {
     /// Waits until every reliable reader of every topic has acknowledged what was
     /// published, or until `max` has passed for a topic (a reader that vanished).
     pub fn wait_for_acknowledgments(&self, max: Duration) {
-        for w in self.stops.iter().chain([
+        for w in self.stops.iter().chain(self.changes.iter()).chain([
             &self.source_poses,
             &self.sources,
             &self.doas,
@@ -340,6 +368,17 @@ pub fn run(a: &Ros2Args) -> Result<Outcome> {
     read.map_topic = names.option(read.map_topic);
     let mut live = LiveMapper::new(settings, read, a.run.stop_options()?, a.seed)?
         .with_pending_audio(a.pending_audio)?;
+    if let Some(path) = &a.prior {
+        let prior = crate::mapfile::MapFile::read(path).context("--prior")?;
+        if let Some(frame) = prior.frame_id.as_deref().filter(|&f| f != rosmap::FRAME) {
+            anyhow::bail!(
+                "--prior {}: its frame is {frame:?}; the node maps in {:?}",
+                path.display(),
+                rosmap::FRAME
+            );
+        }
+        live = live.with_prior(prior);
+    }
     let stop = Arc::new(AtomicBool::new(false));
     {
         let stop = Arc::clone(&stop);
@@ -368,7 +407,7 @@ pub fn run(a: &Ros2Args) -> Result<Outcome> {
         )
     };
     let mut sink = Sink {
-        out: Outputs::new(&dp, &names)?,
+        out: Outputs::new(&dp, &names)?.with_changes(&dp, &names, a.prior.is_some())?,
         run: names.fq(),
         mcap: a.mcap.as_deref().map(rosmap::McapFile::new).transpose()?,
         json: a.out.clone(),
