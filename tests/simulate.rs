@@ -387,3 +387,94 @@ spacing = 0.5
         "{v}"
     );
 }
+
+/// `iasm map --signatures`: what each source sounds like, from the recordings of the
+/// stops that heard it. In `two_talkers` two noises with speech's long-term spectrum
+/// (steady: broadband) stand at (2.0, 4.0) and (4.5, 1.0); in `one_source` a voiced hum
+/// with a steady pitch (tonal) at (3.5, 3.2); in `speech_one_rt05` a recorded talker
+/// (speech) at (3.5, 3.8). Each kind is in the JSON, the table, the figure's legend and the MCAP's
+/// labels.
+#[test]
+fn a_maps_sources_say_what_they_sound_like() {
+    let dir = tempdir();
+    let rooms = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/rooms");
+    for (scene, n, truth) in [
+        (
+            "two_talkers",
+            "3",
+            &[([2.0, 4.0], "broadband"), ([4.5, 1.0], "broadband")][..],
+        ),
+        ("one_source", "2", &[([3.5, 3.2], "tonal")][..]),
+        ("speech_one_rt05", "2", &[([3.5, 3.8], "speech")][..]),
+    ] {
+        let data = path(&dir, scene);
+        let o = iasm(&[
+            "simulate",
+            arg(&rooms.join(format!("{scene}.toml"))),
+            "--out",
+            arg(&data),
+        ]);
+        assert!(o.status.success(), "{}", show(&o));
+        let fig = path(&dir, &format!("{scene}.svg"));
+        let mcap_path = path(&dir, &format!("{scene}.mcap"));
+        let args = [
+            "map",
+            "--dataset",
+            arg(&data),
+            "--method",
+            "mvdr",
+            "--num",
+            n,
+            "--signatures",
+        ];
+        let v = json(&iasm(
+            &[
+                &args[..],
+                &["--json", "--png", arg(&fig), "--mcap", arg(&mcap_path)],
+            ]
+            .concat(),
+        ));
+        let sources = v["sources"].as_array().unwrap();
+        for (at, kind) in truth {
+            let s = sources
+                .iter()
+                .find(|s| {
+                    (s["x"].as_f64().unwrap() - at[0]).hypot(s["y"].as_f64().unwrap() - at[1]) < 0.3
+                })
+                .unwrap_or_else(|| panic!("{scene}: no source near {at:?}: {v:#}"));
+            let sig = &s["signature"];
+            assert_eq!(sig["kind"], *kind, "{scene} {at:?}: {sig:#}");
+            assert!(sig["stops"].as_u64().unwrap() >= 3, "{sig}");
+            assert!(sig["level_db"].as_f64().unwrap() <= 0.0, "{sig}");
+            assert!(!sig["spectrum_db"].as_array().unwrap().is_empty(), "{sig}");
+        }
+        // The loudest source is the level's reference.
+        let top = sources
+            .iter()
+            .map(|s| s["signature"]["level_db"].as_f64().unwrap())
+            .fold(f64::NEG_INFINITY, f64::max);
+        assert_eq!(top, 0.0);
+        let table = String::from_utf8_lossy(&iasm(&args).stdout).into_owned();
+        assert!(table.contains("What each source sounds like"), "{table}");
+        let legend = svg_texts(&fig);
+        for (_, kind) in truth {
+            assert!(legend.iter().any(|t| t.contains(kind)), "{legend:?}");
+        }
+        let bytes = std::fs::read(&mcap_path).unwrap();
+        let labels: Vec<String> = mcap::MessageStream::new(&bytes)
+            .unwrap()
+            .map(|m| m.unwrap())
+            .filter(|m| m.channel.topic == "/iasm/sources")
+            .flat_map(|m| {
+                <iasm_ros::msg::MarkerArray as iasm_ros::msg::Message>::from_cdr(&m.data)
+                    .unwrap()
+                    .markers
+            })
+            .filter(|m| m.ns == "labels")
+            .map(|m| m.text)
+            .collect();
+        for (_, kind) in truth {
+            assert!(labels.iter().any(|t| t.ends_with(kind)), "{labels:?}");
+        }
+    }
+}

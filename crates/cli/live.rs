@@ -134,7 +134,7 @@ impl LiveMapper {
     }
 
     /// Compares every map with `prior`, a map of an earlier run in the same frame (`iasm
-    /// ros2 --prior`): the messages then carry what changed ([`MapMessages::changes`]) and
+    /// ros2 --prior`): the messages then carry what changed (their `changes` markers) and
     /// the JSON its list ([`LiveReport::changes`]).
     #[must_use]
     pub fn with_prior(mut self, prior: crate::mapfile::MapFile) -> Self {

@@ -390,6 +390,23 @@ pub fn change_markers(
     MarkerArray { markers }
 }
 
+/// Adds each source's kind to its label in `messages` (`iasm map --signatures`): "s1: 12
+/// DoAs, speech".
+pub fn label_kinds(messages: &mut MapMessages, signatures: &[Option<ssl::signature::Signature>]) {
+    for m in &mut messages.sources.markers {
+        if m.ns != "labels" {
+            continue;
+        }
+        let sig = usize::try_from(m.id)
+            .ok()
+            .and_then(|k| signatures.get(k))
+            .and_then(Option::as_ref);
+        if let Some(s) = sig {
+            m.text = format!("{}, {}", m.text, s.kind.name());
+        }
+    }
+}
+
 fn stamp_of(stops: &Stops<'_>, i: usize, fallback: i64) -> i64 {
     stops.stamps_ns.get(i).copied().unwrap_or(fallback)
 }

@@ -73,6 +73,13 @@ pub struct SceneResult {
     /// [`crate::changes::CHANGE_TOLERANCE_STOPS`] stops.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub changes_found: Option<f64>,
+    /// What each source sounds like, judged on the first map of each rendering: of the
+    /// sources matched to a place within 0.5 m, the share whose kind
+    /// (`ssl::signature::Kind`) is their signal's ([`crate::pipeline::scene_kind`]), and
+    /// how many were matched.
+    pub kinds_right: f64,
+    /// Sources matched for `kinds_right`.
+    pub kinds_matched: usize,
     /// Whether the scene's thresholds were checked: not when the suite ran with another N
     /// than the scene's own (`iasm regress --num`), for which they were not set.
     pub judged: bool,
@@ -109,7 +116,7 @@ impl SuiteReport {
         // The scene column as wide as its longest name, so that the columns stay aligned.
         let w = self.rows.iter().map(|r| r.scene.len()).fold(22, usize::max);
         let mut s = format!(
-            "{:<w$} {:<9} {:>5} {:>7} {:>2} {:>9} {:>7} {:>6} {:>9} {:>9}  {}\n",
+            "{:<w$} {:<9} {:>5} {:>7} {:>2} {:>9} {:>7} {:>6} {:>9} {:>9} {:>6}  {}\n",
             "scene",
             "method",
             "stops",
@@ -120,6 +127,7 @@ impl SuiteReport {
             "right",
             "OSPA mean",
             "worst",
+            "kind",
             "status"
         );
         for r in &self.rows {
@@ -143,7 +151,7 @@ impl SuiteReport {
                 format!("{lo}-{hi}")
             };
             s.push_str(&format!(
-                "{:<w$} {:<9} {:>5} {:>7} {:>2} {:>9.3} {:>7} {:>5.0}% {:>9.3} {:>9.3}  {}\n",
+                "{:<w$} {:<9} {:>5} {:>7} {:>2} {:>9.3} {:>7} {:>5.0}% {:>9.3} {:>9.3} {:>5.0}%  {}\n",
                 r.scene,
                 r.method,
                 r.stops,
@@ -154,6 +162,7 @@ impl SuiteReport {
                 100.0 * r.right_count,
                 r.ospa,
                 r.ospa_worst,
+                100.0 * r.kinds_right,
                 status + &dated
             ));
         }
@@ -271,13 +280,34 @@ pub fn run_scene(path: &Path, base: &Settings, num: Option<usize>) -> Result<Vec
             found: map.sources.len(),
             ospa: asm::ospa::ospa(&map.positions(), &sim.truth, 1.0, 1.0).total,
             changes: crate::changes::judge(map, &sim.places, stops),
+            kinds: (0, 0),
         };
+        let truth_kinds: Vec<ssl::signature::Kind> = sim
+            .scene
+            .scene
+            .sources
+            .iter()
+            .filter(|s| !s.on_robot)
+            .map(crate::pipeline::scene_kind)
+            .collect();
         let per_method: Vec<(f64, Vec<MapJudged>)> = Method::PAPER
             .iter()
             .map(|&method| {
                 let settings = scene_settings(base, method, n);
                 let r = sim.run(&settings, seed)?;
-                let mut maps = vec![judged(&r.map)];
+                let signatures =
+                    crate::pipeline::signatures(&r.map, sim.poses(), &sim.array, &|k| {
+                        Ok(sim.audio[k].clone())
+                    })?;
+                let mut first = judged(&r.map);
+                first.kinds = crate::pipeline::kinds_right(
+                    &r.map,
+                    &signatures,
+                    &sim.places,
+                    &truth_kinds,
+                    KIND_MATCH_M,
+                );
+                let mut maps = vec![first];
                 for j in 1..map_seeds as u64 {
                     let map = r.survey.map(&settings.iasm, seed + MAP_SEED_STRIDE * j)?;
                     maps.push(judged(&map));
@@ -312,6 +342,13 @@ pub fn run_scene(path: &Path, base: &Settings, num: Option<usize>) -> Result<Vec
                 ospa_now: changing.then(|| mean(&|c| c.changes.ospa_now)),
                 changes_found: changing
                     .then(|| mean(&|c| f64::from(u8::from(c.changes.all_found())))),
+                kinds_right: {
+                    let (right, matched) = maps
+                        .iter()
+                        .fold((0, 0), |a, c| (a.0 + c.kinds.0, a.1 + c.kinds.1));
+                    right as f64 / matched.max(1) as f64
+                },
+                kinds_matched: maps.iter().map(|c| c.kinds.1).sum(),
                 judged: n == own_n,
                 breaches: Vec::new(),
             };
@@ -332,7 +369,13 @@ struct MapJudged {
     ospa: f64,
     /// Against the scene's changes.
     changes: crate::changes::ChangeScore,
+    /// Sources whose kind is right, and matched (the first map of a rendering only).
+    kinds: (usize, usize),
 }
+
+/// How near a map's source must be to a place for its kind to be judged against the
+/// place's signal (m): the change judge's match distance.
+const KIND_MATCH_M: f64 = crate::changes::MATCH_M;
 
 /// `base` with the scene's `[expect.settings]` laid over it, key by key.
 fn scene_base(base: &Settings, e: &Expect) -> Result<Settings> {

@@ -110,6 +110,14 @@ pub struct MapArgs {
     /// left unexplained). In JSON: the `explain` object
     #[arg(long)]
     pub explain: bool,
+    /// Also say what each source sounds like, from the recordings of the stops that heard
+    /// it (the array steered at its map position): its spectrum, level (dB relative to the
+    /// loudest source), steadiness, dominant band and a kind (speech, tonal or broadband).
+    /// Needs one recording per stop (a data set's audio/ or --audio). In JSON: each
+    /// source's `signature`; in the table, the figure's legend and the MCAP's labels: its
+    /// kind
+    #[arg(long)]
+    pub signatures: bool,
     /// How the map is drawn.
     #[command(flatten)]
     pub figure: FigureArgs,

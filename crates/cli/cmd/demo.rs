@@ -70,6 +70,7 @@ pub fn run(seed: u64, png: &Path, mcap: Option<&Path>, figure: &FigureArgs) -> R
             truth: Some(&sim.truth),
             full_map: figure.full_map,
             width: figure.figure_width,
+            kinds: Vec::new(),
         },
     )?;
     println!("map drawn to {}", png.display());

@@ -8,6 +8,7 @@ use asm::ospa::Ospa;
 use asm::{IasmConfig, MapResult};
 use serde::Serialize;
 use ssl::SslConfig;
+use ssl::signature::Signature;
 
 use crate::Outcome;
 use crate::args::MapArgs;
@@ -44,7 +45,7 @@ struct MapReport<'a> {
     removed_sources: usize,
     /// What was found and refused, and why (see `asm::MapResult::refused`).
     refused: &'a [asm::Refused],
-    sources: &'a [asm::Source],
+    sources: Vec<SourceRow<'a>>,
     ospa: Option<OspaReport>,
     /// The map against the truth after the best similarity transform (a diagnostic of the
     /// data's frames; see `asm::align`).
@@ -60,6 +61,15 @@ struct MapReport<'a> {
     /// from 1, and how many), in the order of the stops `explain` counts.
     #[serde(skip_serializing_if = "Option::is_none")]
     runs: Option<&'a [RunSpan]>,
+}
+
+/// A source with what it sounds like, when asked (`--signatures`).
+#[derive(Serialize)]
+struct SourceRow<'a> {
+    #[serde(flatten)]
+    source: &'a asm::Source,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    signature: Option<&'a Signature>,
 }
 
 #[derive(Clone, Copy, Serialize)]
@@ -87,17 +97,93 @@ pub fn run(a: &MapArgs) -> Result<Outcome> {
     for w in crate::pipeline::map_warnings(&survey.map, &survey.poses, config, &result) {
         eprintln!("warning: {w}");
     }
-    let mut report = report(a, &survey, &settings, config, &result, localised);
+    let signatures = if a.signatures {
+        signatures(a, &survey, &result)?
+    } else {
+        Vec::new()
+    };
+    let mut report = report(
+        a,
+        &survey,
+        &settings,
+        config,
+        &result,
+        localised,
+        &signatures,
+    );
     if runs.len() > 1 {
         report.runs = Some(&runs);
     }
-    write_files(a, &survey, &report, &result)?;
+    write_files(a, &survey, &report, &result, &signatures)?;
     if a.report.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
         print_map(a, &survey, &report, &result, dt);
+        print_signatures(&signatures);
     }
     Ok(Outcome::Success)
+}
+
+/// Each source's signature (`--signatures`), from every run's recordings, one per stop.
+fn signatures(a: &MapArgs, survey: &Survey, result: &MapResult) -> Result<Vec<Option<Signature>>> {
+    let runs = a.input.runs()?;
+    let mut files = Vec::new();
+    let array = runs[0].2.mic_array()?;
+    let channels = runs[0].2.channels.clone();
+    for (name, inputs, settings) in &runs {
+        anyhow::ensure!(
+            inputs.recording.is_none(),
+            "--signatures needs one recording per stop, not one continuous --recording"
+        );
+        anyhow::ensure!(
+            settings.mic_array()?.positions() == array.positions(),
+            "--signatures: run {name} was heard by another array than the first run"
+        );
+        let run_files = match (&inputs.audio, &inputs.dataset) {
+            (Some(dir), _) => crate::dataset::list_files(dir, "wav")?,
+            (None, Some(d)) => crate::dataset::Dataset::open(d)?.audio,
+            (None, None) => {
+                anyhow::bail!("--signatures needs the recordings: --dataset or --audio")
+            }
+        };
+        files.extend(run_files);
+    }
+    anyhow::ensure!(
+        files.len() == survey.poses.len(),
+        "--signatures: {} recordings for {} stops; they must match one to one",
+        files.len(),
+        survey.poses.len()
+    );
+    crate::pipeline::signatures(result, &survey.poses, &array, &|k| {
+        crate::dataset::read_recording(&files[k], channels.as_deref())
+    })
+}
+
+/// What each source sounds like, a line each.
+fn print_signatures(signatures: &[Option<Signature>]) {
+    if signatures.is_empty() {
+        return;
+    }
+    println!(
+        "What each source sounds like (the array steered at it from the stops that heard it):"
+    );
+    for (k, s) in signatures.iter().enumerate() {
+        match s {
+            Some(s) => println!(
+                "  s{:<3} {:<9} {:>6.1} dB  band {:.0}-{:.0} Hz  modulation {:.2}  tonality {:.2}  across stops ±{:.1} dB  ({} stops)",
+                k + 1,
+                s.kind.name(),
+                s.level_db,
+                s.band_hz[0],
+                s.band_hz[1],
+                s.modulation,
+                s.tonality,
+                s.level_spread_db,
+                s.stops
+            ),
+            None => println!("  s{:<3} no recording to steer at", k + 1),
+        }
+    }
 }
 
 /// The settings (the first run's, with `--variant`), the survey (of every run, one after
@@ -134,6 +220,7 @@ fn report<'a>(
     config: &'a IasmConfig,
     result: &'a MapResult,
     localised: bool,
+    signatures: &'a [Option<Signature>],
 ) -> MapReport<'a> {
     let ospa = survey
         .ospa(result, a.report.ospa_c, a.report.ospa_p)
@@ -171,7 +258,15 @@ fn report<'a>(
         unexplained_doas: result.unexplained,
         removed_sources: result.removed,
         refused: &result.refused,
-        sources: &result.sources,
+        sources: result
+            .sources
+            .iter()
+            .enumerate()
+            .map(|(k, source)| SourceRow {
+                source,
+                signature: signatures.get(k).and_then(Option::as_ref),
+            })
+            .collect(),
         ospa,
         alignment,
         open_margin_m: survey.open_margin_m,
@@ -187,6 +282,7 @@ fn write_files(
     survey: &Survey,
     report: &MapReport<'_>,
     result: &MapResult,
+    signatures: &[Option<Signature>],
 ) -> Result<()> {
     if let Some(out) = &a.out {
         crate::output::write_atomic(out, serde_json::to_string_pretty(report)?.as_bytes())?;
@@ -213,10 +309,11 @@ fn write_files(
         crate::output::write_atomic(path, text.as_bytes())?;
     }
     if let Some(png) = &a.png {
-        write_figure(a, png, survey, report, result)?;
+        write_figure(a, png, survey, report, result, signatures)?;
     }
     if let Some(path) = &a.mcap {
-        let messages = crate::rosmap::of_survey(survey, result);
+        let mut messages = crate::rosmap::of_survey(survey, result);
+        crate::rosmap::label_kinds(&mut messages, signatures);
         crate::rosmap::write_mcap(path, &messages, messages.path.header.stamp.ns())?;
     }
     Ok(())
@@ -229,6 +326,7 @@ fn write_figure(
     survey: &Survey,
     report: &MapReport<'_>,
     result: &MapResult,
+    signatures: &[Option<Signature>],
 ) -> Result<()> {
     let data = match (&a.input.dataset[..], &a.input.poses) {
         ([], Some(p)) => file_name(p),
@@ -261,6 +359,13 @@ fn write_figure(
             truth: survey.truth.as_deref(),
             full_map: a.figure.full_map,
             width: a.figure.figure_width,
+            kinds: signatures
+                .iter()
+                .map(|s| {
+                    s.as_ref()
+                        .map(|s| format!("{}, {:.0} dB", s.kind.name(), s.level_db))
+                })
+                .collect(),
         },
     )
 }

@@ -134,6 +134,7 @@ impl Outputs<'_> {
                     truth: session.truth(),
                     full_map: self.a.figure.full_map,
                     width: self.a.figure.figure_width,
+                    kinds: Vec::new(),
                 },
             )?;
         }

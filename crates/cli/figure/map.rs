@@ -38,6 +38,9 @@ pub struct MapFigure<'a> {
     pub full_map: bool,
     /// Width of the figure (px); the height follows from the region's aspect.
     pub width: u32,
+    /// What each source sounds like, for the legend (`iasm map --signatures`; empty
+    /// otherwise).
+    pub kinds: Vec<Option<String>>,
 }
 
 /// World region `(x0, x1, y0, y1)` drawn.
@@ -132,6 +135,17 @@ impl Draw for MapFigure<'_> {
         if self.truth.is_some() {
             entries.push((Glyph::Ring(TRUTH, 2), "true source"));
         }
+        let kinds: Vec<(usize, String)> = self
+            .kinds
+            .iter()
+            .enumerate()
+            .filter_map(|(k, s)| s.as_ref().map(|s| (k, format!("s{}: {s}", k + 1))))
+            .collect();
+        entries.extend(
+            kinds
+                .iter()
+                .map(|(k, s)| (Glyph::Dot(colour(*k)), s.as_str())),
+        );
         legend_panel(&side, &entries, small)
     }
 }

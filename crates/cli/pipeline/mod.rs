@@ -38,6 +38,7 @@ mod evaluate;
 mod localise;
 mod runs;
 mod scene;
+mod signatures;
 mod survey;
 
 pub use crate::robot_noise::RobotNoise;
@@ -45,4 +46,5 @@ pub use evaluate::*;
 pub use localise::*;
 pub use runs::*;
 pub use scene::*;
+pub use signatures::*;
 pub use survey::*;

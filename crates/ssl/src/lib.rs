@@ -60,6 +60,7 @@ pub mod grid;
 mod localizer;
 pub mod method;
 pub mod noise;
+pub mod signature;
 pub mod spectrum;
 pub mod steady;
 pub mod stft;
