@@ -63,9 +63,9 @@ impl MapFile {
         })
     }
 
-    /// The sources' positions and covariances.
+    /// The sources' positions, covariances and kinds.
     pub fn placed(&self) -> Vec<Placed> {
-        self.sources.iter().map(|s| s.placed).collect()
+        self.sources.iter().map(|s| s.placed.clone()).collect()
     }
 }
 
@@ -92,8 +92,18 @@ fn source(v: &Value) -> Result<MapFileSource> {
         Some("active") | None => None,
         Some(other) => bail!("state {other:?} is neither \"active\" nor \"silent\""),
     };
+    let kind = v
+        .get("signature")
+        .and_then(|s| s.get("kind"))
+        .and_then(Value::as_str)
+        .map(str::to_owned);
     Ok(MapFileSource {
-        placed: Placed { x, y, covariance },
+        placed: Placed {
+            x,
+            y,
+            covariance,
+            kind,
+        },
         silent_since,
     })
 }
@@ -128,13 +138,15 @@ mod tests {
         let m = parse(
             r#"{"frame_id": "map", "sources": [
                 {"x": 1.0, "y": 2.0, "covariance": [[0.01, 0.0], [0.0, 0.02]], "state": "active"},
-                {"x": 3.0, "y": 4.0, "state": "silent", "since": 7}]}"#,
+                {"x": 3.0, "y": 4.0, "state": "silent", "since": 7, "signature": {"kind": "tonal"}}]}"#,
         )
         .unwrap();
         assert_eq!(m.frame_id.as_deref(), Some("map"));
         assert_eq!(m.sources[0].placed.covariance, [[0.01, 0.0], [0.0, 0.02]]);
         assert_eq!(m.sources[1].silent_since, Some(7));
         assert_eq!(m.sources[1].placed.covariance, [[0.0; 2]; 2]);
+        assert_eq!(m.sources[1].placed.kind.as_deref(), Some("tonal"));
+        assert_eq!(m.sources[0].placed.kind, None);
     }
 
     #[test]

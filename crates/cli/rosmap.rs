@@ -349,8 +349,8 @@ pub fn change_markers(
         ..marker(header, "", 0, Marker::SPHERE)
     }];
     for (k, c) in changes.iter().enumerate() {
-        let old = c.before.map(|i| prior[i]);
-        let new = c.after.map(|j| now[j]);
+        let old = c.before.map(|i| &prior[i]);
+        let new = c.after.map(|j| &now[j]);
         let Some(at) = new.or(old) else { continue };
         let colour = change_colour(c.kind);
         markers.push(Marker {

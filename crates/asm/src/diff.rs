@@ -23,9 +23,11 @@
 //! 3. What is left of the first map was **removed**, of the second **added**.
 //!
 //! Kept pairs go first so that a source that stayed is never taken as another's new place.
-//! Without knowing what each source sounds like, a source removed and another added within
-//! `move_max_m` of each other cannot be told from one that moved; they are reported as
-//! moved, and `move_max_m = 0` reports them as removed and added.
+//! A move pairs only sources of one kind when both maps say what their sources sound like
+//! ([`Placed::kind`], from `iasm map --signatures`): a hum switched off and a voice
+//! switched on are then removed and added. Without kinds, a source removed and another
+//! added within `move_max_m` of each other cannot be told from one that moved; they are
+//! reported as moved, and `move_max_m = 0` reports them as removed and added.
 //!
 //! Each change carries a confidence ([`Change::confidence`]): for a kept source `p_same`,
 //! for a moved one `1 - p_same`, and for a removed or added one `1 - p_same` against the
@@ -36,8 +38,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::ospa::assignment;
 
-/// A mapped source as the comparison sees it: where, and how sure.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+/// A mapped source as the comparison sees it: where, how sure, and what it sounds like
+/// when known.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Placed {
     /// x (m, the maps' common frame).
     pub x: f64,
@@ -45,6 +48,11 @@ pub struct Placed {
     pub y: f64,
     /// The position's covariance (m²).
     pub covariance: [[f64; 2]; 2],
+    /// What it sounds like (`iasm map --signatures`' kind: "speech", "tonal",
+    /// "broadband"), when known: a source moves only as what it is, so a pair of two
+    /// known and different kinds is never a move.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kind: Option<String>,
 }
 
 impl From<&crate::Source> for Placed {
@@ -53,6 +61,18 @@ impl From<&crate::Source> for Placed {
             x: s.x,
             y: s.y,
             covariance: s.covariance,
+            kind: None,
+        }
+    }
+}
+
+impl Placed {
+    /// Whether `self` and `other` may be one source that moved: unless both kinds are
+    /// known and differ.
+    pub fn may_be(&self, other: &Placed) -> bool {
+        match (&self.kind, &other.kind) {
+            (Some(a), Some(b)) => a == b,
+            _ => true,
         }
     }
 }
@@ -244,7 +264,14 @@ pub fn diff(before: &[Placed], after: &[Placed], config: &DiffConfig) -> Vec<Cha
         left_before.len(),
         left_after.len(),
         config.move_max_m,
-        |a, b| distance(&before[left_before[a]], &after[left_after[b]]),
+        |a, b| {
+            let (p, q) = (&before[left_before[a]], &after[left_after[b]]);
+            if p.may_be(q) {
+                distance(p, q)
+            } else {
+                f64::INFINITY
+            }
+        },
     ) {
         pair_of_before[left_before[a]] = Some((left_after[b], ChangeKind::Moved));
         paired_after[left_after[b]] = true;
@@ -313,7 +340,31 @@ mod tests {
             x,
             y,
             covariance: [[sigma * sigma, 0.0], [0.0, sigma * sigma]],
+            kind: None,
         }
+    }
+
+    #[test]
+    fn a_hum_switched_off_and_a_voice_switched_on_are_not_a_move() {
+        // 2 m apart: without kinds one source moved; with a hum before and speech after,
+        // one was removed and another added; with speech both times, a move.
+        let (mut hum, mut voice) = (at(0.0, 0.0, 0.05), at(2.0, 0.0, 0.05));
+        let d = |a: &Placed, b: &Placed| {
+            diff(
+                std::slice::from_ref(a),
+                std::slice::from_ref(b),
+                &DiffConfig::default(),
+            )
+            .iter()
+            .map(|c| c.kind)
+            .collect::<Vec<_>>()
+        };
+        assert_eq!(d(&hum, &voice), [ChangeKind::Moved]);
+        hum.kind = Some("tonal".into());
+        voice.kind = Some("speech".into());
+        assert_eq!(d(&hum, &voice), [ChangeKind::Removed, ChangeKind::Added]);
+        hum.kind = Some("speech".into());
+        assert_eq!(d(&hum, &voice), [ChangeKind::Moved]);
     }
 
     fn kinds(c: &[Change]) -> Vec<(ChangeKind, Option<usize>, Option<usize>)> {
@@ -330,6 +381,7 @@ mod tests {
             x: 0.0,
             y: 0.0,
             covariance: [[1.0, 0.0], [0.0, 0.01]],
+            kind: None,
         };
         let along = mahalanobis2(&long, &at(0.5, 0.0, 0.0), 0.0);
         let across = mahalanobis2(&long, &at(0.0, 0.5, 0.0), 0.0);

@@ -75,8 +75,8 @@ impl DiffFigure<'_> {
     fn draw_sources<DB: DrawingBackend>(&self, chart: &mut Chart<'_, DB>) -> Result<()> {
         for c in self.changes {
             let col = kind_colour(c.kind);
-            let old = c.before.map(|i| self.before[i]);
-            let new = c.after.map(|j| self.after[j]);
+            let old = c.before.map(|i| &self.before[i]);
+            let new = c.after.map(|j| &self.after[j]);
             for p in old.iter().chain(new.iter()) {
                 chart
                     .draw_series(LineSeries::new(

@@ -268,8 +268,25 @@ fn poses(p: &PyReadonlyArray2<'_, f64>) -> Vec<Pose> {
         .collect()
 }
 
-/// The map JSON of a mapper's result, as `iasm map` writes its sources, refusals and counts.
-fn map_json(r: &asm::MapResult, seed: u64, warnings: &[String]) -> String {
+/// The map JSON of a mapper's result, as `iasm map` writes its sources, refusals and counts;
+/// each source with its `signature` when `signatures` holds one.
+fn map_json(
+    r: &asm::MapResult,
+    seed: u64,
+    warnings: &[String],
+    signatures: &[Option<ssl::signature::Signature>],
+) -> String {
+    let mut sources = serde_json::to_value(&r.sources).unwrap_or_default();
+    if let Some(list) = sources.as_array_mut() {
+        for (s, sig) in list.iter_mut().zip(signatures) {
+            if let (Some(obj), Some(sig)) = (s.as_object_mut(), sig) {
+                obj.insert(
+                    "signature".to_owned(),
+                    serde_json::to_value(sig).unwrap_or_default(),
+                );
+            }
+        }
+    }
     serde_json::json!({
         "warnings": warnings,
         "seed": seed,
@@ -278,14 +295,15 @@ fn map_json(r: &asm::MapResult, seed: u64, warnings: &[String]) -> String {
         "unexplained_doas": r.unexplained,
         "removed_sources": r.removed,
         "refused": r.refused,
-        "sources": r.sources,
+        "sources": sources,
     })
     .to_string()
 }
 
 /// Maps the sources of a survey (see `iasm.map_sources`); returns the map as JSON.
 #[pyfunction]
-#[pyo3(signature = (poses_xyt, doas_deg, cut, map, settings_json, seed))]
+#[pyo3(signature = (poses_xyt, doas_deg, cut, map, settings_json, seed, recordings=None, fs=0, array_spec="iasm6", positions=None))]
+#[allow(clippy::too_many_arguments)]
 fn map_sources(
     py: Python<'_>,
     poses_xyt: PyReadonlyArray2<'_, f64>,
@@ -294,11 +312,36 @@ fn map_sources(
     map: MapSpec<'_>,
     settings_json: &str,
     seed: u64,
+    recordings: Option<Vec<PyReadonlyArray2<'_, f32>>>,
+    fs: u32,
+    array_spec: &str,
+    positions: Option<PyReadonlyArray2<'_, f64>>,
 ) -> PyResult<String> {
     let poses = poses(&poses_xyt);
     let s = settings(settings_json).map_err(py_err)?;
     let (map_yaml, grid, resolution, origin) = map;
     let map = occupancy(map_yaml, grid, resolution, origin, &poses).map_err(py_err)?;
+    // The recordings, when given, for each source's signature (copied while the GIL is
+    // held; the mapping and the beams then run without it).
+    let heard = match recordings {
+        None => None,
+        Some(recs) => {
+            if recs.len() != poses.len() {
+                return Err(PyValueError::new_err(format!(
+                    "recordings: {} for {} stops; they must match one to one",
+                    recs.len(),
+                    poses.len()
+                )));
+            }
+            let audio: Vec<ssl::Audio> = recs
+                .iter()
+                .enumerate()
+                .map(|(k, r)| audio(r, fs).with_context(|| format!("recordings[{k}]")))
+                .collect::<Result<_>>()
+                .map_err(py_err)?;
+            Some((audio, mic_array(array_spec, positions).map_err(py_err)?))
+        }
+    };
     py.detach(|| -> Result<String> {
         let mapper = asm::Mapper::new(&map, &s.iasm)?;
         let rad: Vec<Vec<f64>> = doas_deg
@@ -312,7 +355,13 @@ fn map_sources(
             &mut MapRng::seed_from_u64(seed),
         )?;
         let warnings = iasm::pipeline::map_warnings(&map, &poses, &s.iasm, &r);
-        Ok(map_json(&r, seed, &warnings))
+        let signatures = match &heard {
+            Some((audio, array)) => {
+                iasm::pipeline::signatures(&r, &poses, array, &|k| Ok(audio[k].clone()))?
+            }
+            None => Vec::new(),
+        };
+        Ok(map_json(&r, seed, &warnings, &signatures))
     })
     .map_err(py_err)
 }
@@ -376,7 +425,7 @@ impl OnlineMapper {
 
     /// The map after the stops so far, as JSON.
     fn map(&self) -> String {
-        map_json(&self.inner.map(), self.seed, &[])
+        map_json(&self.inner.map(), self.seed, &[], &[])
     }
 
     /// Replaces the map with the batch map over every stop so far; returns its rounds.

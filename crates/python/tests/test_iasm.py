@@ -258,3 +258,35 @@ def test_a_talker_who_falls_silent_is_dated_in_the_map():
     assert (t["state"], t["since"]) == ("silent", 15)
     assert (m["first_stop"], m["last_stop"], m["state"]) == (0, 29, "active")
     assert "since" not in m and "appeared_at" not in m
+
+
+def test_each_source_says_what_it_sounds_like_from_the_recordings():
+    # The one-source scene: a voiced hum with a steady 130-Hz pitch at (3.5, 3.2), so
+    # tonal; the two-talker scene: two noises with speech's long-term spectrum and no
+    # syllables, so broadband. The map from the scene's own true bearings, the signatures
+    # from its recordings.
+    for path, kinds in [(SCENE, ["tonal"]), (TWO, ["broadband", "broadband"])]:
+        sc = iasm.simulate(path)
+
+        def bearing(p, q):
+            a = np.degrees(np.arctan2(q[1] - p[1], q[0] - p[0]) - p[2])
+            return float((a + 180.0) % 360.0 - 180.0)
+
+        doas = [[bearing(p, t) for t in sc.truth] for p in sc.poses]
+        got = iasm.map_sources(
+            sc.poses, doas, sc.grid, resolution=sc.resolution, origin=sc.origin, num=3, seed=1,
+            recordings=sc.signals, fs=sc.fs, array=sc.array,
+        )
+        assert len(got["sources"]) == len(kinds)
+        for s, kind in zip(got["sources"], kinds):
+            sig = s["signature"]
+            assert sig["kind"] == kind, sig
+            assert sig["stops"] >= 3 and sig["level_db"] <= 0.0
+        assert max(s["signature"]["level_db"] for s in got["sources"]) == 0.0
+        # Without recordings, no signature.
+        plain = iasm.map_sources(sc.poses, doas, sc.grid, resolution=sc.resolution, origin=sc.origin, num=3, seed=1)
+        assert all("signature" not in s for s in plain["sources"])
+    with pytest.raises(ValueError, match="sample rate"):
+        iasm.map_sources(sc.poses, doas, recordings=sc.signals)
+    with pytest.raises(ValueError, match="must match one to one"):
+        iasm.map_sources(sc.poses, doas, recordings=sc.signals[:2], fs=sc.fs, array=sc.array)

@@ -394,6 +394,9 @@ def map_sources(
     seed: int = 0,
     num: Optional[int] = None,
     settings: Optional[Mapping[str, Any]] = None,
+    recordings: Optional[Sequence[ArrayLike]] = None,
+    fs: Optional[int] = None,
+    array: Union[str, os.PathLike, ArrayLike, None] = None,
     **iasm_settings: Any,
 ) -> Dict[str, Any]:
     """Maps the sources that a survey's DoAs show, with I-ASM, as ``iasm map`` does.
@@ -411,15 +414,33 @@ def map_sources(
     ``last_stop``, ``heard_stops``, ``heard_share``, ``state`` (``"active"`` or
     ``"silent"`` with ``since``), ``appeared_at``, ``moved_to``, ``moved_from`` where
     they apply), ``refused`` (with the rule), ``rounds``, ``unexplained_doas``, ...
+
+    With ``recordings`` (each stop's ``(M, samples)`` recording at ``fs`` Hz, heard by
+    ``array``: a preset name, an array file, or ``(M, 3)`` positions; the paper's array when
+    not given), each source also says what it sounds like, as ``iasm map --signatures``:
+    ``signature`` with ``kind`` (``"speech"``, ``"tonal"`` or ``"broadband"``),
+    ``level_db`` (0 for the loudest source), ``level_spread_db``, ``modulation``,
+    ``fluctuation``, ``gap_db``, ``tonality``, ``band_hz``, ``spectrum_db`` (third-octave
+    centres and levels) and ``stops``.
     """
     p = _poses(poses)
     rows = _rows(doas, len(p))
     table = _table(settings, iasm_settings)
     if num is not None:
         table["num_doas"] = num
+    extra: Dict[str, Any] = {}
+    if recordings is not None:
+        if fs is None:
+            raise ValueError("recordings need their sample rate: fs")
+        rate = _fs(fs)
+        spec, positions = _array(array)
+        extra = dict(
+            recordings=[_signals(r, rate) for r in recordings], fs=rate, array_spec=spec,
+            positions=positions,
+        )
     text = _iasm.map_sources(
         p, rows, None if cut is None else [bool(c) for c in cut], _map_args(map, resolution, origin),
-        _json({"iasm": table}), int(seed),
+        _json({"iasm": table}), int(seed), **extra,
     )
     m = json.loads(text)
     # What `iasm map` prints as warnings: some stops outside the map, particles thinned.

@@ -52,6 +52,10 @@ def map_sources(
     map: _MapSpec,
     settings_json: str,
     seed: int,
+    recordings: Optional[Sequence[npt.NDArray[np.float32]]] = None,
+    fs: int = 0,
+    array_spec: str = "iasm6",
+    positions: Optional[npt.NDArray[np.float64]] = None,
 ) -> str: ...
 
 @final
