@@ -69,6 +69,7 @@ fn the_generated_small_draw_holds_its_distribution() {
         map_seeds: 2,
         talkers: iasm::generated::talkers_in(&root.join("fixtures/audio")).unwrap(),
         floor_only: false,
+        changes: false,
     };
     let report = run_draw(&opts, &iasm::settings::Settings::default()).unwrap();
     println!("{}", report.scenes_table());

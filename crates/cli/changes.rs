@@ -9,8 +9,14 @@
 //!   (what the room holds now);
 //! - for each change (a place whose source stops playing there before the last stop, or
 //!   starts after the first), whether the map's source nearest that place (within
-//!   [`MATCH_M`]) dates it within [`CHANGE_TOLERANCE_STOPS`]: a place left is `silent since`
-//!   the stop after its last, a place taken `appeared at` its first.
+//!   [`MATCH_M`]) dates it within [`CHANGE_TOLERANCE_STOPS`] of the first stop that could
+//!   tell: a place left is `silent since`, a place taken `appeared at`, the first stop at
+//!   or after the change with a line of sight to the place.
+//!
+//! A change the robot could not hear happen is not judged: one that no stop before it and
+//! none after it sees (a talker who leaves a side room the robot looked into only before,
+//! or starts in one it reaches only after). The map cannot know of it, and the time the
+//! robot next looks is the earliest it could say. `ChangeScore::unseen` counts them.
 
 use asm::MapResult;
 use sim::scene::Place;
@@ -68,8 +74,10 @@ pub struct ChangeScore {
     /// OSPA (m, p = 1, c = 1) of the map's active sources against the places sounding at
     /// the last stop.
     pub ospa_now: f64,
-    /// The scene's changes.
+    /// The scene's changes that some stop before and some stop after could see.
     pub changes: usize,
+    /// Changes no stop could see happen (not judged).
+    pub unseen: usize,
     /// Those the map dates within [`CHANGE_TOLERANCE_STOPS`].
     pub found: usize,
 }
@@ -81,8 +89,23 @@ impl ChangeScore {
     }
 }
 
-/// Judges `map` against `places` over `n_stops` stops (see the module docs).
-pub fn judge(map: &MapResult, places: &[Place], n_stops: usize) -> ChangeScore {
+/// Whether `a` sees `b` in `space`: a line of sight within a floor plan, always in a box.
+pub fn sees(space: &sim::Space, a: [f64; 2], b: [f64; 2]) -> bool {
+    match space {
+        sim::Space::Plan(plan) => plan.sees(a, b),
+        sim::Space::Shoebox(_) => true,
+    }
+}
+
+/// Judges `map` against `places` heard from `stops` (the robot's positions, m), `sees`
+/// saying whether a stop has a line of sight to a place (see the module docs).
+pub fn judge(
+    map: &MapResult,
+    places: &[Place],
+    stops: &[[f64; 2]],
+    sees: &dyn Fn([f64; 2], [f64; 2]) -> bool,
+) -> ChangeScore {
+    let n_stops = stops.len();
     let last = n_stops.saturating_sub(1);
     let now: Vec<[f64; 2]> = places
         .iter()
@@ -106,21 +129,35 @@ pub fn judge(map: &MapResult, places: &[Place], n_stops: usize) -> ChangeScore {
             .map(|(_, s)| s.history)
     };
     let within = |a: usize, b: usize| a.abs_diff(b) <= CHANGE_TOLERANCE_STOPS;
+    // The first stop at or after `k` that sees `place`, if a stop before `k` sees it too.
+    let first_seen = |place: usize, k: usize| {
+        let q = [places[place].pos[0], places[place].pos[1]];
+        let seen = |j: usize| sees(stops[j], q);
+        ((0..k).any(seen))
+            .then(|| (k..n_stops).find(|&j| seen(j)))
+            .flatten()
+    };
     let all = changes(places, n_stops);
-    let found = all
-        .iter()
-        .filter(|c| match **c {
-            Change::Left { place, since } => nearest(place)
-                .and_then(|h| h.silent_since())
-                .is_some_and(|k| within(k, since)),
-            Change::Took { place, at } => nearest(place)
-                .and_then(|h| h.appeared_at)
-                .is_some_and(|k| within(k, at)),
-        })
-        .count();
+    let (mut judged, mut found) = (0, 0);
+    for c in &all {
+        let (place, at) = match *c {
+            Change::Left { place, since } => (place, since),
+            Change::Took { place, at } => (place, at),
+        };
+        let Some(due) = first_seen(place, at) else {
+            continue;
+        };
+        judged += 1;
+        let dated = match c {
+            Change::Left { .. } => nearest(place).and_then(|h| h.silent_since()),
+            Change::Took { .. } => nearest(place).and_then(|h| h.appeared_at),
+        };
+        found += usize::from(dated.is_some_and(|k| within(k, due)));
+    }
     ChangeScore {
         ospa_now,
-        changes: all.len(),
+        changes: judged,
+        unseen: all.len() - judged,
         found,
     }
 }
@@ -201,7 +238,9 @@ mod tests {
             mapped(4.05, appeared(9)),
             mapped(7.0, History::default()),
         ]);
-        let s = judge(&good, &places, 20);
+        let stops: Vec<[f64; 2]> = (0..20).map(|k| [0.5 * k as f64, 0.0]).collect();
+        let open = |_: [f64; 2], _: [f64; 2]| true;
+        let s = judge(&good, &places, &stops, &open);
         assert_eq!((s.changes, s.found), (2, 2));
         assert!((s.ospa_now - 0.025).abs() < 1e-9, "{s:?}");
         // The old place still active (a static map): its change missed, and it counts
@@ -211,9 +250,26 @@ mod tests {
             mapped(4.0, appeared(13)),
             mapped(7.0, History::default()),
         ]);
-        let s = judge(&stale, &places, 20);
+        let s = judge(&stale, &places, &stops, &open);
         assert_eq!((s.changes, s.found), (2, 0));
         assert!((s.ospa_now - 1.0 / 3.0).abs() < 1e-9, "{s:?}");
         assert!(!s.all_found());
+        // Behind a wall from stop 8 to 14 (x 4-7 m): the talker's leaving (stop 10) is due
+        // when stop 15 first sees its old place, and the map dating it at 11 is off by 4;
+        // at 14, within two.
+        let wall = |a: [f64; 2], _: [f64; 2]| !(4.0..7.0).contains(&a[0]);
+        let s = judge(&good, &places, &stops, &wall);
+        assert_eq!((s.changes, s.unseen, s.found), (2, 0, 0));
+        let late = map(vec![
+            mapped(1.0, silent(14)),
+            mapped(4.05, appeared(15)),
+            mapped(7.0, History::default()),
+        ]);
+        assert_eq!(judge(&late, &places, &stops, &wall).found, 2);
+        // Seen only after the change (from stop 10 on): not judged.
+        let after = |a: [f64; 2], _: [f64; 2]| a[0] >= 5.0;
+        let s = judge(&good, &places, &stops, &after);
+        assert_eq!((s.changes, s.unseen), (0, 2));
+        assert!(s.all_found());
     }
 }

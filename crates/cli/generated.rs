@@ -63,6 +63,8 @@ pub struct DrawOptions {
     /// Map from true bearings only, rendering nothing: the mapper's own loss over many
     /// scenes in seconds.
     pub floor_only: bool,
+    /// Draw changes too ([`sim::draw::DrawConfig::changes`]).
+    pub changes: bool,
 }
 
 impl DrawOptions {
@@ -70,6 +72,7 @@ impl DrawOptions {
     pub fn draw_config(&self) -> DrawConfig {
         let mut c = DrawConfig::new(ssl::array::PRESETS.iter().map(|s| s.to_string()).collect());
         c.talkers = self.talkers.clone();
+        c.changes = self.changes;
         c
     }
 }
@@ -111,6 +114,15 @@ pub struct MapRecord {
     pub ospa: f64,
     /// Mapped sources outside the room's walls (beyond [`OUTSIDE_TOLERANCE_M`]).
     pub outside: usize,
+    /// For a scene that changes (`--changes`): OSPA (m) of the map's active sources
+    /// against the places sounding at the last stop ([`crate::changes`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ospa_now: Option<f64>,
+    /// For such a scene, when a stop saw its change happen: whether the map dated it
+    /// within [`crate::changes::CHANGE_TOLERANCE_STOPS`] stops of the first stop that
+    /// could tell ([`crate::changes`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub change_dated: Option<bool>,
 }
 
 /// The distribution of a group of maps.
@@ -131,6 +143,13 @@ pub struct Distribution {
     /// The mean, over scenes, of the largest difference between the mean OSPA of two
     /// renderings of the scene (m): how much a scene's figure owes to its rendering.
     pub spread: f64,
+    /// Over the maps of scenes that change: mean OSPA now (m), and the share that dated
+    /// the change; `None` when no scene changes.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub now: Option<f64>,
+    /// The share of those maps that dated the change within two stops.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dated: Option<f64>,
 }
 
 impl Distribution {
@@ -178,6 +197,14 @@ impl Distribution {
             right_count: maps.iter().filter(|m| m.found == m.sources).count() as f64 / n as f64,
             outside: maps.iter().map(|m| m.outside).sum(),
             spread: spreads.iter().sum::<f64>() / spreads.len() as f64,
+            now: {
+                let v: Vec<f64> = maps.iter().filter_map(|m| m.ospa_now).collect();
+                (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+            },
+            dated: {
+                let v: Vec<bool> = maps.iter().filter_map(|m| m.change_dated).collect();
+                (!v.is_empty()).then(|| v.iter().filter(|&&d| d).count() as f64 / v.len() as f64)
+            },
         }
     }
 }
@@ -312,6 +339,25 @@ impl GeneratedReport {
                 d.mean / f.mean.max(1e-3),
             ));
         }
+        // Scenes that change (`--changes`): each group's maps against the places sounding
+        // at the last stop, and the share that dated the change.
+        if self.groups.iter().any(|g| g.maps.now.is_some()) {
+            s.push_str(&format!(
+                "\nscenes that change: {:<13} {:<9} {:>7} {:>7} | {:>7} {:>7}\n",
+                "group", "method", "now", "dated", "floor", "f.dated"
+            ));
+            for g in self.groups.iter().filter(|g| g.maps.now.is_some()) {
+                s.push_str(&format!(
+                    "                    {:<13} {:<9} {:>7.3} {:>6.0}% | {:>7.3} {:>6.0}%\n",
+                    g.group,
+                    g.method,
+                    g.maps.now.unwrap_or(0.0),
+                    100.0 * g.maps.dated.unwrap_or(0.0),
+                    g.floor.now.unwrap_or(0.0),
+                    100.0 * g.floor.dated.unwrap_or(0.0)
+                ));
+            }
+        }
         s
     }
 
@@ -409,8 +455,17 @@ fn run_drawn(drawn: &Drawn, opts: &DrawOptions, base: &Settings) -> Result<Vec<M
         let floor = true_bearings(&prepared)?;
         let truth = floor.truth.clone().unwrap_or_default();
         let room = prepared.room.clone();
+        let places = prepared.places();
+        let stops = prepared.stops.len();
+        let stop_xy: Vec<[f64; 2]> = prepared.stops.iter().map(|p| [p.x, p.y]).collect();
+        let changing = !crate::changes::changes(&places, stops).is_empty();
         let record = |method: &str, doa_score: f64, map: &asm::MapResult| {
             let found = map.positions();
+            let judged = changing.then(|| {
+                crate::changes::judge(map, &places, &stop_xy, &|a, b| {
+                    crate::changes::sees(&room, a, b)
+                })
+            });
             MapRecord {
                 scene: drawn.scene.name.clone(),
                 seed,
@@ -424,6 +479,9 @@ fn run_drawn(drawn: &Drawn, opts: &DrawOptions, base: &Settings) -> Result<Vec<M
                 found: found.len(),
                 ospa: asm::ospa::ospa(&found, &truth, 1.0, 1.0).total,
                 outside: found.iter().filter(|p| outside(&room, **p)).count(),
+                ospa_now: judged.map(|j| j.ospa_now),
+                // A scene whose changes no stop saw happen has nothing to date.
+                change_dated: judged.filter(|j| j.changes > 0).map(|j| j.all_found()),
             }
         };
         let map_seed = |j: usize| prepared.scene.seed + 1000 * j as u64;
@@ -468,16 +526,22 @@ fn run_drawn(drawn: &Drawn, opts: &DrawOptions, base: &Settings) -> Result<Vec<M
 /// A scene whose array is refused.
 pub fn true_bearings(scene: &PreparedScene) -> Result<Survey> {
     let poses = scene.stops.clone();
-    let truth: Vec<[f64; 2]> = scene.room_sources().map(|s| [s.pos[0], s.pos[1]]).collect();
+    // Every place a source stands at during the run, each heard at the stops it plays at.
+    let places = scene.places();
+    let truth: Vec<[f64; 2]> = places.iter().map(|p| [p.pos[0], p.pos[1]]).collect();
     let sees = |a: [f64; 2], b: [f64; 2]| match &scene.room {
         sim::Space::Plan(plan) => plan.sees(a, b),
         sim::Space::Shoebox(_) => true,
     };
     let doas_deg = poses
         .iter()
-        .map(|p| {
+        .enumerate()
+        .map(|(k, p)| {
             let mut by_distance: Vec<(f64, f64)> = truth
                 .iter()
+                .zip(&places)
+                .filter(|(_, place)| place.plays_at(k))
+                .map(|(t, _)| t)
                 .filter(|t| sees([p.x, p.y], **t))
                 .map(|t| {
                     let az = p.azimuth_to(*t).to_degrees();
@@ -620,6 +684,8 @@ mod tests {
             found,
             ospa,
             outside: 0,
+            ospa_now: None,
+            change_dated: None,
         }
     }
 

@@ -191,6 +191,7 @@ fn draw_options(
         map_seeds,
         talkers: cmd::scenes::talkers(a.talkers.as_deref())?,
         floor_only,
+        changes: a.changes,
     })
 }
 

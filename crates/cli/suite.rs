@@ -276,10 +276,13 @@ pub fn run_scene(path: &Path, base: &Settings, num: Option<usize>) -> Result<Vec
         };
         let sim = Simulated::render(prepared, stem.clone())?;
         name.get_or_insert_with(|| sim.name.clone());
+        let stop_xy: Vec<[f64; 2]> = sim.poses().iter().map(|p| [p.x, p.y]).collect();
         let judged = |map: &asm::MapResult| MapJudged {
             found: map.sources.len(),
             ospa: asm::ospa::ospa(&map.positions(), &sim.truth, 1.0, 1.0).total,
-            changes: crate::changes::judge(map, &sim.places, stops),
+            changes: crate::changes::judge(map, &sim.places, &stop_xy, &|a, b| {
+                crate::changes::sees(&sim.scene.room, a, b)
+            }),
             kinds: (0, 0),
         };
         let truth_kinds: Vec<ssl::signature::Kind> = sim

@@ -19,6 +19,11 @@ pub struct DrawArgs {
     /// it is there, else speech-shaped noise.
     #[arg(long, value_name = "DIR")]
     pub talkers: Option<PathBuf>,
+    /// Draw changes too: in three scenes of four one source falls silent, one starts, or
+    /// a talker walks 2-3 m to another place, in the middle third of the run (the scenes
+    /// are otherwise those of the same seeds without it).
+    #[arg(long)]
+    pub changes: bool,
 }
 
 /// `iasm regress --generated` and its options.

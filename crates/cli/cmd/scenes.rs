@@ -54,9 +54,13 @@ pub fn generate(opts: &DrawOptions, out: &Path) -> Result<Outcome> {
             .iter()
             .map(|k| format!("{k:?}").to_lowercase())
             .collect();
+        let change = d
+            .change
+            .as_ref()
+            .map_or(String::new(), |c| format!(" Changes: {c}."));
         let text = format!(
             "# Drawn by `iasm scenes generate` from seed {seed}: a {} plan, {} sources ({}), \
-             {} of them hidden from the first stop.\n{}\n[expect]\nnum = {}\n",
+             {} of them hidden from the first stop.{change}\n{}\n[expect]\nnum = {}\n",
             d.family.name(),
             kinds.len(),
             kinds.join(", "),

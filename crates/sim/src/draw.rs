@@ -26,6 +26,11 @@
 //!   0.3-0.6 m, and the array is one of [`DrawConfig::arrays`] at 0.5-1.0 m.
 //! - **N** is the source count plus 1 or 2: an upper bound, as a user who knows roughly
 //!   what the room holds sets it.
+//! - **Changes** (only with [`DrawConfig::changes`], from a generator of their own so that
+//!   the scene is otherwise the one its seed draws without them): a quarter of the scenes
+//!   each keep still; in the others one source falls silent, one starts, or a talker
+//!   walks 2-3 m to another place, at a stop drawn in the middle third of the run, as the
+//!   suite's change scenes do (`fixtures/changes`).
 
 use std::path::PathBuf;
 
@@ -106,6 +111,9 @@ pub struct DrawConfig {
     pub fs: u32,
     /// Seconds recorded at each stop. Default: 1.
     pub clip_s: f64,
+    /// Whether sources start, stop and move during the run (see the module docs).
+    /// Default: false.
+    pub changes: bool,
 }
 
 impl DrawConfig {
@@ -116,6 +124,7 @@ impl DrawConfig {
             talkers: Vec::new(),
             fs: 16_000,
             clip_s: 1.0,
+            changes: false,
         }
     }
 }
@@ -133,6 +142,8 @@ pub struct Drawn {
     pub num: usize,
     /// Sources that the first stop's place cannot see (around a corner).
     pub hidden_from_start: usize,
+    /// What changes during the run, in words (with [`DrawConfig::changes`]).
+    pub change: Option<String>,
 }
 
 /// Draws the scene of `seed`. The family cycles with the seed (seed 0 a box, 1 an L, ...),
@@ -250,12 +261,78 @@ pub fn draw(seed: u64, config: &DrawConfig) -> Result<Drawn, SimError> {
         },
         obstacles: Vec::new(),
     };
-    Ok(Drawn {
+    let mut drawn = Drawn {
         scene,
         family,
         kinds,
         num,
         hidden_from_start,
+        change: None,
+    };
+    if config.changes {
+        drawn.change = draw_change(seed, &mut drawn, &room, &path)?;
+    }
+    Ok(drawn)
+}
+
+/// Makes one of `drawn`'s sources stop, start or (a talker) move, or none (see the module
+/// docs); what changed, in words.
+fn draw_change(
+    seed: u64,
+    drawn: &mut Drawn,
+    room: &PlanRoom,
+    path: &[[f64; 2]],
+) -> Result<Option<String>, SimError> {
+    let mut rng = StdRng::seed_from_u64(seed ^ 0xc4a9_9e51_0000_0000);
+    let stops = drawn.scene.stops()?.len();
+    let n = drawn.scene.sources.len();
+    if stops < 6 || n == 0 {
+        return Ok(None);
+    }
+    let at = rng.random_range(stops / 3..=2 * stops / 3);
+    let which = rng.random_range(0..n);
+    Ok(match rng.random_range(0..4u32) {
+        0 => None,
+        1 => {
+            drawn.scene.sources[which].at_stops = Some([0, at - 1]);
+            Some(format!("source {} falls silent at stop {at}", which + 1))
+        }
+        2 => {
+            drawn.scene.sources[which].at_stops = Some([at, stops - 1]);
+            Some(format!("source {} starts at stop {at}", which + 1))
+        }
+        _ => {
+            let talkers: Vec<usize> = (0..n)
+                .filter(|&i| drawn.kinds[i] == SourceKind::Talker)
+                .collect();
+            let Some(&who) = talkers.get(rng.random_range(0..talkers.len().max(1))) else {
+                return Ok(None);
+            };
+            let from = drawn.scene.sources[who].pos;
+            let others: Vec<SourceSpec> = drawn
+                .scene
+                .sources
+                .iter()
+                .enumerate()
+                .filter(|&(i, _)| i != who)
+                .map(|(_, s)| s.clone())
+                .collect();
+            let to = (0..1000).find_map(|_| {
+                place(SourceKind::Talker, room, path, &others, &mut rng).filter(|p| {
+                    let d = (p[0] - from[0]).hypot(p[1] - from[1]);
+                    (2.0..=3.0).contains(&d)
+                })
+            });
+            let Some(to) = to else { return Ok(None) };
+            drawn.scene.sources[who].moves = vec![crate::scene::SourceMove {
+                from_stop: at,
+                pos: to.map(mm),
+            }];
+            Some(format!(
+                "talker {} walks to another place at stop {at}",
+                who + 1
+            ))
+        }
     })
 }
 

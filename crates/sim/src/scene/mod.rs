@@ -313,7 +313,7 @@ impl Scene {
         (self.clip_s * f64::from(self.fs)).round() as usize
     }
 
-    fn stops(&self) -> Result<Vec<Pose>, SimError> {
+    pub(crate) fn stops(&self) -> Result<Vec<Pose>, SimError> {
         let t = &self.trajectory;
         match (&t.poses, &t.waypoints) {
             (Some(p), None) if p.len() > MAX_STOPS => Err(invalid(
