@@ -89,14 +89,6 @@ impl ChangeScore {
     }
 }
 
-/// Whether `a` sees `b` in `space`: a line of sight within a floor plan, always in a box.
-pub fn sees(space: &sim::Space, a: [f64; 2], b: [f64; 2]) -> bool {
-    match space {
-        sim::Space::Plan(plan) => plan.sees(a, b),
-        sim::Space::Shoebox(_) => true,
-    }
-}
-
 /// Judges `map` against `places` heard from `stops` (the robot's positions, m), `sees`
 /// saying whether a stop has a line of sight to a place (see the module docs).
 pub fn judge(

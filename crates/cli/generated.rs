@@ -461,11 +461,8 @@ fn run_drawn(drawn: &Drawn, opts: &DrawOptions, base: &Settings) -> Result<Vec<M
         let changing = !crate::changes::changes(&places, stops).is_empty();
         let record = |method: &str, doa_score: f64, map: &asm::MapResult| {
             let found = map.positions();
-            let judged = changing.then(|| {
-                crate::changes::judge(map, &places, &stop_xy, &|a, b| {
-                    crate::changes::sees(&room, a, b)
-                })
-            });
+            let judged = changing
+                .then(|| crate::changes::judge(map, &places, &stop_xy, &|a, b| room.sees(a, b)));
             MapRecord {
                 scene: drawn.scene.name.clone(),
                 seed,
@@ -529,10 +526,6 @@ pub fn true_bearings(scene: &PreparedScene) -> Result<Survey> {
     // Every place a source stands at during the run, each heard at the stops it plays at.
     let places = scene.places();
     let truth: Vec<[f64; 2]> = places.iter().map(|p| [p.pos[0], p.pos[1]]).collect();
-    let sees = |a: [f64; 2], b: [f64; 2]| match &scene.room {
-        sim::Space::Plan(plan) => plan.sees(a, b),
-        sim::Space::Shoebox(_) => true,
-    };
     let doas_deg = poses
         .iter()
         .enumerate()
@@ -542,7 +535,7 @@ pub fn true_bearings(scene: &PreparedScene) -> Result<Survey> {
                 .zip(&places)
                 .filter(|(_, place)| place.plays_at(k))
                 .map(|(t, _)| t)
-                .filter(|t| sees([p.x, p.y], **t))
+                .filter(|t| scene.room.sees([p.x, p.y], **t))
                 .map(|t| {
                     let az = p.azimuth_to(*t).to_degrees();
                     ((t[0] - p.x).hypot(t[1] - p.y), az)

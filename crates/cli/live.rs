@@ -145,10 +145,9 @@ impl LiveMapper {
     /// What changed between the prior map and `result` (`None` without a prior).
     pub fn changes(&self, result: &MapResult) -> Option<Vec<asm::diff::Change>> {
         let prior = self.prior.as_ref()?;
-        let now: Vec<asm::diff::Placed> = result.sources.iter().map(Into::into).collect();
         Some(asm::diff::diff(
             &prior.placed(),
-            &now,
+            &placed(result),
             &asm::diff::DiffConfig::default(),
         ))
     }
@@ -339,10 +338,11 @@ impl LiveMapper {
             .iter()
             .map(|s| (s.pose, s.arrived_ns, s.doas_deg.as_slice()));
         let mut m = crate::rosmap::messages_over(result, stops, map, stamp_ns);
-        if let (Some(prior), Some(changes)) = (&self.prior, self.changes(result)) {
-            let now: Vec<asm::diff::Placed> = result.sources.iter().map(Into::into).collect();
+        if let Some(prior) = &self.prior {
+            let (before, now) = (prior.placed(), placed(result));
+            let changes = asm::diff::diff(&before, &now, &asm::diff::DiffConfig::default());
             m.changes = Some(crate::rosmap::change_markers(
-                &prior.placed(),
+                &before,
                 &now,
                 &changes,
                 &m.sources.markers[0].header,
@@ -368,4 +368,9 @@ impl LiveMapper {
             changes: self.changes(result),
         }
     }
+}
+
+/// A map's sources as `asm::diff` compares them.
+fn placed(result: &MapResult) -> Vec<asm::diff::Placed> {
+    result.sources.iter().map(Into::into).collect()
 }

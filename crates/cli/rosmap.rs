@@ -320,16 +320,15 @@ impl MapMessages {
     }
 }
 
-/// Colour-blind-safe (Okabe & Ito) colours of the four kinds of change, as `iasm diff`'s
-/// figure draws them.
+/// The colour of a kind of change, as `iasm diff`'s figure draws it.
 fn change_colour(k: asm::diff::ChangeKind) -> Color {
-    use asm::diff::ChangeKind;
-    match k {
-        ChangeKind::Kept => Color::new(0.0, 0.447, 0.698, 1.0),
-        ChangeKind::Moved => Color::new(0.902, 0.624, 0.0, 1.0),
-        ChangeKind::Removed => Color::new(0.835, 0.369, 0.0, 1.0),
-        ChangeKind::Added => Color::new(0.0, 0.620, 0.451, 1.0),
-    }
+    let plotters::style::RGBColor(r, g, b) = crate::figure::change_colour(k);
+    Color::new(
+        f32::from(r) / 255.0,
+        f32::from(g) / 255.0,
+        f32::from(b) / 255.0,
+        1.0,
+    )
 }
 
 /// What changed between `prior` and `now` (`changes`, from `asm::diff::diff` of the two),

@@ -281,16 +281,13 @@ pub fn run_scene(path: &Path, base: &Settings, num: Option<usize>) -> Result<Vec
             found: map.sources.len(),
             ospa: asm::ospa::ospa(&map.positions(), &sim.truth, 1.0, 1.0).total,
             changes: crate::changes::judge(map, &sim.places, &stop_xy, &|a, b| {
-                crate::changes::sees(&sim.scene.room, a, b)
+                sim.scene.room.sees(a, b)
             }),
             kinds: (0, 0),
         };
         let truth_kinds: Vec<ssl::signature::Kind> = sim
             .scene
-            .scene
-            .sources
-            .iter()
-            .filter(|s| !s.on_robot)
+            .room_sources()
             .map(crate::pipeline::scene_kind)
             .collect();
         let per_method: Vec<(f64, Vec<MapJudged>)> = Method::PAPER

@@ -12,7 +12,7 @@ use plotters::prelude::*;
 use super::map::{
     Chart, Glyph, OCCUPIED, Region, draw_grid, ellipse, legend_panel, metric_chart, metric_size,
 };
-use super::{Draw, fail};
+use super::{Draw, change_colour, fail};
 
 /// What the comparison's figure shows.
 pub struct DiffFigure<'a> {
@@ -32,16 +32,6 @@ pub struct DiffFigure<'a> {
 
 /// Margin around the sources (m).
 const MARGIN_M: f64 = 1.0;
-
-/// Colour-blind-safe (Okabe & Ito) colours of the four kinds.
-fn kind_colour(k: ChangeKind) -> RGBColor {
-    match k {
-        ChangeKind::Kept => RGBColor(0, 114, 178),
-        ChangeKind::Moved => RGBColor(230, 159, 0),
-        ChangeKind::Removed => RGBColor(213, 94, 0),
-        ChangeKind::Added => RGBColor(0, 158, 115),
-    }
-}
 
 impl DiffFigure<'_> {
     fn font(&self, base: u32) -> u32 {
@@ -74,7 +64,7 @@ impl DiffFigure<'_> {
 
     fn draw_sources<DB: DrawingBackend>(&self, chart: &mut Chart<'_, DB>) -> Result<()> {
         for c in self.changes {
-            let col = kind_colour(c.kind);
+            let col = change_colour(c.kind);
             let old = c.before.map(|i| &self.before[i]);
             let new = c.after.map(|j| &self.after[j]);
             for p in old.iter().chain(new.iter()) {
@@ -160,13 +150,13 @@ impl Draw for DiffFigure<'_> {
         entries.extend([
             (Glyph::Ring(BLACK, 2), "earlier map"),
             (Glyph::Dot(BLACK), "later map"),
-            (Glyph::Ring(kind_colour(ChangeKind::Kept), 1), "kept"),
+            (Glyph::Ring(change_colour(ChangeKind::Kept), 1), "kept"),
             (
-                Glyph::Line(kind_colour(ChangeKind::Moved)),
+                Glyph::Line(change_colour(ChangeKind::Moved)),
                 "moved (to the dot)",
             ),
-            (Glyph::Cross(kind_colour(ChangeKind::Removed)), "removed"),
-            (Glyph::Dot(kind_colour(ChangeKind::Added)), "added"),
+            (Glyph::Cross(change_colour(ChangeKind::Removed)), "removed"),
+            (Glyph::Dot(change_colour(ChangeKind::Added)), "added"),
             (Glyph::None, "ellipses: 2 sigma"),
         ]);
         legend_panel(&side, &entries, small)

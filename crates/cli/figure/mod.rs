@@ -48,6 +48,18 @@ fn colour(i: usize) -> RGBColor {
     PALETTE[i % PALETTE.len()]
 }
 
+/// The colour of each kind of change between two maps, in `iasm diff`'s figure and on the
+/// live node's `/iasm/changes`: the palette's blue, orange, vermillion and green.
+pub(crate) fn change_colour(k: asm::diff::ChangeKind) -> RGBColor {
+    use asm::diff::ChangeKind;
+    PALETTE[match k {
+        ChangeKind::Kept => 0,
+        ChangeKind::Moved => 4,
+        ChangeKind::Removed => 1,
+        ChangeKind::Added => 2,
+    }]
+}
+
 /// The bounding box `(x0, x1, y0, y1)` of the finite points among `pts`, widened by
 /// `margin` on every side; `None` when there is none.
 fn bounds(pts: impl IntoIterator<Item = [f64; 2]>, margin: f64) -> Option<(f64, f64, f64, f64)> {

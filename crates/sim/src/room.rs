@@ -15,6 +15,15 @@ pub enum Space {
 }
 
 impl Space {
+    /// Whether `a` sees `b` on the floor (m): a line of sight within a floor plan, always
+    /// in a box.
+    pub fn sees(&self, a: [f64; 2], b: [f64; 2]) -> bool {
+        match self {
+            Space::Shoebox(_) => true,
+            Space::Plan(r) => r.sees(a, b),
+        }
+    }
+
     /// Whether `p` lies strictly inside the room.
     pub fn contains(&self, p: [f64; 3]) -> bool {
         match self {
