@@ -215,36 +215,57 @@ impl Renderer {
         let blocks = self.n.div_ceil(self.block);
         let gain = 4.0 * std::f64::consts::PI / self.fft_len as f64;
         let mut h = self.fwd.make_input_vec();
-        let mut hs = self.fwd.make_output_vec();
         let mut y = self.inv.make_output_vec();
-        let mut acc = vec![vec![Complex64::default(); bins]; blocks];
+        // Source by source, every microphone's response first: a diffuse tail's waves are
+        // then read once for the whole array ([`add_tail`]) instead of once a microphone.
+        // Each microphone's sums run in the same order as one microphone at a time.
+        let mut hs = vec![self.fwd.make_output_vec(); mics.len()];
+        let mut acc = vec![vec![vec![Complex64::default(); bins]; blocks]; mics.len()];
         let centre = centroid(mics);
         let tails = self.tails(centre, playing);
-        mics.iter()
-            .map(|&m| {
-                acc.iter_mut().for_each(|a| a.fill(Complex64::default()));
-                for (i, spectra) in self.spectra.iter().enumerate().filter(|(i, _)| playing[*i]) {
-                    h.fill(0.0);
-                    match &self.images {
-                        Images::Shoebox(images) => add_images(&mut h[..l], &images[i], m, fs, c),
-                        Images::Plan(room, images) => {
-                            let from = tails[i].as_ref().map(|t| t.from);
-                            plan::add_plan_images(room, &images[i], m, fs, c, &mut h[..l], from);
-                        }
-                    }
-                    high_pass(&mut h[..l], HIGH_PASS_HZ, fs);
-                    self.fwd
-                        .process(&mut h, &mut hs)
-                        .expect("buffers sized by the plan");
-                    if let Some(tail) = &tails[i] {
-                        add_tail(&mut hs, &tail.waves, m, centre, c / fs, self.fft_len);
-                    }
-                    for (a, x) in acc.iter_mut().zip(spectra) {
-                        for ((a, x), h) in a.iter_mut().zip(x).zip(&hs) {
-                            *a += x * h;
-                        }
+        // The array's reach about its centre in the plan: with it, each microphone looks
+        // only at the plan images near enough to sound ([`plan::PlanImages::near`]).
+        let radius = mics
+            .iter()
+            .map(|m| (m[0] - centre[0]).hypot(m[1] - centre[1]))
+            .fold(0.0, f64::max);
+        for (i, spectra) in self.spectra.iter().enumerate().filter(|(i, _)| playing[*i]) {
+            let near = match &self.images {
+                Images::Plan(room, images) => {
+                    let from = tails[i].as_ref().map(|t| t.from);
+                    let reach = plan::image_reach(l, fs, c, from);
+                    images[i].near(room, [centre[0], centre[1]], radius, reach)
+                }
+                Images::Shoebox(_) => Vec::new(),
+            };
+            for (&m, hs) in mics.iter().zip(hs.iter_mut()) {
+                h.fill(0.0);
+                match &self.images {
+                    Images::Shoebox(images) => add_images(&mut h[..l], &images[i], m, fs, c),
+                    Images::Plan(room, images) => {
+                        let from = tails[i].as_ref().map(|t| t.from);
+                        let (h, near) = (&mut h[..l], Some(&near[..]));
+                        plan::add_plan_images(room, &images[i], near, m, fs, c, h, from);
                     }
                 }
+                high_pass(&mut h[..l], HIGH_PASS_HZ, fs);
+                self.fwd
+                    .process(&mut h, hs)
+                    .expect("buffers sized by the plan");
+            }
+            if let Some(tail) = &tails[i] {
+                add_tail(&mut hs, &tail.waves, mics, centre, c / fs, self.fft_len);
+            }
+            for (acc, hs) in acc.iter_mut().zip(&hs) {
+                for (a, x) in acc.iter_mut().zip(spectra) {
+                    for ((a, x), h) in a.iter_mut().zip(x).zip(hs) {
+                        *a += x * h;
+                    }
+                }
+            }
+        }
+        acc.into_iter()
+            .map(|mut acc| {
                 let mut out = vec![0.0; self.n];
                 for (b, a) in acc.iter_mut().enumerate() {
                     // The inverse real FFT wants real DC and Nyquist bins; they are, up to
@@ -325,27 +346,56 @@ struct Tail {
     waves: TailWaves,
 }
 
-/// Adds to the response spectrum `hs` (an `n`-point real FFT) the tail's plane waves as
-/// the microphone at `mic` hears them: each arrives `u . (mic - centre) / c` earlier there
-/// than at the centre (`u` the direction it comes from; `per_sample` = `c / fs`, metres per
-/// sample), a phase ramp over the bins.
+/// Adds to each microphone's response spectrum (`hs`, one `n`-point real FFT per
+/// microphone of `mics`) the tail's plane waves as it hears them: each arrives `u . (mic -
+/// centre) / c` earlier there than at the centre (`u` the direction it comes from;
+/// `per_sample` = `c / fs`, metres per sample), a phase ramp over the bins.
+///
+/// A ramp is a running product (`turn *= step`), a chain whose latency bound the loop
+/// while one microphone's took the waves one after the other, and each wave's spectrum
+/// (megabytes) was read again for every microphone. Here a stretch of bins at a time,
+/// each wave's stretch is read once and turned for every microphone, their chains side by
+/// side. Each bin still adds the waves in their order and each chain runs as before: the
+/// same bits.
 fn add_tail(
-    hs: &mut [Complex64],
+    hs: &mut [Vec<Complex64>],
     waves: &[([f64; 3], Vec<Complex64>)],
-    mic: [f64; 3],
+    mics: &[[f64; 3]],
     centre: [f64; 3],
     per_sample: f64,
     n: usize,
 ) {
-    let r = [mic[0] - centre[0], mic[1] - centre[1], mic[2] - centre[2]];
-    for (u, spec) in waves {
-        // Delay in samples (negative: earlier).
-        let delay = -(u[0] * r[0] + u[1] * r[1] + u[2] * r[2]) / per_sample;
-        let step = Complex64::from_polar(1.0, -std::f64::consts::TAU * delay / n as f64);
-        let mut turn = Complex64::new(1.0, 0.0);
-        for (h, x) in hs.iter_mut().zip(spec) {
-            *h += x * turn;
-            turn *= step;
+    /// Bins per stretch: the stretch of every microphone's response stays in cache.
+    const STRETCH: usize = 256;
+    let steps: Vec<Vec<Complex64>> = waves
+        .iter()
+        .map(|(u, _)| {
+            mics.iter()
+                .map(|mic| {
+                    let r = [mic[0] - centre[0], mic[1] - centre[1], mic[2] - centre[2]];
+                    // Delay in samples (negative: earlier).
+                    let delay = -(u[0] * r[0] + u[1] * r[1] + u[2] * r[2]) / per_sample;
+                    Complex64::from_polar(1.0, -std::f64::consts::TAU * delay / n as f64)
+                })
+                .collect()
+        })
+        .collect();
+    let mut turns = vec![vec![Complex64::new(1.0, 0.0); mics.len()]; waves.len()];
+    let bins = waves
+        .iter()
+        .map(|(_, s)| s.len())
+        .chain(hs.iter().map(Vec::len))
+        .min()
+        .unwrap_or(0);
+    for start in (0..bins).step_by(STRETCH) {
+        let end = (start + STRETCH).min(bins);
+        for ((steps, turns), (_, spec)) in steps.iter().zip(turns.iter_mut()).zip(waves) {
+            for (k, x) in spec[start..end].iter().enumerate() {
+                for ((h, turn), step) in hs.iter_mut().zip(turns.iter_mut()).zip(steps) {
+                    h[start + k] += x * *turn;
+                    *turn *= step;
+                }
+            }
         }
     }
 }

@@ -339,12 +339,24 @@ impl PlanRoom {
 
     /// Whether the plan segment `a-b` crosses a wall other than `skip` (ends on a wall
     /// listed in `skip` do not count).
+    ///
+    /// A wall whose bounding box lies apart from the segment's cannot meet it, and most
+    /// walls are such: they are passed over with four comparisons (this test ran for
+    /// every leg of every image path, a tenth of a drawn scene's rendering).
     fn blocked(&self, a: [f64; 2], b: [f64; 2], skip: [Option<usize>; 2]) -> bool {
+        let (lo, hi) = (
+            [a[0].min(b[0]), a[1].min(b[1])],
+            [a[0].max(b[0]), a[1].max(b[1])],
+        );
         (0..self.corners.len())
             .filter(|w| !skip.contains(&Some(*w)))
             .any(|w| {
                 let (c, d) = self.wall(w);
-                segments_cross(a, b, c, d)
+                let apart = c[0].max(d[0]) < lo[0]
+                    || c[0].min(d[0]) > hi[0]
+                    || c[1].max(d[1]) < lo[1]
+                    || c[1].min(d[1]) > hi[1];
+                !apart && segments_cross(a, b, c, d)
             })
     }
 }
@@ -500,12 +512,12 @@ impl PlanRoom {
         while k != 0 {
             let im = images[k];
             let (a, b) = self.wall(im.wall);
-            if side(from, a, b) <= 0.0 {
+            let s0 = side(from, a, b);
+            if s0 <= 0.0 {
                 return false;
             }
             // Where the leg towards the image meets the wall's line.
-            let (s0, s1) = (side(from, a, b), side(im.pos, a, b));
-            let t = s0 / (s0 - s1);
+            let t = s0 / (s0 - side(im.pos, a, b));
             let p = [
                 from[0] + t * (im.pos[0] - from[0]),
                 from[1] + t * (im.pos[1] - from[1]),
@@ -545,9 +557,21 @@ pub fn sounding(
     mic: [f64; 3],
     reach: f64,
 ) -> Vec<crate::ism::ImageSource> {
+    sounding_among(room, images, 0..images.plan.len(), mic, reach)
+}
+
+/// [`sounding`] among the plan images `ids` (ascending) only.
+fn sounding_among(
+    room: &PlanRoom,
+    images: &PlanImages,
+    ids: impl Iterator<Item = usize>,
+    mic: [f64; 3],
+    reach: f64,
+) -> Vec<crate::ism::ImageSource> {
     let m2 = [mic[0], mic[1]];
     let mut out = Vec::new();
-    for (id, im) in images.plan.iter().enumerate() {
+    for id in ids {
+        let im = &images.plan[id];
         let dxy2 = (im.pos[0] - m2[0]).powi(2) + (im.pos[1] - m2[1]).powi(2);
         if dxy2 > reach * reach || !room.visible(&images.plan, id, m2) {
             continue;
@@ -569,24 +593,113 @@ pub fn sounding(
     out
 }
 
+impl PlanImages {
+    /// The plan images that may sound within `reach` m at a microphone within `radius` m
+    /// of the plan point `centre`, ascending: those within `reach + radius` of it, less
+    /// those [`PlanRoom::hidden_from_disc`] shows to be hidden from the whole disc. An
+    /// array's microphones share it ([`add_plan_images`]'s `near`): nearly every image is
+    /// hidden from the array, most of them at their first or second wall, and this
+    /// settles it once for the array rather than once a microphone (the path traced for
+    /// every image and microphone was half of a drawn scene's rendering).
+    pub fn near(&self, room: &PlanRoom, centre: [f64; 2], radius: f64, reach: f64) -> Vec<usize> {
+        let r2 = (reach + radius).powi(2);
+        (0..self.plan.len())
+            .filter(|&id| {
+                let p = self.plan[id].pos;
+                (p[0] - centre[0]).powi(2) + (p[1] - centre[1]).powi(2) <= r2
+                    && !room.hidden_from_disc(&self.plan, id, centre, radius)
+            })
+            .collect()
+    }
+}
+
+impl PlanRoom {
+    /// Whether plan image `id` of `images` is hidden from every point within `radius` m
+    /// of `centre`, by its first wall's side or by where its path meets a wall: a `true`
+    /// here is a `false` of [`PlanRoom::visible`] at every such point; a `false` says
+    /// nothing.
+    ///
+    /// Unfolded (each wall's reflection undone), a path from a point `q` to the image is
+    /// the straight segment from `q` to it, and its `k`-th reflection lies where that
+    /// segment meets the `k`-th wall mirrored in the walls before it. It lies within the
+    /// wall only if `q` lies in the sector the mirrored wall spans from the image; a disc
+    /// that lies wholly outside one of those sectors, by more than rounding, is hidden.
+    pub fn hidden_from_disc(
+        &self,
+        images: &[PlanImage],
+        id: usize,
+        centre: [f64; 2],
+        radius: f64,
+    ) -> bool {
+        if id == 0 {
+            return false;
+        }
+        let margin = radius + 1e-6;
+        let apex = images[id].pos;
+        // Whether `centre` lies more than `margin` on the negative side of the line from
+        // `a` to `b` (`side` is the distance times the length: compared squared).
+        let clear_of = |a: [f64; 2], b: [f64; 2], sign: f64| {
+            let at = side(centre, a, b) * sign;
+            at < 0.0 && at * at > margin * margin * ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2))
+        };
+        let (a, b) = self.wall(images[id].wall);
+        if clear_of(a, b, 1.0) {
+            return true; // behind its first wall
+        }
+        // Is the disc wholly on the other side of the line from the apex through `p` than
+        // `other` is?
+        let beyond = |p: [f64; 2], other: [f64; 2]| {
+            let reference = side(other, apex, p);
+            reference != 0.0 && clear_of(apex, p, reference.signum())
+        };
+        let mut unfold: Vec<usize> = Vec::new();
+        let mut k = id;
+        while k != 0 {
+            let (mut a, mut b) = self.wall(images[k].wall);
+            for &w in unfold.iter().rev() {
+                let (c, d) = self.wall(w);
+                (a, b) = (mirror(a, c, d), mirror(b, c, d));
+            }
+            if beyond(a, b) || beyond(b, a) {
+                return true;
+            }
+            unfold.push(images[k].wall);
+            k = images[k].parent;
+        }
+        false
+    }
+}
+
+/// How far (m) an image of a response `len` samples long at `fs` may be, with the exact
+/// images faded out after `tail_from` (s) when given: the images [`add_plan_images`] adds.
+pub fn image_reach(len: usize, fs: f64, c: f64, tail_from: Option<f64>) -> f64 {
+    // As the shoebox's images: those that arrive within the response.
+    let reach = len as f64 / fs * c;
+    tail_from.map_or(reach, |s| reach.min((s + FADE_S) * c))
+}
+
 /// Adds to `h` (samples at `fs`, from emission) the images of `images` that sound at
 /// `mic` and arrive within `h`, each weighted by one minus [`tail_weight`] when
-/// `tail_from` (s) is given (and none after the fade).
+/// `tail_from` (s) is given (and none after the fade). With `near`, only those plan images
+/// are looked at ([`PlanImages::near`] within [`image_reach`] and the microphone's
+/// distance from the point it was taken about).
+#[allow(clippy::too_many_arguments)]
 pub fn add_plan_images(
     room: &PlanRoom,
     images: &PlanImages,
+    near: Option<&[usize]>,
     mic: [f64; 3],
     fs: f64,
     c: f64,
     h: &mut [f64],
     tail_from: Option<f64>,
 ) {
-    // As the shoebox's images: those that arrive within `h`.
-    let mut reach = h.len() as f64 / fs * c;
-    if let Some(s) = tail_from {
-        reach = reach.min((s + FADE_S) * c);
-    }
-    for im in sounding(room, images, mic, reach) {
+    let reach = image_reach(h.len(), fs, c, tail_from);
+    let sounding = match near {
+        Some(ids) => sounding_among(room, images, ids.iter().copied(), mic, reach),
+        None => sounding(room, images, mic, reach),
+    };
+    for im in sounding {
         let d = (0..3)
             .map(|k| (im.pos[k] - mic[k]).powi(2))
             .sum::<f64>()
@@ -633,14 +746,22 @@ pub fn tail_waves(
         / (TAIL_DIRECTIONS as f64).sqrt();
     // Amplitude decays 60 dB in rt60: exp(-ln(1000) t / rt60).
     let rate = 1000f64.ln() / room.sabine_rt60();
-    let first = (tail_from * fs).floor().max(0.0) as usize;
+    let first = (tail_from * fs).floor().max(0.0).min(len as f64) as usize;
+    // The decay and the fade-in are the same for every wave: computed once per sample
+    // (an exponential and a cosine per sample and wave were a tenth of a drawn scene's
+    // rendering), and applied in the same order as before, so the same bits.
+    let envelope: Vec<(f64, f64)> = (first..len)
+        .map(|k| {
+            let t = k as f64 / fs;
+            ((-rate * t).exp(), tail_weight(t, tail_from))
+        })
+        .collect();
     (0..TAIL_DIRECTIONS)
         .map(|_| {
             let mut x = vec![0.0; len];
-            for (k, v) in x.iter_mut().enumerate().skip(first) {
-                let t = k as f64 / fs;
+            for (v, &(decay, fade)) in x[first..].iter_mut().zip(&envelope) {
                 let g: f64 = StandardNormal.sample(&mut rng);
-                *v = g * level * (-rate * t).exp() * tail_weight(t, tail_from);
+                *v = g * level * decay * fade;
             }
             x
         })
@@ -668,7 +789,7 @@ pub fn plan_rir(
     let reach = tail_from.map_or(len as f64 / fs, |s| s + FADE_S) * c;
     let images = room.images(src, reach, max_order);
     let mut h = vec![0.0; len];
-    add_plan_images(room, &images, mic, fs, c, &mut h, tail_from);
+    add_plan_images(room, &images, None, mic, fs, c, &mut h, tail_from);
     if let (Some(seed), Some(from)) = (tail_seed, tail_from) {
         for wave in tail_waves(room, fs, c, len, from, seed) {
             h.iter_mut().zip(&wave).for_each(|(h, w)| *h += w);
