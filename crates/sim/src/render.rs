@@ -355,8 +355,9 @@ struct Tail {
 /// while one microphone's took the waves one after the other, and each wave's spectrum
 /// (megabytes) was read again for every microphone. Here a stretch of bins at a time,
 /// each wave's stretch is read once and turned for every microphone, their chains side by
-/// side. Each bin still adds the waves in their order and each chain runs as before: the
-/// same bits.
+/// side in SIMD lanes (real and imaginary parts apart, microphones along the lanes). Each
+/// bin still adds the waves in their order and each chain runs as before, with the
+/// products and sums of complex arithmetic and no fused multiply-adds: the same bits.
 fn add_tail(
     hs: &mut [Vec<Complex64>],
     waves: &[([f64; 3], Vec<Complex64>)],
@@ -365,35 +366,123 @@ fn add_tail(
     per_sample: f64,
     n: usize,
 ) {
-    /// Bins per stretch: the stretch of every microphone's response stays in cache.
-    const STRETCH: usize = 256;
-    let steps: Vec<Vec<Complex64>> = waves
-        .iter()
-        .map(|(u, _)| {
-            mics.iter()
-                .map(|mic| {
-                    let r = [mic[0] - centre[0], mic[1] - centre[1], mic[2] - centre[2]];
-                    // Delay in samples (negative: earlier).
-                    let delay = -(u[0] * r[0] + u[1] * r[1] + u[2] * r[2]) / per_sample;
-                    Complex64::from_polar(1.0, -std::f64::consts::TAU * delay / n as f64)
-                })
-                .collect()
-        })
-        .collect();
-    let mut turns = vec![vec![Complex64::new(1.0, 0.0); mics.len()]; waves.len()];
+    // Microphones padded to whole lanes; a padded lane turns nothing into nothing.
+    let m = mics.len().div_ceil(LANES) * LANES;
+    let mut step_re = vec![1.0; waves.len() * m];
+    let mut step_im = vec![0.0; waves.len() * m];
+    for (w, (u, _)) in waves.iter().enumerate() {
+        for (j, mic) in mics.iter().enumerate() {
+            let r = [mic[0] - centre[0], mic[1] - centre[1], mic[2] - centre[2]];
+            // Delay in samples (negative: earlier).
+            let delay = -(u[0] * r[0] + u[1] * r[1] + u[2] * r[2]) / per_sample;
+            let step = Complex64::from_polar(1.0, -std::f64::consts::TAU * delay / n as f64);
+            step_re[w * m + j] = step.re;
+            step_im[w * m + j] = step.im;
+        }
+    }
+    let mut turn_re = vec![0.0; waves.len() * m];
+    for w in 0..waves.len() {
+        turn_re[w * m..w * m + mics.len()].fill(1.0);
+    }
     let bins = waves
         .iter()
         .map(|(_, s)| s.len())
         .chain(hs.iter().map(Vec::len))
         .min()
         .unwrap_or(0);
-    for start in (0..bins).step_by(STRETCH) {
-        let end = (start + STRETCH).min(bins);
-        for ((steps, turns), (_, spec)) in steps.iter().zip(turns.iter_mut()).zip(waves) {
-            for (k, x) in spec[start..end].iter().enumerate() {
-                for ((h, turn), step) in hs.iter_mut().zip(turns.iter_mut()).zip(steps) {
-                    h[start + k] += x * *turn;
-                    *turn *= step;
+    // Bin-major, microphone-minor copies of the responses, the parts apart.
+    let (mut re, mut im) = (vec![0.0; bins * m], vec![0.0; bins * m]);
+    for (j, h) in hs.iter().enumerate() {
+        for (k, x) in h[..bins].iter().enumerate() {
+            re[k * m + j] = x.re;
+            im[k * m + j] = x.im;
+        }
+    }
+    let mut turns = TailTurns {
+        m,
+        step_re,
+        step_im,
+        turn_im: vec![0.0; turn_re.len()],
+        turn_re,
+    };
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU supports the feature the function is compiled for.
+        unsafe { turns.turn_avx2(waves, &mut re, &mut im, bins) };
+    } else {
+        turns.turn(waves, &mut re, &mut im, bins);
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    turns.turn(waves, &mut re, &mut im, bins);
+    for (j, h) in hs.iter_mut().enumerate() {
+        for (k, x) in h[..bins].iter_mut().enumerate() {
+            *x = Complex64::new(re[k * m + j], im[k * m + j]);
+        }
+    }
+}
+
+/// Microphones per SIMD group in [`add_tail`] (four doubles: one AVX2 register).
+const LANES: usize = 4;
+
+/// Every wave's phase ramp at every microphone ([`add_tail`]): wave-major, microphones
+/// (padded to whole [`LANES`]) minor, the parts apart.
+struct TailTurns {
+    m: usize,
+    step_re: Vec<f64>,
+    step_im: Vec<f64>,
+    turn_re: Vec<f64>,
+    turn_im: Vec<f64>,
+}
+
+impl TailTurns {
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn turn_avx2(
+        &mut self,
+        waves: &[([f64; 3], Vec<Complex64>)],
+        re: &mut [f64],
+        im: &mut [f64],
+        bins: usize,
+    ) {
+        self.turn(waves, re, im, bins);
+    }
+
+    /// Adds each wave, turned, to the responses `re` and `im` (bin-major, microphones
+    /// minor), `bins` bins.
+    #[inline(always)]
+    fn turn(
+        &mut self,
+        waves: &[([f64; 3], Vec<Complex64>)],
+        re: &mut [f64],
+        im: &mut [f64],
+        bins: usize,
+    ) {
+        /// Bins per stretch: the stretch of every microphone's response stays in cache.
+        const STRETCH: usize = 256;
+        let m = self.m;
+        for start in (0..bins).step_by(STRETCH) {
+            let end = (start + STRETCH).min(bins);
+            for (w, (_, spec)) in waves.iter().enumerate() {
+                for g in (0..m).step_by(LANES) {
+                    let at = w * m + g;
+                    let lanes = |v: &[f64]| -> [f64; LANES] { std::array::from_fn(|l| v[at + l]) };
+                    let (sr, si) = (lanes(&self.step_re), lanes(&self.step_im));
+                    let (mut tr, mut ti) = (lanes(&self.turn_re), lanes(&self.turn_im));
+                    for (k, x) in spec[start..end].iter().enumerate() {
+                        let row = (start + k) * m + g;
+                        let hr: &mut [f64; LANES] = (&mut re[row..row + LANES]).try_into().unwrap();
+                        let hi: &mut [f64; LANES] = (&mut im[row..row + LANES]).try_into().unwrap();
+                        for l in 0..LANES {
+                            // h += x * turn; turn *= step (num_complex's arithmetic).
+                            let (a, b) = (tr[l], ti[l]);
+                            hr[l] += x.re * a - x.im * b;
+                            hi[l] += x.re * b + x.im * a;
+                            tr[l] = a * sr[l] - b * si[l];
+                            ti[l] = a * si[l] + b * sr[l];
+                        }
+                    }
+                    self.turn_re[at..at + LANES].copy_from_slice(&tr);
+                    self.turn_im[at..at + LANES].copy_from_slice(&ti);
                 }
             }
         }
