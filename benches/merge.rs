@@ -7,9 +7,10 @@
 //! back and forth, a stop every 0.2 m, 500 stops each. Each stop hears the four nearest
 //! talkers, their exact bearings (N = 4): the mapper's cost, not the front end's. The stops
 //! arrive round-robin, as four robots' do. What is timed is `MergeMapper::add` (the
-//! update the node publishes after each stop; at 4, 8, 16, ... stops it is a full map over
-//! every stop, see `asm::online`) and, at the end, `MergeMapper::finish` (the full map
-//! Ctrl-C ends with).
+//! update the node publishes after each stop; the stop after 4, 8, 16, ... stops takes in
+//! the full map over every stop that the stop before started beside it, see
+//! `asm::online`, and here, the stops coming back to back, waits for it) and, at the end,
+//! `MergeMapper::finish` (the full map Ctrl-C ends with).
 //!
 //! A plain benchmark (its updates take milliseconds to tens of seconds, each once, which
 //! criterion's repeated samples do not fit): `cargo bench --bench merge` prints the curve;
@@ -88,7 +89,7 @@ fn main() {
         let t0 = Instant::now();
         let u = m.add(s.clone()).expect("a stop").expect("a new stop");
         let ms = 1e3 * t0.elapsed().as_secs_f64();
-        if k.is_power_of_two() && k >= 4 {
+        if k > 4 && (k - 1).is_power_of_two() {
             full = Some(ms);
         } else {
             window.push(ms);

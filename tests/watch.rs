@@ -95,7 +95,7 @@ fn a_replay_writes_one_curve_row_per_stop_and_ends_on_the_batch_map() {
         "stop",
         "OSPA (m)",
         "the map after each stop",
-        "a full map ran",
+        "a full map taken in",
     ] {
         assert!(
             texts.iter().any(|t| t.contains(want)),

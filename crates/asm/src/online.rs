@@ -32,8 +32,23 @@
 //!   twice one full map of all the stops, so the total stays linear in `K` where the
 //!   recompute's is quadratic. [`OnlineMapper::consolidate`] runs one on demand (at the
 //!   last stop of a run, it gives exactly the batch map of the same seed).
+//! - **The full map runs beside the robot, not in its stop.** It is the one step whose cost
+//!   grows with the run (arrangement II's last one takes 90 ms on one core, where a stop's
+//!   own update takes 7), so a stop that would run it answers with its incremental update
+//!   and starts the full map over every stop so far on a thread of its own; the next stop
+//!   takes it in before its own update, from the state the full map would have left at
+//!   the stop that started it (the draws and the round count as they were). So every map
+//!   from that next stop on is the one the full map in the stop would have given, to the
+//!   bit, whether the thread finished early, late or could not be started (the full map
+//!   then runs where it is taken in); only the starting stop's own map is its incremental
+//!   one. A robot records for seconds at a stop, so the full map is done before the next
+//!   stop arrives, and a stop's latency is its incremental update.
 //!
 //! [`IasmConfig::refine`]: crate::IasmConfig::refine
+
+use std::sync::Arc;
+use std::thread::JoinHandle;
+use std::time::Instant;
 
 use rand::SeedableRng;
 
@@ -43,7 +58,7 @@ use crate::pf::{ParticleFilter, covariance, mean};
 use crate::{MapRng, Pose};
 
 /// What one stop changed.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct StopUpdate {
     /// The stop's index (from 0).
     pub stop: usize,
@@ -55,15 +70,21 @@ pub struct StopUpdate {
     pub rounds: usize,
     /// Sources on the map after the stop.
     pub sources: usize,
-    /// Whether the stop ran a full map (see the module docs).
+    /// Whether the stop started a full map over every stop so far (see the module docs:
+    /// it runs beside the next stops and the next stop takes it in).
     pub full: bool,
+    /// Whether the stop took in the full map the stop before it started (its rounds are
+    /// counted in [`StopUpdate::rounds`]).
+    pub adopted: bool,
+    /// How long that full map took on its own thread (ms; 0 where none was taken in).
+    pub full_ms: f64,
 }
 
 /// The incremental I-ASM mapper (see the module docs): feed it stops with
 /// [`OnlineMapper::add_stop`], read the map with [`OnlineMapper::map`].
-#[derive(Clone, Debug)]
+#[derive(Debug)]
 pub struct OnlineMapper {
-    mapper: Mapper,
+    mapper: Arc<Mapper>,
     seed: u64,
     /// Every stop so far.
     stops: Stops,
@@ -81,6 +102,67 @@ pub struct OnlineMapper {
     /// The stop count of the last full map (0: none yet).
     last_full: usize,
     rng: MapRng,
+    /// The full map running beside the stops, if one does.
+    pending: Option<Pending>,
+    /// Whether full maps run on a thread of their own (the tests run them in place too).
+    threaded: bool,
+}
+
+/// A full map started at a stop and not yet taken in (see the module docs).
+#[derive(Debug)]
+struct Pending {
+    /// The stops it maps: the first `stops`.
+    stops: usize,
+    /// The draws and the round count as the full map would have left them in the stop
+    /// that started it.
+    rng: MapRng,
+    rounds: usize,
+    work: Work,
+}
+
+/// A full map's result with the time it took (ms), or the thread computing it.
+#[derive(Debug)]
+enum Work {
+    Running(JoinHandle<(MapResult, f64)>),
+    Done(MapResult, f64),
+}
+
+impl Work {
+    /// The full map of `stops`, on a thread of its own where one can be started, here
+    /// otherwise.
+    fn start(mapper: &Arc<Mapper>, stops: &Stops, seed: u64, threaded: bool) -> Self {
+        let job = {
+            let (mapper, stops) = (Arc::clone(mapper), stops.clone());
+            move || {
+                let t0 = Instant::now();
+                let r = mapper.run_stops(&stops, &mut MapRng::seed_from_u64(seed));
+                (r, 1e3 * t0.elapsed().as_secs_f64())
+            }
+        };
+        let thread = threaded.then(|| {
+            std::thread::Builder::new()
+                .name("iasm-full-map".into())
+                .spawn(job.clone())
+        });
+        match thread {
+            Some(Ok(h)) => Work::Running(h),
+            _ => {
+                let (r, ms) = job();
+                Work::Done(r, ms)
+            }
+        }
+    }
+
+    /// Waits for the thread, if it still runs.
+    fn finish(self) -> (MapResult, f64) {
+        match self {
+            Work::Done(r, ms) => (r, ms),
+            Work::Running(h) => match h.join() {
+                Ok(done) => done,
+                Err(panic) => std::panic::resume_unwind(panic),
+            },
+        }
+    }
 }
 
 /// The first full map runs at this many stops; then at twice as many each time.
@@ -91,7 +173,7 @@ impl OnlineMapper {
     /// maps).
     pub fn new(mapper: Mapper, seed: u64) -> Self {
         Self {
-            mapper,
+            mapper: Arc::new(mapper),
             seed,
             stops: Stops::default(),
             pool: Vec::new(),
@@ -102,6 +184,8 @@ impl OnlineMapper {
             next_full: FIRST_FULL,
             last_full: 0,
             rng: MapRng::seed_from_u64(seed ^ 0x0e11_0e11),
+            pending: None,
+            threaded: true,
         }
     }
 
@@ -145,30 +229,45 @@ impl OnlineMapper {
         }
         self.mapper
             .push_stop(&mut self.stops, pose, doas_rad, cut)?;
+        let mut update = StopUpdate {
+            stop,
+            ..StopUpdate::default()
+        };
+        if let Some(p) = self.pending.take() {
+            update.rounds = self.adopt(p, &mut update.full_ms);
+            update.adopted = true;
+            // As the stop that started it would have ended.
+            self.refused = self
+                .mapper
+                .one_per_place(std::mem::take(&mut self.refused), &self.sources);
+        }
         self.pool.push(self.stops.heard()[stop].clone());
 
         let (associated, returned) = self.reassociate();
-        let mut update = StopUpdate {
-            stop,
-            associated,
-            ..StopUpdate::default()
-        };
-        if self.stops.len() >= self.next_full {
+        update.associated = associated;
+        let full_due = self.stops.len() >= self.next_full;
+        // What the full map in this stop would have left (see `Pending`).
+        let before = (self.rng.clone(), self.rounds);
+        if !self.pool[stop].is_empty() || returned {
+            self.search(&mut update);
+        }
+        // As the batch mapper ends its search.
+        let removed = self
+            .mapper
+            .settle(&mut self.sources, &self.stops, &mut self.pool);
+        self.removed += removed.len();
+        self.refused.extend(removed);
+        if full_due {
             while self.next_full <= self.stops.len() {
                 self.next_full *= 2;
             }
-            update.rounds = self.consolidate();
+            self.pending = Some(Pending {
+                stops: self.stops.len(),
+                rng: before.0,
+                rounds: before.1,
+                work: Work::start(&self.mapper, &self.stops, self.seed, self.threaded),
+            });
             update.full = true;
-        } else {
-            if !self.pool[stop].is_empty() || returned {
-                self.search(&mut update);
-            }
-            // As the batch mapper ends its search.
-            let removed = self
-                .mapper
-                .settle(&mut self.sources, &self.stops, &mut self.pool);
-            self.removed += removed.len();
-            self.refused.extend(removed);
         }
         // One refusal per place, as the map reports them: the vote tries its refused
         // proposals again at every stop.
@@ -186,14 +285,47 @@ impl OnlineMapper {
         if self.last_full == self.stops.len() {
             return 0;
         }
-        let mut rng = MapRng::seed_from_u64(self.seed);
-        let r = self.mapper.run_stops(&self.stops, &mut rng);
+        let pending = self.pending.take().filter(|p| p.stops == self.stops.len());
+        let p = pending.unwrap_or_else(|| Pending {
+            stops: self.stops.len(),
+            rng: self.rng.clone(),
+            rounds: self.rounds,
+            work: Work::Done(
+                self.mapper
+                    .run_stops(&self.stops, &mut MapRng::seed_from_u64(self.seed)),
+                0.0,
+            ),
+        });
+        self.adopt(p, &mut 0.0)
+    }
+
+    /// Waits for the full map running beside the stops, if one does; the next stop (or
+    /// [`OnlineMapper::consolidate`]) takes it in. Nothing changes in the map: a replay
+    /// that feeds stops faster than a robot makes them calls this between stops, so that
+    /// each stop's time is its own.
+    pub fn wait_for_full_map(&mut self) {
+        if let Some(p) = self.pending.take() {
+            let (r, ms) = p.work.finish();
+            self.pending = Some(Pending {
+                work: Work::Done(r, ms),
+                ..p
+            });
+        }
+    }
+
+    /// Replaces the map with the full map `p` of the first `p.stops` stops, from the state
+    /// the stop that started it would have left had it run the map itself; the rounds it
+    /// ran, and its time in `ms`.
+    fn adopt(&mut self, p: Pending, ms: &mut f64) -> usize {
+        let (r, took) = p.work.finish();
+        *ms = took;
         self.pool = r.unexplained_bearings;
-        self.rounds += r.rounds;
+        self.rng = p.rng;
+        self.rounds = p.rounds + r.rounds;
         self.sources = r.sources;
         self.removed = r.removed;
         self.refused = r.refused;
-        self.last_full = self.stops.len();
+        self.last_full = p.stops;
         r.rounds
     }
 
@@ -426,6 +558,55 @@ mod tests {
     }
 
     #[test]
+    fn a_full_map_run_beside_the_stops_gives_the_maps_it_would_have_given_in_its_stop() {
+        // The oracle runs each full map in the stop that is due one (`consolidate` right
+        // after it, the old way); from the stop after it on, the maps must be the same, to
+        // the bit, and the same whether the full maps ran on a thread or in place.
+        let (map, poses, doas) = survey();
+        let mapper = Mapper::new(&map, &config()).unwrap();
+        for seed in 0..3 {
+            let mut oracle = OnlineMapper::new(mapper.clone(), seed);
+            let mut threaded = OnlineMapper::new(mapper.clone(), seed);
+            let mut in_place = OnlineMapper::new(mapper.clone(), seed);
+            in_place.threaded = false;
+            let mut started = false;
+            for (k, (p, row)) in poses.iter().zip(&doas).enumerate() {
+                let u = oracle.add_stop(*p, row).unwrap();
+                if u.full {
+                    oracle.consolidate();
+                }
+                let t = threaded.add_stop(*p, row).unwrap();
+                let i = in_place.add_stop(*p, row).unwrap();
+                assert_eq!((t.full, t.adopted), (u.full, started), "stop {k}");
+                assert_eq!((i.full, i.adopted), (t.full, t.adopted), "stop {k}");
+                assert_eq!(threaded.map(), in_place.map(), "seed {seed}, stop {k}");
+                if !t.full {
+                    assert_eq!(
+                        threaded.map().positions(),
+                        oracle.map().positions(),
+                        "seed {seed}, stop {k}"
+                    );
+                }
+                started = t.full;
+            }
+            // Consolidated at a stop that started a full map, it takes that map in: the
+            // batch map.
+            let batch = mapper
+                .run(&poses[..16], &doas[..16], &mut MapRng::seed_from_u64(seed))
+                .unwrap();
+            let mut online = OnlineMapper::new(mapper.clone(), seed);
+            for (p, row) in poses.iter().zip(&doas).take(16) {
+                online.add_stop(*p, row).unwrap();
+            }
+            assert!(online.pending.is_some());
+            online.wait_for_full_map();
+            assert_eq!(online.consolidate(), batch.rounds);
+            assert!(online.pending.is_none());
+            assert_eq!(online.map().positions(), batch.positions(), "seed {seed}");
+        }
+    }
+
+    #[test]
     fn told_which_rows_were_cut_the_consolidated_map_is_the_batch_map_told_the_same() {
         let (map, poses, doas) = survey();
         let mapper = Mapper::new(&map, &config()).unwrap();
@@ -482,8 +663,16 @@ mod tests {
             "online {online_rounds} rounds, recompute {recompute}"
         );
         // Between full maps, a stop with a DoA left over runs one round that fails, or one
-        // more per source it finds.
-        for u in updates.iter().filter(|u| !u.full) {
+        // more per source it finds (the stops that take a full map in count its rounds).
+        assert_eq!(
+            updates
+                .iter()
+                .filter(|u| u.adopted)
+                .map(|u| u.stop + 1)
+                .collect::<Vec<_>>(),
+            [5, 9, 17]
+        );
+        for u in updates.iter().filter(|u| !u.adopted) {
             assert!(u.rounds <= u.found + 1, "{u:?}");
         }
         // Without clutter, nothing is left over once the map is complete: no round at all.
@@ -493,7 +682,8 @@ mod tests {
             .iter()
             .zip(&clean)
             .map(|(p, row)| online.add_stop(*p, row).unwrap())
-            .skip(16)
+            // Once stop 17 has taken in the full map stop 16 started.
+            .skip(17)
             .collect();
         assert!(
             late.iter()

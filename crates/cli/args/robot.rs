@@ -387,7 +387,8 @@ pub struct WatchArgs {
     #[arg(long)]
     pub replay: bool,
     /// Write the curve here: one CSV row per stop (stop, file, DoAs, sources, OSPA and its
-    /// parts when the truth is known, ms of SSL and of mapping, whether a full map ran).
+    /// parts when the truth is known, ms of SSL and of mapping, whether the stop started a
+    /// full map, and the ms of the full map it took in, which ran beside the stops).
     #[arg(long, value_name = "FILE")]
     pub curve: Option<PathBuf>,
     /// Plot the curve here (PNG or SVG) [default: beside --curve, as .svg].

@@ -165,14 +165,23 @@ fn line(r: &StopRecord) -> String {
         })
         .collect();
     format!(
-        "stop {:>3}  {:<14} {} DoAs  {:>2} sources{o}  ssl {:.0} ms  map {:.0} ms{}{faulty}",
+        "stop {:>3}  {:<14} {} DoAs  {:>2} sources{o}  ssl {:.0} ms  map {:.0} ms{}{}{faulty}",
         r.stop,
         r.file,
         r.doas,
         r.sources,
         r.ssl_ms,
         r.map_ms,
-        if r.full_map { "  (full map)" } else { "" }
+        if r.full_map_ms > 0.0 {
+            format!("  (took in the full map, {:.0} ms beside)", r.full_map_ms)
+        } else {
+            String::new()
+        },
+        if r.full_map {
+            "  (full map started)"
+        } else {
+            ""
+        }
     )
 }
 
@@ -287,7 +296,9 @@ fn finish(
     Ok(())
 }
 
-/// A finished data set, stop by stop, as fast as it goes.
+/// A finished data set, stop by stop, as fast as it goes: only the full map that a stop
+/// starts beside the next ones ([`asm::online`]) is waited for between stops, untimed, as a
+/// robot's driving and recording give it seconds.
 fn replay(
     a: &WatchArgs,
     ds: &Dataset,
@@ -320,6 +331,7 @@ fn replay(
         let audio = ssl::read_wav(file)?;
         let read_ms = 1e3 * t0.elapsed().as_secs_f64();
         out.add(session, file, *pose, &audio, records, read_ms)?;
+        session.wait_for_full_map();
     }
     Ok(())
 }

@@ -76,18 +76,24 @@ impl Draw for Curve<'_> {
                     PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(w))
                 });
         }
-        // The stops that ran a full map.
+        // The stops that took in a full map: the one after each stop that started one.
         let full: Vec<(f64, f64)> = self
             .records
-            .iter()
-            .filter(|r| r.full_map)
-            .filter_map(|r| series[0].1.iter().find(|p| p.0 == r.stop as f64).copied())
+            .windows(2)
+            .filter(|w| w[0].full_map)
+            .filter_map(|w| {
+                series[0]
+                    .1
+                    .iter()
+                    .find(|p| p.0 == w[1].stop as f64)
+                    .copied()
+            })
             .collect();
         let c = colour(0);
         chart
             .draw_series(full.iter().map(|&p| Circle::new(p, 4, c.filled())))
             .map_err(fail)?
-            .label("a full map ran")
+            .label("a full map taken in")
             .legend(move |(x, y)| Circle::new((x + 7, y), 4, c.filled()));
         legend(&mut chart, SeriesLabelPosition::UpperRight, 12)
     }

@@ -39,8 +39,12 @@ pub struct StopRecord {
     pub ssl_ms: f64,
     /// Milliseconds to update the map.
     pub map_ms: f64,
-    /// Whether the stop ran a full map (see [`asm::online`]).
+    /// Whether the stop started a full map over every stop so far (see [`asm::online`]: it
+    /// runs beside the next stops, and the next stop takes it in).
     pub full_map: bool,
+    /// How long the full map this stop took in ran on its own thread (ms; 0 where the
+    /// stop took in none). Not part of `map_ms`: it ran between the stops.
+    pub full_map_ms: f64,
     /// The recording's channels found not to hear the room ([`ssl::channels`]).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub faulty_channels: Vec<crate::pipeline::FaultyChannel>,
@@ -210,6 +214,7 @@ impl Session {
             ssl_ms: 0.0,
             map_ms,
             full_map: u.full,
+            full_map_ms: u.full_ms,
             faulty_channels: Vec::new(),
         })
     }
@@ -224,6 +229,13 @@ impl Session {
     /// The current map.
     pub fn map(&self) -> MapResult {
         self.mapper.map()
+    }
+
+    /// Waits for the full map running beside the stops, if one does
+    /// ([`OnlineMapper::wait_for_full_map`]): a replay calls it between stops, where a
+    /// robot drives and records for seconds.
+    pub fn wait_for_full_map(&mut self) {
+        self.mapper.wait_for_full_map();
     }
 
     /// The stops so far.
@@ -252,7 +264,7 @@ impl Session {
 /// The curve as CSV: one row per stop, the stop number first.
 pub fn curve_csv(records: &[StopRecord]) -> String {
     let mut s = String::from(
-        "stop,file,doas,sources,ospa_m,localisation_m,cardinality_m,ssl_ms,map_ms,full_map\n",
+        "stop,file,doas,sources,ospa_m,localisation_m,cardinality_m,ssl_ms,map_ms,full_map,full_map_ms\n",
     );
     for r in records {
         let o = |f: fn(&Ospa) -> f64| {
@@ -261,7 +273,7 @@ pub fn curve_csv(records: &[StopRecord]) -> String {
                 .map_or(String::new(), |o| format!("{:.4}", f(o)))
         };
         s.push_str(&format!(
-            "{},{},{},{},{},{},{},{:.2},{:.2},{}\n",
+            "{},{},{},{},{},{},{},{:.2},{:.2},{},{:.2}\n",
             r.stop,
             r.file,
             r.doas,
@@ -271,7 +283,8 @@ pub fn curve_csv(records: &[StopRecord]) -> String {
             o(|o| o.cardinality),
             r.ssl_ms,
             r.map_ms,
-            u8::from(r.full_map)
+            u8::from(r.full_map),
+            r.full_map_ms
         ));
     }
     s

@@ -419,6 +419,7 @@ impl OnlineMapper {
             "rounds": u.rounds,
             "sources": u.sources,
             "full": u.full,
+            "adopted": u.adopted,
         })
         .to_string())
     }

@@ -477,8 +477,9 @@ class OnlineMapper:
 
     def add_stop(self, pose: ArrayLike, doas: ArrayLike, cut: Optional[bool] = None) -> Dict[str, Any]:
         """Adds one stop: its pose ``(x, y, theta)`` and DoAs (degrees, strongest first).
-        Returns what it changed (``associated``, ``found``, ``rounds``, ``sources``,
-        ``full``)."""
+        Returns what it changed (``associated``, ``found``, ``rounds``, ``sources``;
+        ``full``: it started the full map over every stop so far, which runs beside the
+        next stops; ``adopted``: it took in the full map the stop before started)."""
         x, y, theta = (float(v) for v in np.asarray(pose, dtype=np.float64).reshape(3))
         row = [float(a) for a in np.atleast_1d(np.asarray(doas, dtype=np.float64))]
         return json.loads(self._inner.add_stop(x, y, theta, row, cut))
