@@ -4,7 +4,7 @@
 //! map's loudest source.
 
 use super::*;
-use ssl::signature::{Heard, ListenConfig, Signature, listen};
+use ssl::signature::{Heard, ListenConfig, Listener, Signature};
 
 /// Each source's signature (in the map's order; `None` for a source no recording could be
 /// steered at), its `level_db` relative to the loudest source's. `audio_of(k)` gives the
@@ -42,24 +42,20 @@ pub fn signatures(
         .map(|&k| -> Result<Vec<(usize, Heard, f64)>> {
             let audio = audio_of(k)?;
             let p = poses[k];
-            heard_at
+            // The recording's spectra and covariances once; a beam per source.
+            let listener = Listener::new(&audio, array, &config)
+                .with_context(|| format!("the signatures at stop {k}"))?;
+            Ok(heard_at
                 .iter()
                 .enumerate()
                 .filter(|(_, at)| at.binary_search(&k).is_ok())
                 .map(|(i, _)| {
                     let s = &result.sources[i];
-                    let azimuth = (s.y - p.y).atan2(s.x - p.x) - p.theta;
-                    let heard = listen(
-                        &audio,
-                        array,
-                        asm::wrap_rad(azimuth).to_degrees(),
-                        0.0,
-                        &config,
-                    )
-                    .with_context(|| format!("the signature of s{} at stop {k}", i + 1))?;
-                    Ok((i, heard, (s.x - p.x).hypot(s.y - p.y)))
+                    let azimuth = p.azimuth_to([s.x, s.y]);
+                    let heard = listener.steer(azimuth.to_degrees(), 0.0);
+                    (i, heard, (s.x - p.x).hypot(s.y - p.y))
                 })
-                .collect()
+                .collect())
         })
         .collect::<Result<_>>()?;
     let mut by_source: Vec<Vec<(Heard, f64)>> = vec![Vec::new(); result.sources.len()];

@@ -36,7 +36,7 @@
 //! only as good as these features, and a noise with speech's long-term spectrum but no
 //! syllables is broadband, as it physically is.
 
-use nalgebra::{Complex, DMatrix, DVector};
+use nalgebra::{Cholesky, Complex, DMatrix, DVector, Dyn};
 use serde::{Deserialize, Serialize};
 
 use crate::array::MicArray;
@@ -108,7 +108,9 @@ const SPEECH_MIN: f64 = 0.4;
 const LEVEL_NEAR_M: f64 = 0.3;
 
 /// Steers an MVDR beam at `azimuth_deg`, `elevation_deg` (array frame) in `audio` and
-/// keeps what it hears (see the module docs).
+/// keeps what it hears (see the module docs): [`Listener::new`] then
+/// [`Listener::steer`]. To steer at several directions of one recording, make the
+/// [`Listener`] once.
 ///
 /// # Errors
 /// Audio shorter than one window, or channels that are not the array's.
@@ -119,79 +121,139 @@ pub fn listen(
     elevation_deg: f64,
     config: &ListenConfig,
 ) -> Result<Heard> {
-    let fs = f64::from(audio.sample_rate());
-    if audio.num_channels() != array.len() {
-        return Err(crate::Error::ChannelMismatch {
-            got: audio.num_channels(),
-            expected: array.len(),
-        });
-    }
-    let n = ((config.window_s * fs).ceil() as usize)
-        .next_power_of_two()
-        .max(16);
-    let stft = Stft::new(n, (n / config.overlap.max(1)).max(1))?;
-    let df = fs / n as f64;
-    let k0 = ((config.fmin_hz / df).ceil() as usize).max(1);
-    let k1 = ((config.fmax_hz.min(0.5 * fs) / df).floor() as usize).min(n / 2);
-    let spec = stft.analyze(audio, k0..k1 + 1)?;
-    let (m, t, nb) = (spec.num_channels(), spec.num_frames(), k1 + 1 - k0);
-    let (az, el) = (azimuth_deg.to_radians(), elevation_deg.to_radians());
-    let u = [el.cos() * az.cos(), el.cos() * az.sin(), el.sin()];
-    let ahead: Vec<f64> = array
-        .positions()
-        .iter()
-        .map(|p| (p[0] * u[0] + p[1] * u[1] + p[2] * u[2]) / config.speed_of_sound)
-        .collect();
-    let mut spectrum = vec![0.0; nb];
-    let mut envelope = vec![0.0; t];
+    Ok(Listener::new(audio, array, config)?.steer(azimuth_deg, elevation_deg))
+}
 
-    let mut x = DMatrix::<Complex<f64>>::zeros(m, t);
-    for (b, k) in (k0..=k1).enumerate() {
-        let f = k as f64 * df;
-        for frame in 0..t {
-            for c in 0..m {
-                let v = spec.frame(frame, c)[b];
-                x[(c, frame)] = Complex::new(f64::from(v.re), f64::from(v.im));
+/// One recording made ready for beams ([`Listener::steer`]): its spectra and, per bin,
+/// the loaded covariance's Cholesky factor, none of which depends on where the beam
+/// points.
+pub struct Listener {
+    bins: Vec<Bin>,
+    /// Each microphone's position (m).
+    positions: Vec<[f64; 3]>,
+    frames: usize,
+    f0_hz: f64,
+    df_hz: f64,
+    frame_rate: f64,
+    speed_of_sound: f64,
+}
+
+/// One bin of a [`Listener`]: its frequency (Hz), and the frames' microphone spectra
+/// (channels x frames) with the loaded covariance's Cholesky factor; `None` for a bin with
+/// no power.
+struct Bin {
+    f_hz: f64,
+    frames: Option<(DMatrix<Complex<f64>>, Factor)>,
+}
+
+/// A bin's loaded covariance, factored.
+type Factor = Cholesky<Complex<f64>, Dyn>;
+
+impl Listener {
+    /// The recording `audio` of `array`, analysed as `config` says.
+    ///
+    /// # Errors
+    /// Audio shorter than one window, or channels that are not the array's.
+    pub fn new(audio: &Audio, array: &MicArray, config: &ListenConfig) -> Result<Self> {
+        let fs = f64::from(audio.sample_rate());
+        if audio.num_channels() != array.len() {
+            return Err(crate::Error::ChannelMismatch {
+                got: audio.num_channels(),
+                expected: array.len(),
+            });
+        }
+        let n = ((config.window_s * fs).ceil() as usize)
+            .next_power_of_two()
+            .max(16);
+        let stft = Stft::new(n, (n / config.overlap.max(1)).max(1))?;
+        let df = fs / n as f64;
+        let k0 = ((config.fmin_hz / df).ceil() as usize).max(1);
+        let k1 = ((config.fmax_hz.min(0.5 * fs) / df).floor() as usize).min(n / 2);
+        let spec = stft.analyze(audio, k0..k1 + 1)?;
+        let (m, t) = (spec.num_channels(), spec.num_frames());
+        let bins = (k0..=k1)
+            .enumerate()
+            .map(|(b, k)| {
+                let f = k as f64 * df;
+                let mut x = DMatrix::<Complex<f64>>::zeros(m, t);
+                for frame in 0..t {
+                    for c in 0..m {
+                        let v = spec.frame(frame, c)[b];
+                        x[(c, frame)] = Complex::new(f64::from(v.re), f64::from(v.im));
+                    }
+                }
+                let mut r = (&x * x.adjoint()).unscale(t as f64);
+                let mean_power = (0..m).map(|c| r[(c, c)].re).sum::<f64>() / m as f64;
+                if !(mean_power > 0.0 && mean_power.is_finite()) {
+                    return Bin {
+                        f_hz: f,
+                        frames: None,
+                    };
+                }
+                for c in 0..m {
+                    r[(c, c)] += Complex::new(config.loading * mean_power, 0.0);
+                }
+                Bin {
+                    f_hz: f,
+                    frames: r.cholesky().map(|chol| (x, chol)),
+                }
+            })
+            .collect();
+        Ok(Self {
+            bins,
+            positions: array.positions().to_vec(),
+            frames: t,
+            f0_hz: k0 as f64 * df,
+            df_hz: df,
+            frame_rate: fs / stft.hop() as f64,
+            speed_of_sound: config.speed_of_sound,
+        })
+    }
+
+    /// What an MVDR beam steered at `azimuth_deg`, `elevation_deg` (array frame) hears.
+    pub fn steer(&self, azimuth_deg: f64, elevation_deg: f64) -> Heard {
+        let (az, el) = (azimuth_deg.to_radians(), elevation_deg.to_radians());
+        let u = [el.cos() * az.cos(), el.cos() * az.sin(), el.sin()];
+        let ahead: Vec<f64> = (self.positions.iter())
+            .map(|p| (p[0] * u[0] + p[1] * u[1] + p[2] * u[2]) / self.speed_of_sound)
+            .collect();
+        let t = self.frames;
+        let mut spectrum = vec![0.0; self.bins.len()];
+        let mut envelope = vec![0.0; t];
+        for (b, bin) in self.bins.iter().enumerate() {
+            let (f, Some((x, chol))) = (&bin.f_hz, &bin.frames) else {
+                continue;
+            };
+            let d = DVector::from_iterator(
+                ahead.len(),
+                ahead
+                    .iter()
+                    .map(|&tau| Complex::from_polar(1.0, std::f64::consts::TAU * f * tau)),
+            );
+            let rd = chol.solve(&d);
+            let denom = d.dotc(&rd);
+            if denom.norm() <= 0.0 {
+                continue;
+            }
+            let w = rd / denom;
+            let y = w.adjoint() * x;
+            let in_envelope = (ENVELOPE_BAND_HZ.0..=ENVELOPE_BAND_HZ.1).contains(f);
+            for (frame, v) in y.iter().enumerate() {
+                let p = v.norm_sqr();
+                spectrum[b] += p / t as f64;
+                if in_envelope {
+                    envelope[frame] += p;
+                }
             }
         }
-        let mut r = (&x * x.adjoint()).unscale(t as f64);
-        let mean_power = (0..m).map(|c| r[(c, c)].re).sum::<f64>() / m as f64;
-        if !(mean_power > 0.0 && mean_power.is_finite()) {
-            continue;
-        }
-        for c in 0..m {
-            r[(c, c)] += Complex::new(config.loading * mean_power, 0.0);
-        }
-        let d = DVector::from_iterator(
-            m,
-            ahead
-                .iter()
-                .map(|&tau| Complex::from_polar(1.0, std::f64::consts::TAU * f * tau)),
-        );
-        let Some(chol) = r.cholesky() else { continue };
-        let rd = chol.solve(&d);
-        let denom = d.dotc(&rd);
-        if denom.norm() <= 0.0 {
-            continue;
-        }
-        let w = rd / denom;
-        let y = w.adjoint() * &x;
-        let in_envelope = (ENVELOPE_BAND_HZ.0..=ENVELOPE_BAND_HZ.1).contains(&f);
-        for (frame, v) in y.iter().enumerate() {
-            let p = v.norm_sqr();
-            spectrum[b] += p / t as f64;
-            if in_envelope {
-                envelope[frame] += p;
-            }
+        Heard {
+            f0_hz: self.f0_hz,
+            df_hz: self.df_hz,
+            spectrum,
+            envelope,
+            frame_rate: self.frame_rate,
         }
     }
-    Ok(Heard {
-        f0_hz: k0 as f64 * df,
-        df_hz: df,
-        spectrum,
-        envelope,
-        frame_rate: fs / stft.hop() as f64,
-    })
 }
 
 /// A source's coarse kind (see the module docs).
