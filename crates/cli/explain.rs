@@ -12,7 +12,6 @@
 //! without a debugger: it is what every hand-built tracer of this project's sessions
 //! printed.
 
-use asm::ospa::assignment;
 use asm::{MapResult, Pose};
 use serde::Serialize;
 
@@ -268,27 +267,9 @@ impl MissedTally {
 
 /// Which true sources the OSPA assignment pairs with an estimate within `c`.
 fn mapped_truth(est: &[[f64; 2]], truth: &[[f64; 2]], c: f64) -> Vec<bool> {
-    let dist = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]).min(c);
     let mut mapped = vec![false; truth.len()];
-    if est.is_empty() {
-        return mapped;
-    }
-    if truth.len() <= est.len() {
-        let cost: Vec<Vec<f64>> = truth
-            .iter()
-            .map(|&t| est.iter().map(|&e| dist(t, e)).collect())
-            .collect();
-        for (k, j) in assignment(&cost).into_iter().enumerate() {
-            mapped[k] = dist(truth[k], est[j]) < c;
-        }
-    } else {
-        let cost: Vec<Vec<f64>> = est
-            .iter()
-            .map(|&e| truth.iter().map(|&t| dist(t, e)).collect())
-            .collect();
-        for (i, k) in assignment(&cost).into_iter().enumerate() {
-            mapped[k] = dist(truth[k], est[i]) < c;
-        }
+    for (_, k) in asm::ospa::pairs(est, truth, c) {
+        mapped[k] = true;
     }
     mapped
 }

@@ -18,8 +18,6 @@
 
 use serde::Serialize;
 
-use crate::ospa::assignment;
-
 /// A similarity transform of a map onto the truth and what it leaves.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Alignment {
@@ -65,29 +63,9 @@ impl Alignment {
 pub fn align(est: &[[f64; 2]], truth: &[[f64; 2]], c: f64) -> Option<Alignment> {
     assert!(c > 0.0, "the matching cutoff must be positive");
     let dist = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]);
-    let (rows, cols, swapped) = if est.len() <= truth.len() {
-        (est, truth, false)
-    } else {
-        (truth, est, true)
-    };
-    if rows.is_empty() {
-        return None;
-    }
-    let cost: Vec<Vec<f64>> = rows
-        .iter()
-        .map(|&a| cols.iter().map(|&b| dist(a, b).min(c)).collect())
-        .collect();
-    let pairs: Vec<([f64; 2], [f64; 2])> = assignment(&cost)
+    let pairs: Vec<([f64; 2], [f64; 2])> = crate::ospa::pairs(est, truth, c)
         .into_iter()
-        .enumerate()
-        .map(|(i, j)| {
-            if swapped {
-                (cols[j], rows[i])
-            } else {
-                (rows[i], cols[j])
-            }
-        })
-        .filter(|&(e, t)| dist(e, t) < c)
+        .map(|(i, j)| (est[i], truth[j]))
         .collect();
     if pairs.len() < 3 {
         return None;

@@ -90,6 +90,29 @@ pub fn ospa(est: &[[f64; 2]], truth: &[[f64; 2]], c: f64, p: f64) -> Ospa {
     }
 }
 
+/// The pairs `(i, j)` of `est[i]` and `truth[j]` that OSPA's optimal assignment (each
+/// distance capped at `c`, m) matches within `c` of each other: what a map found of the
+/// truth, each at most once.
+pub fn pairs(est: &[[f64; 2]], truth: &[[f64; 2]], c: f64) -> Vec<(usize, usize)> {
+    let dist = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]);
+    if est.is_empty() || truth.is_empty() {
+        return Vec::new();
+    }
+    // Rows must not outnumber columns.
+    let swapped = est.len() > truth.len();
+    let (rows, cols) = if swapped { (truth, est) } else { (est, truth) };
+    let cost: Vec<Vec<f64>> = rows
+        .iter()
+        .map(|&a| cols.iter().map(|&b| dist(a, b).min(c)).collect())
+        .collect();
+    assignment(&cost)
+        .into_iter()
+        .enumerate()
+        .map(|(r, k)| if swapped { (k, r) } else { (r, k) })
+        .filter(|&(i, j)| dist(est[i], truth[j]) < c)
+        .collect()
+}
+
 /// The least total cost of assigning each row to a distinct column (`rows <= cols`):
 /// the Hungarian algorithm with potentials.
 pub fn min_assignment(cost: &[Vec<f64>]) -> f64 {
@@ -182,6 +205,24 @@ mod tests {
             best
         }
         go(cost, 0, &mut vec![false; cost[0].len()])
+    }
+
+    #[test]
+    fn pairs_match_each_estimate_to_its_own_source_within_the_cutoff() {
+        let truth = [[0.0, 0.0], [4.0, 0.0], [0.0, 4.0]];
+        // One estimate near each of the first two sources (the second 0.5 m off), one far
+        // from every source, and none for the third.
+        let est = [[4.5, 0.0], [9.0, 9.0], [0.1, 0.0]];
+        assert_eq!(pairs(&est, &truth, 1.0), [(0, 1), (2, 0)]);
+        // Beyond a cutoff of 0.4 m the 0.5-m pair is no match; either order agrees.
+        assert_eq!(pairs(&est, &truth, 0.4), [(2, 0)]);
+        let mut back: Vec<(usize, usize)> = pairs(&truth, &est, 1.0)
+            .into_iter()
+            .map(|(j, i)| (i, j))
+            .collect();
+        back.sort_unstable();
+        assert_eq!(back, [(0, 1), (2, 0)]);
+        assert!(pairs(&[], &truth, 1.0).is_empty());
     }
 
     #[test]

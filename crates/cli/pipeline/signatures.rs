@@ -101,35 +101,10 @@ pub fn kinds_right(
     kinds: &[ssl::signature::Kind],
     within_m: f64,
 ) -> (usize, usize) {
-    let (n, m) = (places.len(), result.sources.len());
-    if n == 0 || m == 0 {
-        return (0, 0);
-    }
-    let d = |i: usize, j: usize| {
-        let s = &result.sources[j];
-        (s.x - places[i].pos[0]).hypot(s.y - places[i].pos[1])
-    };
-    // Rows must not outnumber columns: pad with far-away columns.
-    let cols = n.max(m);
-    let cost: Vec<Vec<f64>> = (0..n)
-        .map(|i| {
-            (0..cols)
-                .map(|j| {
-                    if j < m {
-                        d(i, j).min(within_m)
-                    } else {
-                        within_m
-                    }
-                })
-                .collect()
-        })
-        .collect();
+    let truth: Vec<[f64; 2]> = places.iter().map(|p| [p.pos[0], p.pos[1]]).collect();
     let mut right = 0;
     let mut matched = 0;
-    for (i, j) in asm::ospa::assignment(&cost).into_iter().enumerate() {
-        if j >= m || d(i, j) > within_m {
-            continue;
-        }
+    for (j, i) in asm::ospa::pairs(&result.positions(), &truth, within_m) {
         if let (Some(sig), Some(&kind)) = (&signatures[j], kinds.get(places[i].source)) {
             matched += 1;
             right += usize::from(sig.kind == kind);
