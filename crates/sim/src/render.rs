@@ -223,31 +223,31 @@ impl Renderer {
         let mut acc = vec![vec![vec![Complex64::default(); bins]; blocks]; mics.len()];
         let centre = centroid(mics);
         let tails = self.tails(centre, playing);
-        // The array's reach about its centre in the plan: with it, each microphone looks
-        // only at the plan images near enough to sound ([`plan::PlanImages::near`]).
-        let radius = mics
-            .iter()
-            .map(|m| (m[0] - centre[0]).hypot(m[1] - centre[1]))
-            .fold(0.0, f64::max);
         for (i, spectra) in self.spectra.iter().enumerate().filter(|(i, _)| playing[*i]) {
-            let near = match &self.images {
-                Images::Plan(room, images) => {
-                    let from = tails[i].as_ref().map(|t| t.from);
-                    let reach = plan::image_reach(l, fs, c, from);
-                    images[i].near(room, [centre[0], centre[1]], radius, reach)
+            // One microphone's response to the source's images: in a plan, of those near
+            // enough the array to sound at any of its microphones, taken once for all of
+            // them ([`plan::PlanImages::near`]).
+            let from = tails[i].as_ref().map(|t| t.from);
+            let add: Box<Respond> = match &self.images {
+                Images::Shoebox(images) => {
+                    let images = &images[i];
+                    Box::new(move |h, m| add_images(h, images, m, fs, c))
                 }
-                Images::Shoebox(_) => Vec::new(),
+                Images::Plan(room, images) => {
+                    let images = &images[i];
+                    let radius = (mics.iter())
+                        .map(|m| (m[0] - centre[0]).hypot(m[1] - centre[1]))
+                        .fold(0.0, f64::max);
+                    let reach = plan::image_reach(l, fs, c, from);
+                    let near = images.near(room, [centre[0], centre[1]], radius, reach);
+                    Box::new(move |h, m| {
+                        plan::add_plan_images(room, images, Some(&near), m, fs, c, h, from);
+                    })
+                }
             };
             for (&m, hs) in mics.iter().zip(hs.iter_mut()) {
                 h.fill(0.0);
-                match &self.images {
-                    Images::Shoebox(images) => add_images(&mut h[..l], &images[i], m, fs, c),
-                    Images::Plan(room, images) => {
-                        let from = tails[i].as_ref().map(|t| t.from);
-                        let (h, near) = (&mut h[..l], Some(&near[..]));
-                        plan::add_plan_images(room, &images[i], near, m, fs, c, h, from);
-                    }
-                }
+                add(&mut h[..l], m);
                 high_pass(&mut h[..l], HIGH_PASS_HZ, fs);
                 self.fwd
                     .process(&mut h, hs)
@@ -285,6 +285,10 @@ impl Renderer {
             .collect()
     }
 }
+
+/// Adds one microphone's response to one source's images to a buffer: the microphone's
+/// position (m).
+type Respond<'a> = dyn Fn(&mut [f64], [f64; 3]) + 'a;
 
 impl Renderer {
     /// In a plan, each playing source's diffuse tail heard at `centre`: when it takes
