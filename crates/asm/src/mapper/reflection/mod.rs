@@ -7,10 +7,9 @@
 //! room's walls do the same wherever two stops hear one source's images. The map says
 //! where the walls are, so each DoA's ray can be traced through them, reflected
 //! specularly where it meets one (the image-source model unfolded, as in
-//! reflection-aware localisation: An et al., ICRA 2018; to the first order, and to the
-//! second towards a source the map hides from the stop, [`HIDDEN_MAX_ORDER`]; a wall's
-//! direction from its cells around the point hit). A ray is a mapped source's reflection
-//! when
+//! reflection-aware localisation: An et al., ICRA 2018; to the first order, [`MAX_ORDER`];
+//! a wall's direction from its cells around the point hit). A ray is a mapped source's
+//! reflection when
 //!
 //! - its reflected leg passes the source before the next wall, within the vote's gate
 //!   (2 `sigma`, as the angle at the stop to the source's image), and within one `sigma`
@@ -57,26 +56,19 @@ const WALL_REACH_M: f64 = 0.3;
 /// thick seen over 0.6 m has 4; two walls meeting at a right angle near 1.
 const WALL_ELONGATION: f64 = 2.5;
 
-/// The most reflections a DoA's ray is traced through, towards a source the stop sees:
-/// the first order, one wall. Why not the second (two walls, as at a corner, whose double
-/// reflection a right angle sends back towards where it came from): it explained a ghost
-/// in `corridor_alcoves`' alcove corner (GCC-PHAT 0.159 -> 0.141 m), but second-order
-/// images are many and lie by chance within the gate of real sources' bearings
-/// (`sparse_ten`, ten talkers: the right count 100 -> 93 % with GCC-PHAT, MVDR 0.138 ->
-/// 0.170 m), and MVDR's corridor lost ground (0.187 -> 0.198 m; measured again
-/// later, 0.098 -> 0.115 m).
+/// The most reflections a DoA's ray is traced through: the first order, one wall, from
+/// every stop. Why not the second (two walls, as at a corner or across an alcove): on the
+/// drawn scenes, DoAs lie at second-order images no more often than chance, from stops
+/// that see the source and from stops the map hides it from alike, where first-order
+/// images are heard twice as often as chance (`scripts/doas_at_images.py`, decision
+/// 0019). Traced to the second order towards hidden sources, the rule moved 1-3 of 48
+/// drawn scenes within their spread and no held-out scene; it was written for
+/// `corridor_alcoves`' alcove talker, heard from the corridor's first stops 2-4 degrees
+/// from its second-order image, whose ghost at the alcove's mouth it explained away
+/// (GCC-PHAT worst map 0.431 -> 0.288 m). And second-order images are many and lie by
+/// chance within the gate of real sources' bearings (`sparse_ten`, ten talkers: the
+/// right count 100 -> 93 % with GCC-PHAT when every stop traced them).
 const MAX_ORDER: usize = 1;
-
-/// The most reflections a DoA's ray is traced through towards a source the map hides from
-/// its stop: the second order. No direct sound reaches such a stop, and the first
-/// reflections that do are few, so that what the SSL hears of the source there is its
-/// first- and second-order images, often as one peak between them: `corridor_alcoves`'
-/// first alcove talker is heard from the corridor's first stops, which its alcove's west
-/// corner hides it from, 2-4 degrees from its second-order image in the alcove's east and
-/// west walls and 5-8 from its first-order one, and those rays made a ghost at the
-/// alcove's mouth with GCC-PHAT. Only there: the stops that see a source keep the first
-/// order, which leaves every box room as it was.
-const HIDDEN_MAX_ORDER: usize = 2;
 
 /// One leg of a DoA's ray traced through the map's walls, after one reflection or more.
 #[derive(Clone, Copy, Debug)]
@@ -89,8 +81,6 @@ struct Leg {
     before: f64,
     /// Its own length, to the next wall or the map's end (m).
     len: f64,
-    /// The reflections before it (1 for the first leg after the stop's).
-    order: usize,
 }
 
 /// The widest angle at a stop between a source and its image in a wall that the SSL is
@@ -193,7 +183,6 @@ impl Mapper {
                     dir,
                     before,
                     len,
-                    order,
                 });
             }
             let Some(hit) = hit.filter(|_| order < max_order) else {
@@ -367,18 +356,12 @@ impl Mapper {
         let slack = self.config.room_margin_m;
         for (r, legs) in g.rays.iter().zip(legs) {
             let miss = r.miss(at);
-            // A reflection, with the source's direct sound heard at its stop too, or hidden
-            // (and then to the second order, [`HIDDEN_MAX_ORDER`]).
-            let hidden = OnceCell::new();
-            let hidden = || *hidden.get_or_init(|| self.hidden(r.from, at));
-            let passes = |order: usize| {
-                nearest_image(legs.iter().filter(|leg| leg.order <= order), at, slack)
-                    .is_some_and(|m| m <= gate && m <= r.miss(own) + self.sigma)
-            };
+            // A reflection, with the source's direct sound heard at its stop too, or hidden.
             let reflection = || {
                 let to = stops.poses()[r.stop].bearing_to(at);
-                (passes(MAX_ORDER) || (hidden() && passes(HIDDEN_MAX_ORDER)))
-                    && (hidden()
+                nearest_image(legs, at, slack)
+                    .is_some_and(|m| m <= gate && m <= r.miss(own) + self.sigma)
+                    && (self.hidden(r.from, at)
                         || stops.heard()[r.stop]
                             .iter()
                             .any(|&h| h != r.bearing && wrap_rad(h - to).abs() <= gate))
@@ -427,7 +410,7 @@ impl Mapper {
             .map(|&i| {
                 let g = &sources[i];
                 let legs: Vec<Vec<Leg>> = (g.rays.iter())
-                    .map(|r| self.reflected_legs(r, HIDDEN_MAX_ORDER))
+                    .map(|r| self.reflected_legs(r, MAX_ORDER))
                     .collect();
                 (0..standing.len())
                     .filter(|&k| {
@@ -500,8 +483,7 @@ const LINE_STEPS: usize = 90;
 /// times as many as the line across it, its direction refined by those cells' principal
 /// axis. `None` at a corner itself, where both walls' lines through `hit` hold alike. A ray
 /// that meets `corridor_alcoves`' alcove wall 0.2 m from the corridor's wall is reflected
-/// by it, where the trace ended before (with [`HIDDEN_MAX_ORDER`], a ghost at the alcove's
-/// mouth made of the alcove talker's images is explained away: GCC-PHAT 0.108 -> 0.097 m).
+/// by it, where the trace ended before.
 /// Why only where the principal axis says none: taken for every point hit, it mapped the
 /// corridor alike (0.098 m) and a held-out corner talker better, but the thick walls of a
 /// map (a wall 0.2 m thick, four cells) hold as many cells across the line through `hit`
