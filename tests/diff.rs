@@ -171,7 +171,11 @@ fn bad_maps_and_options_are_clear_errors() {
     );
     assert_clear_error(
         &iasm(&["diff", arg(&good), arg(&good), "--floor-m=-1"]),
-        &["--floor-m"],
+        &["--floor-m", "must be >= 0 m"],
+    );
+    assert_clear_error(
+        &iasm(&["diff", arg(&good), arg(&good), "--same-p", "1"]),
+        &["--same-p", "must lie in (0, 1)"],
     );
     assert_clear_error(
         &iasm(&[

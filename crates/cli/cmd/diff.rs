@@ -58,9 +58,8 @@ pub fn run(a: &DiffArgs) -> Result<Outcome> {
         same_p: a.same_p,
         move_max_m: a.move_max_m,
     };
-    config
-        .check()
-        .map_err(|e| anyhow::anyhow!("--{}", e.replacen('_', "-", 2).replacen(" =", "", 1)))?;
+    // The flags' parsers checked each value already (`args::diff`).
+    config.check().map_err(anyhow::Error::msg)?;
     let (before, after) = (MapFile::read(&a.before)?, MapFile::read(&a.after)?);
     if let (Some(fa), Some(fb)) = (&before.frame_id, &after.frame_id)
         && fa != fb
