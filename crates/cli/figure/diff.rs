@@ -10,7 +10,8 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::map::{
-    Chart, Glyph, OCCUPIED, Region, draw_grid, ellipse, legend_panel, metric_chart, metric_size,
+    Chart, Glyph, OCCUPIED, Region, decoration, draw_grid, ellipse, extent, font, legend_panel,
+    legend_width, metric_chart, metric_size,
 };
 use super::{Draw, change_colour, fail};
 
@@ -35,31 +36,13 @@ const MARGIN_M: f64 = 1.0;
 
 impl DiffFigure<'_> {
     fn font(&self, base: u32) -> u32 {
-        (f64::from(base) * f64::from(self.width) / 1000.0)
-            .round()
-            .max(8.0) as u32
-    }
-
-    fn legend_width(&self) -> u32 {
-        self.font(13) * 13
+        font(self.width, base)
     }
 
     fn region(&self) -> Region {
         let pts = self.before.iter().chain(self.after).map(|p| [p.x, p.y]);
-        super::bounds(pts, MARGIN_M).unwrap_or_else(|| match self.map {
-            Some(m) => (
-                m.origin()[0],
-                m.origin()[0] + m.width() as f64 * m.resolution(),
-                m.origin()[1],
-                m.origin()[1] + m.height() as f64 * m.resolution(),
-            ),
-            None => (-1.0, 1.0, -1.0, 1.0),
-        })
-    }
-
-    fn decoration(&self) -> (u32, u32, u32, u32) {
-        let f = self.font(16);
-        (f * 4 + 10, 20 + self.legend_width(), f * 3, f * 3 + 10)
+        super::bounds(pts, MARGIN_M)
+            .unwrap_or_else(|| self.map.map_or((-1.0, 1.0, -1.0, 1.0), extent))
     }
 
     fn draw_sources<DB: DrawingBackend>(&self, chart: &mut Chart<'_, DB>) -> Result<()> {
@@ -130,14 +113,15 @@ impl DiffFigure<'_> {
 
 impl Draw for DiffFigure<'_> {
     fn size(&self) -> (u32, u32) {
-        metric_size(self.width, self.region(), self.decoration())
+        metric_size(self.width, self.region(), decoration(self.width))
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()> {
         let region = self.region();
-        let (l, _, _, b) = self.decoration();
+        let (l, _, _, b) = decoration(self.width);
         let small = self.font(13);
-        let (plot, side) = root.split_horizontally(root.dim_in_pixel().0 - self.legend_width());
+        let (plot, side) =
+            root.split_horizontally(root.dim_in_pixel().0 - legend_width(self.width));
         let mut chart = metric_chart(&plot, &self.title, region, (l, b), |f| self.font(f))?;
         if let Some(map) = self.map {
             draw_grid(&mut chart, map, region)?;

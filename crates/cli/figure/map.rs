@@ -63,20 +63,11 @@ const FOUND: RGBColor = RGBColor(220, 20, 20);
 impl MapFigure<'_> {
     /// Font size scaled with the figure's width (16 px at 1000 px).
     fn font(&self, base: u32) -> u32 {
-        (f64::from(base) * f64::from(self.width) / 1000.0)
-            .round()
-            .max(8.0) as u32
+        font(self.width, base)
     }
 
     fn region(&self) -> Region {
-        let m = self.map;
-        let (ox, oy) = (m.origin()[0], m.origin()[1]);
-        let full = (
-            ox,
-            ox + m.width() as f64 * m.resolution(),
-            oy,
-            oy + m.height() as f64 * m.resolution(),
-        );
+        let full = extent(self.map);
         if self.full_map {
             return full;
         }
@@ -91,14 +82,42 @@ impl MapFigure<'_> {
 
     /// Pixels around the plot: (left, right, top, bottom); the legend is on the right.
     fn decoration(&self) -> (u32, u32, u32, u32) {
-        let f = self.font(16);
-        (f * 4 + 10, 20 + self.legend_width(), f * 3, f * 3 + 10)
+        decoration(self.width)
     }
 
-    /// Width of the legend column (px), outside the plot so that it hides nothing.
     fn legend_width(&self) -> u32 {
-        self.font(13) * 13
+        legend_width(self.width)
     }
+}
+
+/// A figure's font size (px) for a `base` size at 1000 px wide, scaled with its `width`.
+pub(super) fn font(width: u32, base: u32) -> u32 {
+    (f64::from(base) * f64::from(width) / 1000.0)
+        .round()
+        .max(8.0) as u32
+}
+
+/// Width of a map figure's legend column (px), outside the plot so that it hides nothing.
+pub(super) fn legend_width(width: u32) -> u32 {
+    font(width, 13) * 13
+}
+
+/// A map figure's margins around the plot (px: left, right, top, bottom): the axes'
+/// labels and the legend column.
+pub(super) fn decoration(width: u32) -> (u32, u32, u32, u32) {
+    let f = font(width, 16);
+    (f * 4 + 10, 20 + legend_width(width), f * 3, f * 3 + 10)
+}
+
+/// The whole occupancy map's region (m).
+pub(super) fn extent(m: &OccupancyMap) -> Region {
+    let (ox, oy) = (m.origin()[0], m.origin()[1]);
+    (
+        ox,
+        ox + m.width() as f64 * m.resolution(),
+        oy,
+        oy + m.height() as f64 * m.resolution(),
+    )
 }
 
 impl Draw for MapFigure<'_> {
