@@ -276,22 +276,23 @@ pub fn diff(before: &[Placed], after: &[Placed], config: &DiffConfig) -> Vec<Cha
         pair_of_before[left_before[a]] = Some((left_after[b], ChangeKind::Moved));
         paired_after[left_after[b]] = true;
     }
-    let change = |kind, before_i: Option<usize>, after_i: Option<usize>, other: Option<usize>| {
-        let (d, v) = match (before_i, after_i, other) {
-            (Some(i), Some(j), _) | (Some(i), None, Some(j)) | (None, Some(j), Some(i)) => {
-                (Some(distance(&before[i], &after[j])), Some(m2(i, j)))
-            }
-            _ => (None, None),
-        };
+    // A change of `kind` of `before[i]` and `after[j]` (either may be absent): the source
+    // of the other map nearest it, and the compared pair `(i, j)` whose distance and m² it
+    // carries (the pair itself, or an unpaired source and that nearest one).
+    let change = |kind,
+                  i: Option<usize>,
+                  j: Option<usize>,
+                  nearest: Option<usize>,
+                  compared: Option<(usize, usize)>| {
+        let (d, v) = compared
+            .map(|(a, b)| (distance(&before[a], &after[b]), m2(a, b)))
+            .unzip();
         let p_same = v.map_or(0.0, |v| (-0.5 * v).exp());
         Change {
             kind,
-            before: before_i,
-            after: after_i,
-            nearest: other.or(match kind {
-                ChangeKind::Kept | ChangeKind::Moved => after_i,
-                _ => None,
-            }),
+            before: i,
+            after: j,
+            nearest,
             distance_m: d,
             mahalanobis2: v,
             p_same,
@@ -309,25 +310,22 @@ pub fn diff(before: &[Placed], after: &[Placed], config: &DiffConfig) -> Vec<Cha
     let mut out: Vec<Change> = pair_of_before
         .iter()
         .enumerate()
-        .filter_map(|(i, p)| p.map(|(j, kind)| change(kind, Some(i), Some(j), None)))
+        .filter_map(|(i, p)| {
+            p.map(|(j, kind)| change(kind, Some(i), Some(j), Some(j), Some((i, j))))
+        })
         .collect();
     out.extend(
         (0..before.len())
             .filter(|&i| pair_of_before[i].is_none())
             .map(|i| {
-                change(
-                    ChangeKind::Removed,
-                    Some(i),
-                    None,
-                    nearest(&before[i], after),
-                )
+                let n = nearest(&before[i], after);
+                change(ChangeKind::Removed, Some(i), None, n, n.map(|j| (i, j)))
             }),
     );
-    out.extend(
-        (0..after.len())
-            .filter(|&j| !paired_after[j])
-            .map(|j| change(ChangeKind::Added, None, Some(j), nearest(&after[j], before))),
-    );
+    out.extend((0..after.len()).filter(|&j| !paired_after[j]).map(|j| {
+        let n = nearest(&after[j], before);
+        change(ChangeKind::Added, None, Some(j), n, n.map(|i| (i, j)))
+    }));
     out
 }
 
