@@ -256,9 +256,7 @@ impl Mapper {
                 });
             room_in_row
                 && d <= reach
-                && self
-                    .wall_short_of(p.position(), q, self.config.room_margin_m)
-                    .is_none()
+                && self.sees(p.position(), q)
                 && !places.iter().enumerate().any(|(j, &o)| {
                     let dj = dist(p, o);
                     j != me

@@ -48,15 +48,22 @@ impl Mapper {
     /// behind a wall. Occupied cells within [`IasmConfig::room_margin_m`] of `p` are its
     /// own (the wall it stands at, the furniture it stands on).
     fn seen_in_the_open(&self, p: [f64; 2], rays: &[Ray]) -> bool {
-        let margin = self.config.room_margin_m;
-        rays.iter()
-            .any(|r| self.wall_short_of(r.from, p, margin).is_none())
+        rays.iter().any(|r| self.sees(r.from, p))
+    }
+
+    /// Whether the map shows a place `to` to a stop at `from`: no occupied cell on the
+    /// way, leaving out the [`IasmConfig::room_margin_m`] at `to` (a source's own wall, its
+    /// own table). The one question of what a stop sees that the room rule, the
+    /// reflection rules and the map's dating ask.
+    pub(super) fn sees(&self, from: [f64; 2], to: [f64; 2]) -> bool {
+        self.wall_short_of(from, to, self.config.room_margin_m)
+            .is_none()
     }
 
     /// The first occupied cell on the straight way from `from` to `to`, leaving out the
     /// last `margin` metres at `to` (the wall or furniture a source there stands at); `None`
-    /// when the way is clear or no longer than `margin`. What a stop sees of a place: the
-    /// room rule, the wall rule and the map's dating ask it alike.
+    /// when the way is clear or no longer than `margin`: [`Mapper::sees`] with the room's
+    /// margin, and the wall rule with its clearance.
     pub(super) fn wall_short_of(
         &self,
         from: [f64; 2],

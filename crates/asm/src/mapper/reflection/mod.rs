@@ -319,23 +319,13 @@ impl Mapper {
         mirrors: impl FnOnce() -> &'m [Mirror],
     ) -> Option<f64> {
         let miss = r.miss(s);
-        if miss <= self.sigma || miss > BLEND_WEDGE || self.hidden(r.from, s) {
+        if miss <= self.sigma || miss > BLEND_WEDGE || !self.sees(r.from, s) {
             return None;
         }
         mirrors()
             .iter()
             .filter_map(|m| self.blends(m, r, s, g))
             .min_by(f64::total_cmp)
-    }
-
-    /// Whether the map holds a wall between `a` and `b`, leaving out the
-    /// [`IasmConfig::room_margin_m`] at `b` (a source's own wall, its own table).
-    fn hidden(&self, a: [f64; 2], b: [f64; 2]) -> bool {
-        let d = [b[0] - a[0], b[1] - a[1]];
-        let keep = (1.0 - self.config.room_margin_m / d[0].hypot(d[1])).max(0.0);
-        self.map
-            .first_occupied(a, [a[0] + keep * d[0], a[1] + keep * d[1]])
-            .is_some()
     }
 
     /// Whether the rays of `g` (their reflected legs in `legs`) are the direct sound, the
@@ -361,7 +351,7 @@ impl Mapper {
                 let to = stops.poses()[r.stop].bearing_to(at);
                 nearest_image(legs, at, slack)
                     .is_some_and(|m| m <= gate && m <= r.miss(own) + self.sigma)
-                    && (self.hidden(r.from, at)
+                    && (!self.sees(r.from, at)
                         || stops.heard()[r.stop]
                             .iter()
                             .any(|&h| h != r.bearing && wrap_rad(h - to).abs() <= gate))
@@ -372,7 +362,7 @@ impl Mapper {
             };
             if reflection() || blend() {
                 reflected += 1;
-            } else if miss <= gate || self.hidden(r.from, own) {
+            } else if miss <= gate || !self.sees(r.from, own) {
                 direct += 1;
             } else {
                 unexplained += 1;

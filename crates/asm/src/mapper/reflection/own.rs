@@ -325,7 +325,7 @@ impl Mapper {
     /// wall) and sees `s`.
     fn image_miss(&self, m: &Mirror, r: &Ray, s: [f64; 2]) -> Option<f64> {
         self.wall_image_miss(m, r, s)
-            .filter(|_| !self.hidden(r.from, s))
+            .filter(|_| self.sees(r.from, s))
     }
 
     /// The miss (rad) of ray `r` at the image of a source at `s` in `m`'s wall, where its
@@ -363,7 +363,7 @@ impl Mapper {
                         .filter_map(|m| self.wall_image_miss(m, r, q))
                         .fold(f64::INFINITY, f64::min)
                 };
-                let hidden = miss > 2.0 * self.sigma && self.hidden(r.from, q);
+                let hidden = miss > 2.0 * self.sigma && !self.sees(r.from, q);
                 let (c, aside) = if let Some(image) = hidden.then(image).filter(|&i| i < miss) {
                     (
                         (image / self.sigma).powi(2),
