@@ -300,9 +300,10 @@ impl LiveMapper {
         if self.map.as_ref() != Some(&map) || self.session.is_none() {
             // A new region: the mapper again over the stops so far.
             let mut session = Session::new(&map.0, &self.settings, self.seed, None, 1.0, 1.0)?;
-            for (i, s) in self.stops.iter().enumerate() {
-                session.add_row(&format!("stop {}", i + 1), s.pose, &s.doas_deg, Some(s.cut))?;
-            }
+            let rows: Vec<_> = (self.stops.iter())
+                .map(|s| (s.pose, s.doas_deg.clone(), Some(s.cut)))
+                .collect();
+            session.add_history(&rows)?;
             self.session = Some(session);
             self.map = Some(map);
         }

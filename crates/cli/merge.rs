@@ -157,15 +157,13 @@ impl MergeMapper {
         keys: impl Iterator<Item = &'a (String, u32)>,
     ) -> Result<Session> {
         let mut s = Session::new(map, &self.settings, self.seed, None, 1.0, 1.0)?;
-        for k in keys {
-            let st = &self.stops[k];
-            s.add_row(
-                &format!("{} stop {}", st.run, st.index + 1),
-                st.pose,
-                &st.doas_deg,
-                Some(st.cut),
-            )?;
-        }
+        let rows: Vec<_> = keys
+            .map(|k| {
+                let st = &self.stops[k];
+                (st.pose, st.doas_deg.clone(), Some(st.cut))
+            })
+            .collect();
+        s.add_history(&rows)?;
         Ok(s)
     }
 

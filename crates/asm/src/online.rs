@@ -278,6 +278,36 @@ impl OnlineMapper {
         Ok(update)
     }
 
+    /// Adds stops made before the mapper was (a merging node that joins late, a map
+    /// rebuilt over a new region), each `(pose, DoAs, cut)` as [`OnlineMapper::add_row`]
+    /// takes it, and maps them with one full map over every stop so far
+    /// ([`OnlineMapper::consolidate`]): the map stop-by-stop updates end with after their
+    /// last stop, at the cost of one batch map instead of an update per stop and a full
+    /// map at each doubling. The next full map is due at the next power of two above the
+    /// stops. Returns the rounds it ran.
+    ///
+    /// # Errors
+    /// As [`OnlineMapper::add_row`], naming the first bad stop; the map is then unchanged.
+    pub fn add_history<'a>(
+        &mut self,
+        rows: impl IntoIterator<Item = (Pose, &'a [f64], Option<bool>)>,
+    ) -> Result<usize> {
+        let mut stops = self.stops.clone();
+        for (pose, doas_rad, cut) in rows {
+            if pose.is_finite() {
+                self.mapper.check_in_map(stops.len(), pose)?;
+            }
+            self.mapper.push_stop(&mut stops, pose, doas_rad, cut)?;
+        }
+        self.pool
+            .extend(stops.heard()[self.stops.len()..].iter().cloned());
+        self.stops = stops;
+        while self.next_full <= self.stops.len() {
+            self.next_full *= 2;
+        }
+        Ok(self.consolidate())
+    }
+
     /// Replaces the map with the batch mapper's over every stop so far, seeded with the
     /// mapper's seed: what [`Mapper::run`] gives on the same stops and seed. Returns the
     /// rounds it ran.
@@ -604,6 +634,42 @@ mod tests {
             assert!(online.pending.is_none());
             assert_eq!(online.map().positions(), batch.positions(), "seed {seed}");
         }
+    }
+
+    #[test]
+    fn a_history_added_at_once_is_the_batch_map_and_the_stops_after_it_go_on() {
+        let (map, poses, doas) = survey();
+        let mapper = Mapper::new(&map, &config()).unwrap();
+        let rows = |r: std::ops::Range<usize>| {
+            r.map(|k| (poses[k], &doas[k][..], None))
+                .collect::<Vec<_>>()
+        };
+        for seed in 0..3 {
+            let batch = mapper
+                .run(&poses[..10], &doas[..10], &mut MapRng::seed_from_u64(seed))
+                .unwrap();
+            let mut online = OnlineMapper::new(mapper.clone(), seed);
+            online.add_history(rows(0..10)).unwrap();
+            assert_eq!(online.stops(), 10);
+            assert_eq!(online.map().positions(), batch.positions(), "seed {seed}");
+            // The next full map is due at 16 stops.
+            let full: Vec<usize> = (10..24)
+                .filter(|&k| online.add_stop(poses[k], &doas[k]).unwrap().full)
+                .map(|k| k + 1)
+                .collect();
+            assert_eq!(full, [16], "seed {seed}");
+            assert_eq!(online.map().sources.len(), 4, "seed {seed}");
+        }
+        // A bad stop in the history: named, and nothing of it is kept.
+        let mut online = OnlineMapper::new(mapper.clone(), 0);
+        online.add_history(rows(0..3)).unwrap();
+        let before = online.map();
+        let mut bad = rows(3..8);
+        bad[2].0 = Pose::new(f64::NAN, 0.0, 0.0);
+        let e = online.add_history(bad).unwrap_err();
+        assert!(matches!(e, Error::NonFinitePose { index: 5 }), "{e}");
+        assert_eq!(online.stops(), 3);
+        assert_eq!(online.map(), before);
     }
 
     #[test]

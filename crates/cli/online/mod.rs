@@ -186,18 +186,10 @@ impl Session {
         cut: Option<bool>,
     ) -> Result<StopRecord> {
         let t0 = Instant::now();
-        let rad: Vec<f64> = doas_deg.iter().map(|a| a.to_radians()).collect();
-        // A table's row past N is cut to N, as `iasm map` reads a table; a row the SSL cut
-        // keeps its extra DoAs.
-        let n = self.mapper.mapper().config().num_doas;
-        let keep = if cut == Some(true) {
-            rad.len()
-        } else {
-            rad.len().min(n)
-        };
+        let rad = self.mapped_row(doas_deg, cut);
         let u = self
             .mapper
-            .add_row(pose, &rad[..keep], cut)
+            .add_row(pose, &rad, cut)
             .with_context(|| format!("stop {} ({name})", self.poses.len() + 1))?;
         self.poses.push(pose);
         self.doas_deg.push(doas_deg.to_vec());
@@ -217,6 +209,42 @@ impl Session {
             full_map_ms: u.full_ms,
             faulty_channels: Vec::new(),
         })
+    }
+
+    /// A row of DoAs (degrees) as the mapper takes it (rad): a table's row past N is cut to
+    /// N, as `iasm map` reads a table; a row the SSL cut keeps its extra DoAs.
+    fn mapped_row(&self, doas_deg: &[f64], cut: Option<bool>) -> Vec<f64> {
+        let n = self.mapper.mapper().config().num_doas;
+        let keep = if cut == Some(true) {
+            doas_deg.len()
+        } else {
+            doas_deg.len().min(n)
+        };
+        doas_deg[..keep].iter().map(|a| a.to_radians()).collect()
+    }
+
+    /// Adds stops whose DoAs (degrees) are known, `(pose, DoAs, cut)` as
+    /// [`Session::add_row`] takes each, mapped at once with one full map
+    /// ([`OnlineMapper::add_history`]): how a map is rebuilt over the stops so far when its
+    /// region changes or a merging node starts late, at the cost of one batch map.
+    ///
+    /// # Errors
+    /// A non-finite pose, a stop outside the map or more DoAs than N, naming the stop; the
+    /// session is then unchanged.
+    pub fn add_history(&mut self, rows: &[(Pose, Vec<f64>, Option<bool>)]) -> Result<()> {
+        let rad: Vec<Vec<f64>> = rows
+            .iter()
+            .map(|(_, d, cut)| self.mapped_row(d, *cut))
+            .collect();
+        self.mapper
+            .add_history(rows.iter().zip(&rad).map(|((p, _, c), r)| (*p, &r[..], *c)))
+            .map_err(|e| anyhow::anyhow!("{e}"))
+            .context("mapping the stops so far")?;
+        for (pose, d, _) in rows {
+            self.poses.push(*pose);
+            self.doas_deg.push(d.clone());
+        }
+        Ok(())
     }
 
     /// Ends the run with a full map over every stop (what `iasm map` gives on the same
