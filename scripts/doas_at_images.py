@@ -44,16 +44,23 @@ def wrap(a):
     return (a + math.pi) % (2 * math.pi) - math.pi
 
 
-def crosses(p, q, a, b):
-    """Whether segment p-q crosses segment a-b (not at p or q)."""
+def params(p, q, a, b):
+    """Where the lines p-q and a-b meet, as the fractions (t along p-q, u along a-b); None
+    when they are parallel."""
     r = (q[0] - p[0], q[1] - p[1])
     s = (b[0] - a[0], b[1] - a[1])
     den = r[0] * s[1] - r[1] * s[0]
     if abs(den) < 1e-12:
-        return False
+        return None
     t = ((a[0] - p[0]) * s[1] - (a[1] - p[1]) * s[0]) / den
     u = ((a[0] - p[0]) * r[1] - (a[1] - p[1]) * r[0]) / den
-    return 1e-6 < t < 1 - 1e-6 and -1e-9 <= u <= 1 + 1e-9
+    return t, u
+
+
+def crosses(p, q, a, b):
+    """Whether segment p-q crosses segment a-b (not at p or q)."""
+    tu = params(p, q, a, b)
+    return tu is not None and 1e-6 < tu[0] < 1 - 1e-6 and -1e-9 <= tu[1] <= 1 + 1e-9
 
 
 def clear(p, q, walls, skip=()):
@@ -68,14 +75,10 @@ def mirror(x, a, b):
 
 def meets(p, q, a, b):
     """Where segment p-q meets wall a-b, or None."""
-    r = (q[0] - p[0], q[1] - p[1])
-    s = (b[0] - a[0], b[1] - a[1])
-    den = r[0] * s[1] - r[1] * s[0]
-    if abs(den) < 1e-12:
+    tu = params(p, q, a, b)
+    if tu is None or not (0 < tu[0] < 1 and 0 <= tu[1] <= 1):
         return None
-    t = ((a[0] - p[0]) * s[1] - (a[1] - p[1]) * s[0]) / den
-    u = ((a[0] - p[0]) * r[1] - (a[1] - p[1]) * r[0]) / den
-    return (p[0] + t * r[0], p[1] + t * r[1]) if 0 < t < 1 and 0 <= u <= 1 else None
+    return (p[0] + tu[0] * (q[0] - p[0]), p[1] + tu[0] * (q[1] - p[1]))
 
 
 def images(p, s, walls):

@@ -298,7 +298,7 @@ impl LiveMapper {
         let audio = Audio::new(stop.sample_rate, stop.audio.clone())?;
         let map = self.current_map(stop.stop.pose)?;
         if self.map.as_ref() != Some(&map) || self.session.is_none() {
-            // A new region: the mapper again over the stops so far.
+            // A new region: one batch map over the stops so far (`Session::add_history`).
             let mut session = Session::new(&map.0, &self.settings, self.seed, None, 1.0, 1.0)?;
             let rows: Vec<_> = (self.stops.iter())
                 .map(|s| (s.pose, s.doas_deg.clone(), Some(s.cut)))

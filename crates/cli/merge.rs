@@ -189,7 +189,7 @@ impl MergeMapper {
                     session.add_row(&name, st.pose, &st.doas_deg, Some(st.cut))?;
                 }
                 _ => {
-                    // A new region: the mapper again over the stops so far.
+                    // A new region: one batch map over the stops so far (`Session::add_history`).
                     let s = self.session_over(&map, self.order.iter())?;
                     self.session = Some(s);
                     self.map = Some(map);
