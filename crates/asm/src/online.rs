@@ -33,10 +33,10 @@
 //!   recompute's is quadratic. [`OnlineMapper::consolidate`] runs one on demand (at the
 //!   last stop of a run, it gives exactly the batch map of the same seed).
 //! - **The full map runs beside the robot, not in its stop.** It is the one step whose cost
-//!   grows with the run (arrangement II's last one takes 90 ms on one core, where a stop's
-//!   own update takes 7), so a stop that would run it answers with its incremental update
-//!   and starts the full map over every stop so far on a thread of its own; the next stop
-//!   takes it in before its own update, from the state the full map would have left at
+//!   grows with the run (arrangement II's at 32 stops takes 80-180 ms on one core, where a
+//!   stop's own update takes 7), so a stop that would run it answers with its incremental
+//!   update and starts the full map over every stop so far on a thread of its own; the next
+//!   stop takes it in before its own update, from the state the full map would have left at
 //!   the stop that started it (the draws and the round count as they were). So every map
 //!   from that next stop on is the one the full map in the stop would have given, to the
 //!   bit, whether the thread finished early, late or could not be started (the full map
