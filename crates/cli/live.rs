@@ -300,10 +300,8 @@ impl LiveMapper {
         if self.map.as_ref() != Some(&map) || self.session.is_none() {
             // A new region: one batch map over the stops so far (`Session::add_history`).
             let mut session = Session::new(&map.0, &self.settings, self.seed, None, 1.0, 1.0)?;
-            let rows: Vec<_> = (self.stops.iter())
-                .map(|s| (s.pose, s.doas_deg.clone(), Some(s.cut)))
-                .collect();
-            session.add_history(&rows)?;
+            session
+                .add_history((self.stops.iter()).map(|s| (s.pose, &s.doas_deg[..], Some(s.cut))))?;
             self.session = Some(session);
             self.map = Some(map);
         }

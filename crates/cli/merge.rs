@@ -157,13 +157,10 @@ impl MergeMapper {
         keys: impl Iterator<Item = &'a (String, u32)>,
     ) -> Result<Session> {
         let mut s = Session::new(map, &self.settings, self.seed, None, 1.0, 1.0)?;
-        let rows: Vec<_> = keys
-            .map(|k| {
-                let st = &self.stops[k];
-                (st.pose, st.doas_deg.clone(), Some(st.cut))
-            })
-            .collect();
-        s.add_history(&rows)?;
+        s.add_history(keys.map(|k| {
+            let st = &self.stops[k];
+            (st.pose, &st.doas_deg[..], Some(st.cut))
+        }))?;
         Ok(s)
     }
 

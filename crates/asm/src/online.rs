@@ -73,11 +73,10 @@ pub struct StopUpdate {
     /// Whether the stop started a full map over every stop so far (see the module docs:
     /// it runs beside the next stops and the next stop takes it in).
     pub full: bool,
-    /// Whether the stop took in the full map the stop before it started (its rounds are
-    /// counted in [`StopUpdate::rounds`]).
-    pub adopted: bool,
-    /// How long that full map took on its own thread (ms; 0 where none was taken in).
-    pub full_ms: f64,
+    /// Where the stop took in the full map the stop before it started: how long that map
+    /// took on its own thread (ms; its rounds are counted in [`StopUpdate::rounds`]).
+    /// `None` at every other stop.
+    pub full_ms: Option<f64>,
 }
 
 /// The incremental I-ASM mapper (see the module docs): feed it stops with
@@ -131,8 +130,10 @@ impl Work {
     /// The full map of `stops`, on a thread of its own where one can be started, here
     /// otherwise.
     fn start(mapper: &Arc<Mapper>, stops: &Stops, seed: u64, threaded: bool) -> Self {
+        // The job is kept to run here if no thread can be started: what it holds is shared,
+        // not copied twice.
         let job = {
-            let (mapper, stops) = (Arc::clone(mapper), stops.clone());
+            let (mapper, stops) = (Arc::clone(mapper), Arc::new(stops.clone()));
             move || {
                 let t0 = Instant::now();
                 let r = mapper.run_stops(&stops, &mut MapRng::seed_from_u64(seed));
@@ -224,18 +225,14 @@ impl OnlineMapper {
         cut: Option<bool>,
     ) -> Result<StopUpdate> {
         let stop = self.stops.len();
-        if pose.is_finite() {
-            self.mapper.check_in_map(stop, pose)?;
-        }
-        self.mapper
-            .push_stop(&mut self.stops, pose, doas_rad, cut)?;
+        push_checked(&self.mapper, &mut self.stops, pose, doas_rad, cut)?;
         let mut update = StopUpdate {
             stop,
             ..StopUpdate::default()
         };
         if let Some(p) = self.pending.take() {
-            update.rounds = self.adopt(p, &mut update.full_ms);
-            update.adopted = true;
+            let (rounds, ms) = self.adopt(p);
+            (update.rounds, update.full_ms) = (rounds, Some(ms));
             // As the stop that started it would have ended.
             self.refused = self
                 .mapper
@@ -294,10 +291,7 @@ impl OnlineMapper {
     ) -> Result<usize> {
         let mut stops = self.stops.clone();
         for (pose, doas_rad, cut) in rows {
-            if pose.is_finite() {
-                self.mapper.check_in_map(stops.len(), pose)?;
-            }
-            self.mapper.push_stop(&mut stops, pose, doas_rad, cut)?;
+            push_checked(&self.mapper, &mut stops, pose, doas_rad, cut)?;
         }
         self.pool
             .extend(stops.heard()[self.stops.len()..].iter().cloned());
@@ -326,7 +320,7 @@ impl OnlineMapper {
                 0.0,
             ),
         });
-        self.adopt(p, &mut 0.0)
+        self.adopt(p).0
     }
 
     /// Waits for the full map running beside the stops, if one does; the next stop (or
@@ -344,11 +338,10 @@ impl OnlineMapper {
     }
 
     /// Replaces the map with the full map `p` of the first `p.stops` stops, from the state
-    /// the stop that started it would have left had it run the map itself; the rounds it
-    /// ran, and its time in `ms`.
-    fn adopt(&mut self, p: Pending, ms: &mut f64) -> usize {
-        let (r, took) = p.work.finish();
-        *ms = took;
+    /// the stop that started it would have left had it run the map itself. Returns the
+    /// rounds it ran and its time (ms).
+    fn adopt(&mut self, p: Pending) -> (usize, f64) {
+        let (r, ms) = p.work.finish();
         self.pool = r.unexplained_bearings;
         self.rng = p.rng;
         self.rounds = p.rounds + r.rounds;
@@ -356,7 +349,7 @@ impl OnlineMapper {
         self.removed = r.removed;
         self.refused = r.refused;
         self.last_full = p.stops;
-        r.rounds
+        (r.rounds, ms)
     }
 
     /// Re-associates every DoA with the known sources, best supported first, with the
@@ -476,6 +469,22 @@ impl OnlineMapper {
             refused: self.refused.clone(),
         }
     }
+}
+
+/// Adds a stop to `stops` as the online mapper takes it: a finite pose outside the map is
+/// refused ([`Mapper::check_in_map`]), then [`Mapper::push_stop`] checks the rest. `stops`
+/// is unchanged on an error.
+fn push_checked(
+    mapper: &Mapper,
+    stops: &mut Stops,
+    pose: Pose,
+    doas_rad: &[f64],
+    cut: Option<bool>,
+) -> Result<()> {
+    if pose.is_finite() {
+        mapper.check_in_map(stops.len(), pose)?;
+    }
+    mapper.push_stop(stops, pose, doas_rad, cut)
 }
 
 #[cfg(test)]
@@ -607,8 +616,12 @@ mod tests {
                 }
                 let t = threaded.add_stop(*p, row).unwrap();
                 let i = in_place.add_stop(*p, row).unwrap();
-                assert_eq!((t.full, t.adopted), (u.full, started), "stop {k}");
-                assert_eq!((i.full, i.adopted), (t.full, t.adopted), "stop {k}");
+                assert_eq!((t.full, t.full_ms.is_some()), (u.full, started), "stop {k}");
+                assert_eq!(
+                    (i.full, i.full_ms.is_some()),
+                    (t.full, t.full_ms.is_some()),
+                    "stop {k}"
+                );
                 assert_eq!(threaded.map(), in_place.map(), "seed {seed}, stop {k}");
                 if !t.full {
                     assert_eq!(
@@ -733,12 +746,12 @@ mod tests {
         assert_eq!(
             updates
                 .iter()
-                .filter(|u| u.adopted)
+                .filter(|u| u.full_ms.is_some())
                 .map(|u| u.stop + 1)
                 .collect::<Vec<_>>(),
             [5, 9, 17]
         );
-        for u in updates.iter().filter(|u| !u.adopted) {
+        for u in updates.iter().filter(|u| u.full_ms.is_none()) {
             assert!(u.rounds <= u.found + 1, "{u:?}");
         }
         // Without clutter, nothing is left over once the map is complete: no round at all.

@@ -58,7 +58,8 @@ pub fn run(a: &DiffArgs) -> Result<Outcome> {
         same_p: a.same_p,
         move_max_m: a.move_max_m,
     };
-    // The flags' parsers checked each value already (`args::diff`).
+    // The flags' parsers check each value (`args::diff`); this holds for arguments built
+    // without them.
     config.check().map_err(anyhow::Error::msg)?;
     let (before, after) = (MapFile::read(&a.before)?, MapFile::read(&a.after)?);
     if let (Some(fa), Some(fb)) = (&before.frame_id, &after.frame_id)

@@ -172,11 +172,9 @@ fn line(r: &StopRecord) -> String {
         r.sources,
         r.ssl_ms,
         r.map_ms,
-        if r.full_map_ms > 0.0 {
-            format!("  (took in the full map, {:.0} ms beside)", r.full_map_ms)
-        } else {
-            String::new()
-        },
+        r.full_map_ms.map_or(String::new(), |ms| format!(
+            "  (took in the full map, {ms:.0} ms beside)"
+        )),
         if r.full_map {
             "  (full map started)"
         } else {

@@ -76,18 +76,12 @@ impl Draw for Curve<'_> {
                     PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(w))
                 });
         }
-        // The stops that took in a full map: the one after each stop that started one.
+        // The stops that took in a full map (the one after each stop that started one).
         let full: Vec<(f64, f64)> = self
             .records
-            .windows(2)
-            .filter(|w| w[0].full_map)
-            .filter_map(|w| {
-                series[0]
-                    .1
-                    .iter()
-                    .find(|p| p.0 == w[1].stop as f64)
-                    .copied()
-            })
+            .iter()
+            .filter(|r| r.full_map_ms.is_some())
+            .filter_map(|r| series[0].1.iter().find(|p| p.0 == r.stop as f64).copied())
             .collect();
         let c = colour(0);
         chart

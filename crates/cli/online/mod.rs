@@ -42,9 +42,10 @@ pub struct StopRecord {
     /// Whether the stop started a full map over every stop so far (see [`asm::online`]: it
     /// runs beside the next stops, and the next stop takes it in).
     pub full_map: bool,
-    /// How long the full map this stop took in ran on its own thread (ms; 0 where the
-    /// stop took in none). Not part of `map_ms`: it ran between the stops.
-    pub full_map_ms: f64,
+    /// Where the stop took in the full map the stop before it started: how long that map
+    /// ran on its own thread (ms; not part of `map_ms`: it ran between the stops). `None`
+    /// at every other stop.
+    pub full_map_ms: Option<f64>,
     /// The recording's channels found not to hear the room ([`ssl::channels`]).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub faulty_channels: Vec<crate::pipeline::FaultyChannel>,
@@ -231,18 +232,20 @@ impl Session {
     /// # Errors
     /// A non-finite pose, a stop outside the map or more DoAs than N, naming the stop; the
     /// session is then unchanged.
-    pub fn add_history(&mut self, rows: &[(Pose, Vec<f64>, Option<bool>)]) -> Result<()> {
-        let rad: Vec<Vec<f64>> = rows
-            .iter()
-            .map(|(_, d, cut)| self.mapped_row(d, *cut))
+    pub fn add_history<'a>(
+        &mut self,
+        rows: impl IntoIterator<Item = (Pose, &'a [f64], Option<bool>)>,
+    ) -> Result<()> {
+        let rows: Vec<_> = rows.into_iter().collect();
+        let rad: Vec<Vec<f64>> = (rows.iter())
+            .map(|&(_, d, cut)| self.mapped_row(d, cut))
             .collect();
         self.mapper
-            .add_history(rows.iter().zip(&rad).map(|((p, _, c), r)| (*p, &r[..], *c)))
-            .map_err(|e| anyhow::anyhow!("{e}"))
+            .add_history(rows.iter().zip(&rad).map(|(&(p, _, c), r)| (p, &r[..], c)))
             .context("mapping the stops so far")?;
         for (pose, d, _) in rows {
-            self.poses.push(*pose);
-            self.doas_deg.push(d.clone());
+            self.poses.push(pose);
+            self.doas_deg.push(d.to_vec());
         }
         Ok(())
     }
@@ -301,7 +304,7 @@ pub fn curve_csv(records: &[StopRecord]) -> String {
                 .map_or(String::new(), |o| format!("{:.4}", f(o)))
         };
         s.push_str(&format!(
-            "{},{},{},{},{},{},{},{:.2},{:.2},{},{:.2}\n",
+            "{},{},{},{},{},{},{},{:.2},{:.2},{},{}\n",
             r.stop,
             r.file,
             r.doas,
@@ -312,7 +315,7 @@ pub fn curve_csv(records: &[StopRecord]) -> String {
             r.ssl_ms,
             r.map_ms,
             u8::from(r.full_map),
-            r.full_map_ms
+            r.full_map_ms.map_or(String::new(), |ms| format!("{ms:.2}"))
         ));
     }
     s

@@ -419,7 +419,7 @@ impl OnlineMapper {
             "rounds": u.rounds,
             "sources": u.sources,
             "full": u.full,
-            "adopted": u.adopted,
+            "adopted": u.full_ms.is_some(),
         })
         .to_string())
     }
