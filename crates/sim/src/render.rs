@@ -223,10 +223,14 @@ impl Renderer {
         let mut acc = vec![vec![vec![Complex64::default(); bins]; blocks]; mics.len()];
         let centre = centroid(mics);
         let tails = self.tails(centre, playing);
+        // The array's reach about its centre: in a plan, the images near enough to sound at
+        // any of its microphones are taken once for all of them ([`plan::PlanImages::near`]).
+        let radius = mics
+            .iter()
+            .map(|m| (m[0] - centre[0]).hypot(m[1] - centre[1]))
+            .fold(0.0, f64::max);
         for (i, spectra) in self.spectra.iter().enumerate().filter(|(i, _)| playing[*i]) {
-            // One microphone's response to the source's images: in a plan, of those near
-            // enough the array to sound at any of its microphones, taken once for all of
-            // them ([`plan::PlanImages::near`]).
+            // One microphone's response to the source's images.
             let from = tails[i].as_ref().map(|t| t.from);
             let add: Box<Respond> = match &self.images {
                 Images::Shoebox(images) => {
@@ -235,9 +239,6 @@ impl Renderer {
                 }
                 Images::Plan(room, images) => {
                     let images = &images[i];
-                    let radius = (mics.iter())
-                        .map(|m| (m[0] - centre[0]).hypot(m[1] - centre[1]))
-                        .fold(0.0, f64::max);
                     let reach = plan::image_reach(l, fs, c, from);
                     let near = images.near(room, [centre[0], centre[1]], radius, reach);
                     Box::new(move |h, m| {
