@@ -41,7 +41,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::array::MicArray;
 use crate::audio::Audio;
+use crate::covariance::leads;
 use crate::error::Result;
+use crate::grid::unit_vector;
 use crate::stft::Stft;
 
 /// How the beam listens.
@@ -212,11 +214,8 @@ impl Listener {
 
     /// What an MVDR beam steered at `azimuth_deg`, `elevation_deg` (array frame) hears.
     pub fn steer(&self, azimuth_deg: f64, elevation_deg: f64) -> Heard {
-        let (az, el) = (azimuth_deg.to_radians(), elevation_deg.to_radians());
-        let u = [el.cos() * az.cos(), el.cos() * az.sin(), el.sin()];
-        let ahead: Vec<f64> = (self.positions.iter())
-            .map(|p| (p[0] * u[0] + p[1] * u[1] + p[2] * u[2]) / self.speed_of_sound)
-            .collect();
+        let u = unit_vector(azimuth_deg, elevation_deg);
+        let ahead = leads(&self.positions, u, self.speed_of_sound);
         let t = self.frames;
         let mut spectrum = vec![0.0; self.bins.len()];
         let mut envelope = vec![0.0; t];
