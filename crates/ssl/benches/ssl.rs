@@ -185,7 +185,7 @@ fn block_spectrum(c: &mut Criterion) {
                 (config.fmin_hz / spacing).ceil() as usize..(config.fmax_hz / spacing) as usize + 1;
             let spec = loc.stft().analyze(&audio, bins).unwrap();
             let mut out = vec![0.0f32; loc.grid().len()];
-            let mut scratch = iasm_ssl::Scratch::default();
+            let mut scratch = iasm_ssl::MethodScratch::default();
             g.bench_function(
                 BenchmarkId::new(method.name(), format!("{}cells", loc.grid().len())),
                 |b| {

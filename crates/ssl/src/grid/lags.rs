@@ -5,9 +5,9 @@ use std::ops::Range;
 
 use crate::array::MicArray;
 use crate::grid::DirectionGrid;
-use crate::localizer::zeroed;
+use crate::method::zeroed;
+use crate::method::{MethodScratch, SpectrumEstimator};
 use crate::stft::Spectrogram;
-use crate::{Scratch, SpectrumEstimator};
 
 /// Every pair's delay function sampled on a uniform lag grid, with the tables to evaluate
 /// a per-bin statistic at those lags and to read the result off at each direction.
@@ -63,7 +63,7 @@ pub(crate) trait Pairwise: Send + Sync {
         stft: &Spectrogram,
         frames: Range<usize>,
         target: Target<'_>,
-        scratch: &mut Scratch,
+        scratch: &mut MethodScratch,
     );
 }
 
@@ -77,7 +77,7 @@ impl<T: Pairwise> SpectrumEstimator for T {
         stft: &Spectrogram,
         frames: Range<usize>,
         out: &mut [f32],
-        scratch: &mut Scratch,
+        scratch: &mut MethodScratch,
     ) {
         self.spectrum(stft, frames, Target::Directions(out), scratch);
     }
@@ -87,7 +87,7 @@ impl<T: Pairwise> SpectrumEstimator for T {
         stft: &Spectrogram,
         blocks: &[Range<usize>],
         block: &mut [f32],
-        scratch: &mut Scratch,
+        scratch: &mut MethodScratch,
         sink: &mut dyn FnMut(usize, &[f32]),
     ) {
         let lags = self.lags();
@@ -306,7 +306,7 @@ impl PairLags {
     /// are summed side by side in SIMD lanes instead of one scalar gather per block.
     pub fn read_off_tile(&self, tile: &mut LagTile) {
         #[cfg(target_arch = "x86_64")]
-        if crate::localizer::avx2_fma() {
+        if crate::method::avx2_fma() {
             // SAFETY: the CPU supports the features the function is compiled for.
             unsafe { self.read_off_tile_avx2(tile) };
             return;
@@ -351,7 +351,7 @@ impl PairLags {
     }
 }
 
-/// Working memory of [`PairLags::pairwise_spectrum`] (part of [`crate::Scratch`]).
+/// Working memory of [`PairLags::pairwise_spectrum`] (part of [`crate::method::MethodScratch`]).
 #[derive(Clone, Debug, Default)]
 pub(crate) struct PairScratch {
     x: Vec<f32>,
@@ -389,7 +389,7 @@ fn lag_sums<K>(
     K: Fn(f32, f32, f32, f32, f32) -> f32 + Copy,
 {
     #[cfg(target_arch = "x86_64")]
-    if crate::localizer::avx2_fma() {
+    if crate::method::avx2_fma() {
         // SAFETY: the CPU supports the features the function is compiled for.
         unsafe { lag_sums_avx2(x, y, z, cos, sin, out, kernel) };
         return;
@@ -534,7 +534,7 @@ mod tests {
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn the_avx2_lag_sums_equal_the_portable_ones() {
-        if !crate::localizer::avx2_fma() {
+        if !crate::method::avx2_fma() {
             eprintln!("no AVX2+FMA here: only the portable kernel runs");
             return;
         }

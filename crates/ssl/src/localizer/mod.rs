@@ -11,8 +11,8 @@ use crate::channels::{ChannelStats, Fault};
 use crate::config::{Pooling, SslConfig};
 use crate::covariance::SpatialCovariance;
 use crate::error::{ConfigError, Error, Result};
-use crate::grid::{DirectionGrid, ElevationRange, PairScratch, unit_vector};
-use crate::method::music::SubspaceScratch;
+use crate::grid::{DirectionGrid, ElevationRange, unit_vector};
+use crate::method::{MethodScratch, SpectrumEstimator};
 use crate::noise::NoiseField;
 use crate::spectrum::{AngularSpectrum, Doa, wrap_deg};
 use crate::stft::{Spectrogram, Stft};
@@ -29,147 +29,17 @@ mod tests;
 /// pools) leaves the vote as it is; with the default gate the two are equal.
 const VOTE_QUIET_DB: f64 = 10.0;
 
-/// An angular-spectrum method: writes the spectrum of a block of STFT frames.
-pub trait SpectrumEstimator: Send + Sync {
-    /// Stable short name used in reports (`"gcc-phat"`, `"mvdr"`).
-    fn name(&self) -> &'static str;
-
-    /// Writes the angular spectrum of frames `frames` of `stft` into `out`, one value per
-    /// direction of the grid the estimator was built for. `scratch` is working memory that
-    /// the caller keeps between calls (RustFFT's `process_with_scratch`): the estimators
-    /// run once per block of frames, dozens of times per recording, and allocate nothing
-    /// once it has grown to size. Its contents on entry do not matter.
-    ///
-    /// # Panics
-    /// If `out` does not hold one value per direction, `frames` is out of range, or `stft`
-    /// was not made with the band and channel count the estimator was built for.
-    fn estimate_into(
-        &self,
-        stft: &Spectrogram,
-        frames: Range<usize>,
-        out: &mut [f32],
-        scratch: &mut Scratch,
-    );
-
-    /// The spectra of several blocks: `sink(i, spectrum)` for each of `blocks` (frame
-    /// ranges of `stft`), in order, each spectrum being what
-    /// [`SpectrumEstimator::estimate_into`] writes for it (to within rounding: an override
-    /// may sum in another order). `block` is a buffer of one
-    /// value per direction. The default runs `estimate_into` block by block; an estimator
-    /// whose work can be shared between blocks overrides it (the subspace methods form
-    /// each direction's steering terms once per recording instead of once per block; the
-    /// pairwise methods read their lag functions off at the directions a tile of blocks at
-    /// a time).
-    ///
-    /// # Panics
-    /// As [`SpectrumEstimator::estimate_into`].
-    fn estimate_blocks(
-        &self,
-        stft: &Spectrogram,
-        blocks: &[Range<usize>],
-        block: &mut [f32],
-        scratch: &mut Scratch,
-        sink: &mut dyn FnMut(usize, &[f32]),
-    ) {
-        each_block(self, stft, blocks, block, scratch, sink);
-    }
-
-    /// Whether the estimator takes one spectrum of a recording's every frame instead of
-    /// pooling short blocks (the coherent wideband methods, [`crate::coherent`]:
-    /// their per-bin statistics need every snapshot): the localizer then makes one block
-    /// of the recording, whatever [`SslConfig::block_frames`] says. Default: no.
-    fn whole_recording(&self) -> bool {
-        false
-    }
-
-    /// Whether [`SpectrumEstimator::estimate_blocks_parts`] gives the spectra of parts of
-    /// the band in the same pass as the band's. Default: no.
-    fn estimates_parts(&self) -> bool {
-        false
-    }
-
-    /// [`SpectrumEstimator::estimate_blocks`], and in the same pass what each of `parts`
-    /// (bin ranges relative to the band; a bin in two counts in the first) contributes,
-    /// kept in `scratch` for
-    /// [`SpectrumEstimator::part_spectra`]. Returns whether it kept them; the default does
-    /// not, and an estimator that shares no work between the band and its parts should
-    /// not either (a localizer of each part is then as fast).
-    ///
-    /// # Panics
-    /// As [`SpectrumEstimator::estimate_into`].
-    fn estimate_blocks_parts(
-        &self,
-        stft: &Spectrogram,
-        blocks: &[Range<usize>],
-        parts: &[Range<usize>],
-        block: &mut [f32],
-        scratch: &mut Scratch,
-        sink: &mut dyn FnMut(usize, &[f32]),
-    ) -> bool {
-        let _ = parts;
-        self.estimate_blocks(stft, blocks, block, scratch, sink);
-        false
-    }
-
-    /// After [`SpectrumEstimator::estimate_blocks_parts`] kept them (and before the next
-    /// call of it), each block's spectrum of part `part` at the grid directions `dirs`,
-    /// into `out` (block-major, one value per direction of `dirs`): to within a constant
-    /// factor, what an estimator of that part alone would write there (the estimator says
-    /// how its part's plan differs). The band's other estimates in between
-    /// ([`SpectrumEstimator::estimate_blocks`], [`SpectrumEstimator::estimate_into`]) leave
-    /// them as they are.
-    ///
-    /// # Panics
-    /// If the parts were not kept; the default always panics.
-    fn part_spectra(&self, part: usize, dirs: &[usize], scratch: &mut Scratch, out: &mut Vec<f32>) {
-        let _ = (part, dirs, scratch, out);
-        unreachable!("part_spectra without estimate_blocks_parts keeping the parts")
-    }
-}
-
-/// [`SpectrumEstimator::estimate_blocks`] block by block, through `estimate_into`: the
-/// default, and the fallback of an override for the cases it does not batch.
-pub(crate) fn each_block<E: SpectrumEstimator + ?Sized>(
-    estimator: &E,
-    stft: &Spectrogram,
-    blocks: &[Range<usize>],
-    block: &mut [f32],
-    scratch: &mut Scratch,
-    sink: &mut dyn FnMut(usize, &[f32]),
-) {
-    for (i, frames) in blocks.iter().enumerate() {
-        estimator.estimate_into(stft, frames.clone(), block, scratch);
-        sink(i, block);
-    }
-}
-
-/// Working memory of the spectrum estimators, grown on first use and reused after: one
-/// per thread, passed to [`SpectrumEstimator::estimate_into`] or
-/// [`Localizer::locate_with_scratch`]. Any estimator may use any scratch.
+/// Working memory of a [`Localizer`], grown on first use and reused after: one per
+/// thread, passed to [`Localizer::locate_with_scratch`]. It holds the recording's STFT and
+/// the pooling's buffers, and the estimators' own working memory ([`MethodScratch`]).
 #[derive(Clone, Debug, Default)]
 pub struct Scratch {
-    /// Per frame and channel, each bin's unit phasor (GCC-PHAT).
-    pub(crate) unit: Vec<Complex32>,
-    /// Per channel, bin powers summed over the block, then smoothed (MVDR).
-    pub(crate) power: Vec<f32>,
-    /// One channel's unsmoothed powers (MVDR).
-    pub(crate) power_sum: Vec<f32>,
-    /// One pair's cross-spectrum, summed then smoothed (MVDR).
-    pub(crate) cross: Vec<Complex32>,
-    pub(crate) cross_smooth: Vec<Complex32>,
-    /// Prefix sums of the box smoother (MVDR).
-    pub(crate) prefix_real: Vec<f32>,
-    pub(crate) prefix_complex: Vec<Complex32>,
-    /// The pairwise lag-function machinery ([`crate::grid`]).
-    pub(crate) pairs: PairScratch,
-    /// The full-array estimators' buffers ([`crate::music`]).
-    pub(crate) subspace: SubspaceScratch,
-    /// One block's spectrum (the localizer).
+    /// The spectrum estimator's working memory.
+    pub(crate) method: MethodScratch,
+    /// One block's spectrum.
     pub(crate) block: Vec<f32>,
-    /// The recording's STFT (the localizer), its memory kept from one recording to the next.
+    /// The recording's STFT, its memory kept from one recording to the next.
     pub(crate) spec: Spectrogram,
-    /// A tile of blocks' lag functions and spectra (the pairwise methods).
-    pub(crate) lag_tile: crate::grid::LagTile,
     /// One octave of the recording's STFT ([`SslConfig::subband_votes`]).
     pub(crate) octave: Spectrogram,
     /// The octaves' blocks of the last recording, when its estimator kept the octaves'
@@ -202,20 +72,6 @@ enum Blocks<'a> {
         spectra: &'a [f32],
         blocks: &'a [usize],
     },
-}
-
-/// Whether this CPU can run the AVX2+FMA builds of the hot kernels (the lag sums, the
-/// subspace steering), which are compiled beside the portable ones and chosen at run time.
-#[cfg(target_arch = "x86_64")]
-pub(crate) fn avx2_fma() -> bool {
-    std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-}
-
-/// Zero-filled `v` of length `n`, reusing its memory.
-pub(crate) fn zeroed<T: Copy + Default>(v: &mut Vec<T>, n: usize) -> &mut [T] {
-    v.clear();
-    v.resize(n, T::default());
-    v
 }
 
 /// The DoAs of one recording ([`Localizer::locate_row_with_scratch`]).

@@ -83,9 +83,13 @@ impl Localizer {
         block.resize(self.grid.len(), 0.0);
         let mut sink = |i: usize, block: &[f32]| pooler.take(block, votes_in(kept_blocks[i]));
         match source {
-            Blocks::Estimate => self
-                .estimator
-                .estimate_blocks(spec, &ranges, &mut block, scratch, &mut sink),
+            Blocks::Estimate => self.estimator.estimate_blocks(
+                spec,
+                &ranges,
+                &mut block,
+                &mut scratch.method,
+                &mut sink,
+            ),
             Blocks::EstimateWithOctaves => {
                 let mut parts = std::mem::take(&mut scratch.parts);
                 let octaves: Vec<Range<usize>> = self
@@ -93,9 +97,14 @@ impl Localizer {
                     .iter()
                     .map(|s| s.bins.start - self.bins.start..s.bins.end - self.bins.start)
                     .collect();
-                parts.valid = self
-                    .estimator
-                    .estimate_blocks_parts(spec, &ranges, &octaves, &mut block, scratch, &mut sink);
+                parts.valid = self.estimator.estimate_blocks_parts(
+                    spec,
+                    &ranges,
+                    &octaves,
+                    &mut block,
+                    &mut scratch.method,
+                    &mut sink,
+                );
                 parts.blocks.clone_from(&kept_blocks);
                 scratch.parts = parts;
             }

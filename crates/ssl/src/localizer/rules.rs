@@ -171,8 +171,12 @@ impl Localizer {
         for (o, sub) in self.subbands.iter().enumerate() {
             spec.band_into(sub.bins.clone(), &mut octave);
             let source = if self.shared_octaves() && parts.valid {
-                self.estimator
-                    .part_spectra(o, &self.octave_dirs, scratch, &mut spectra);
+                self.estimator.part_spectra(
+                    o,
+                    &self.octave_dirs,
+                    &mut scratch.method,
+                    &mut spectra,
+                );
                 Blocks::Stored {
                     spectra: &spectra,
                     blocks: &parts.blocks,

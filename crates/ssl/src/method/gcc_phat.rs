@@ -30,9 +30,9 @@
 use std::ops::Range;
 use std::sync::Arc;
 
-use crate::Scratch;
 use crate::grid::{PairLags, Pairwise, Target};
-use crate::localizer::zeroed;
+use crate::method::zeroed;
+use crate::method::{GccPhatScratch, MethodScratch};
 use crate::stft::Spectrogram;
 
 /// The GCC-PHAT estimator for one array, grid, band and sample rate.
@@ -56,13 +56,17 @@ impl GccPhat {
         stft: &Spectrogram,
         frames: Range<usize>,
         target: Target<'_>,
-        scratch: &mut Scratch,
+        scratch: &mut MethodScratch,
         norm: f32,
     ) {
         let l = &*self.lags;
         let nb = l.band_of(stft);
         let t = frames.len() as f32;
-        let Scratch { cross, pairs, .. } = scratch;
+        let MethodScratch {
+            gcc_phat: GccPhatScratch { cross, .. },
+            pairs,
+            ..
+        } = scratch;
         let cross = zeroed(cross, nb);
         let coefficients = |_, pair, gr: &mut [f32], gi: &mut [f32], _: &mut [f32]| {
             // The block's cross-spectrum less the noise's (`block_cross` subtracts it).
@@ -91,7 +95,7 @@ impl Pairwise for GccPhat {
         stft: &Spectrogram,
         frames: Range<usize>,
         target: Target<'_>,
-        scratch: &mut Scratch,
+        scratch: &mut MethodScratch,
     ) {
         let l = &*self.lags;
         let nb = l.band_of(stft);
@@ -102,7 +106,11 @@ impl Pairwise for GccPhat {
         if stft.noise().is_some() {
             return self.less_noise(stft, frames, target, scratch, norm);
         }
-        let Scratch { unit, pairs, .. } = scratch;
+        let MethodScratch {
+            gcc_phat: GccPhatScratch { unit, .. },
+            pairs,
+            ..
+        } = scratch;
         let unit = zeroed(unit, frames.len() * n_ch * nb);
         for (k, f) in frames.clone().enumerate() {
             for c in 0..n_ch {

@@ -12,10 +12,16 @@
 //! [`crate::Localizer::new`] builds the one a [`crate::SslConfig`] names.
 
 pub mod coherent;
+mod estimator;
 pub mod gcc_phat;
 pub mod music;
 pub mod mvdr;
 pub mod srp_phat;
+
+#[cfg(target_arch = "x86_64")]
+pub(crate) use estimator::avx2_fma;
+pub(crate) use estimator::{GccPhatScratch, MvdrScratch, each_block, zeroed};
+pub use estimator::{MethodScratch, SpectrumEstimator};
 
 use std::ops::Range;
 use std::sync::Arc;
@@ -25,7 +31,6 @@ use realfft::num_complex::Complex32;
 use crate::array::MicArray;
 use crate::config::{Method, SslConfig};
 use crate::grid::{DirectionGrid, PairLags};
-use crate::localizer::SpectrumEstimator;
 use crate::stft::Spectrogram;
 
 /// Writes the cross-spectrum of channels `i` and `j` summed over `frames`,
@@ -173,7 +178,6 @@ pub(crate) fn lcg(mut state: u64) -> impl FnMut() -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::Scratch;
     use crate::grid::ElevationRange;
 
     /// The pairwise methods spectra of a recording's blocks at once (a tile of blocks'
@@ -207,7 +211,7 @@ mod tests {
                     ..SslConfig::default()
                 };
                 let est = estimator(&config, &array, &grid, fs, bins.clone(), frame_len);
-                let mut scratch = Scratch::default();
+                let mut scratch = MethodScratch::default();
                 let mut one = vec![0.0f32; grid.len()];
                 let mut got: Vec<Vec<f32>> = Vec::new();
                 let mut buf = vec![0.0f32; grid.len()];

@@ -31,9 +31,9 @@ use std::sync::Arc;
 
 use realfft::num_complex::Complex32;
 
-use crate::Scratch;
 use crate::grid::{PairLags, Pairwise, Target};
-use crate::localizer::zeroed;
+use crate::method::zeroed;
+use crate::method::{MethodScratch, MvdrScratch};
 use crate::stft::Spectrogram;
 
 /// The pairwise MVDR estimator for one array, grid, band and sample rate.
@@ -88,20 +88,23 @@ impl Pairwise for Mvdr {
         stft: &Spectrogram,
         frames: Range<usize>,
         target: Target<'_>,
-        scratch: &mut Scratch,
+        scratch: &mut MethodScratch,
     ) {
         let l = &*self.lags;
         let nb = l.band_of(stft);
         let n_ch = stft.num_channels();
         let noise = stft.noise();
         let t = frames.len() as f32;
-        let Scratch {
-            power,
-            power_sum,
-            cross,
-            cross_smooth: smooth,
-            prefix_real,
-            prefix_complex,
+        let MethodScratch {
+            mvdr:
+                MvdrScratch {
+                    power,
+                    power_sum,
+                    cross,
+                    cross_smooth: smooth,
+                    prefix_real,
+                    prefix_complex,
+                },
             pairs,
             ..
         } = scratch;

@@ -18,9 +18,9 @@
 use std::ops::Range;
 use std::sync::Arc;
 
-use crate::Scratch;
 use crate::grid::{PairLags, Pairwise, Target};
-use crate::localizer::zeroed;
+use crate::method::MethodScratch;
+use crate::method::zeroed;
 use crate::stft::Spectrogram;
 
 /// The SRP-PHAT estimator for one array, grid, band and sample rate.
@@ -47,12 +47,16 @@ impl Pairwise for SrpPhat {
         stft: &Spectrogram,
         frames: Range<usize>,
         target: Target<'_>,
-        scratch: &mut Scratch,
+        scratch: &mut MethodScratch,
     ) {
         let l = &*self.lags;
         let nb = l.band_of(stft);
         let norm = 1.0 / (nb * l.pairs.len()) as f32;
-        let Scratch { cross, pairs, .. } = scratch;
+        let MethodScratch {
+            srp_phat: cross,
+            pairs,
+            ..
+        } = scratch;
         let cross = zeroed(cross, nb);
         // Bins past the band stay 0 and so add nothing.
         let coefficients = |_, pair, gr: &mut [f32], gi: &mut [f32], _: &mut [f32]| {

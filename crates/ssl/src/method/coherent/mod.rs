@@ -84,10 +84,10 @@ use std::sync::Arc;
 use nalgebra::{Complex, DMatrix, SymmetricEigen};
 use realfft::num_complex::Complex32;
 
-use crate::Scratch;
 use crate::array::MicArray;
 use crate::grid::{DirectionGrid, PairLags};
-use crate::localizer::SpectrumEstimator;
+use crate::method::MethodScratch;
+use crate::method::SpectrumEstimator;
 use crate::method::srp_phat::SrpPhat;
 use crate::stft::Spectrogram;
 
@@ -408,7 +408,7 @@ impl SpectrumEstimator for Focused {
         stft: &Spectrogram,
         frames: Range<usize>,
         out: &mut [f32],
-        scratch: &mut Scratch,
+        scratch: &mut MethodScratch,
     ) {
         let p = &self.plan;
         p.check(stft, out);

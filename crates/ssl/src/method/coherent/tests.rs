@@ -82,7 +82,7 @@ fn tops_is_its_definition_written_out() {
     for sources in [None, Some(1), Some(2), Some(3)] {
         let tops = Tops::new(Plan::new(&array, &grid, band(sources)), &grid);
         let mut got = vec![0.0f32; grid.len()];
-        tops.estimate_into(&spec, 0..40, &mut got, &mut Scratch::default());
+        tops.estimate_into(&spec, 0..40, &mut got, &mut MethodScratch::default());
         let p = &tops.plan;
         let covs = p.covariances(&spec, 0..40);
         let sub = tops.subspaces(&covs).unwrap();
@@ -196,7 +196,7 @@ fn each_method_finds_plane_waves() {
         }
         for est in methods {
             let mut out = vec![0.0f32; grid.len()];
-            est.estimate_into(&spec, 0..60, &mut out, &mut Scratch::default());
+            est.estimate_into(&spec, 0..60, &mut out, &mut MethodScratch::default());
             let peaks = plan().peaks(&out, truth.len());
             for &(az, el, _) in truth {
                 let hit = peaks.iter().any(|&d| {

@@ -5,9 +5,9 @@
 use std::ops::Range;
 
 use super::{C64, Mat, Plan, eigh_desc, projector};
-use crate::Scratch;
 use crate::grid::DirectionGrid;
-use crate::localizer::SpectrumEstimator;
+use crate::method::MethodScratch;
+use crate::method::SpectrumEstimator;
 use crate::stft::Spectrogram;
 
 /// Directions summed at a time by the pair kernel (one vector of lanes each).
@@ -241,7 +241,7 @@ impl PairSums {
             }
         }
         #[cfg(target_arch = "x86_64")]
-        if crate::localizer::avx2_fma() {
+        if crate::method::avx2_fma() {
             // SAFETY: the CPU supports the features the function is compiled for.
             unsafe { self.pairs_avx2(&tops.pairs, sub, m, nb) };
             return;
@@ -299,7 +299,7 @@ impl SpectrumEstimator for Tops {
         stft: &Spectrogram,
         frames: Range<usize>,
         out: &mut [f32],
-        _scratch: &mut Scratch,
+        _scratch: &mut MethodScratch,
     ) {
         self.plan.check(stft, out);
         let covs = self.plan.covariances(stft, frames);

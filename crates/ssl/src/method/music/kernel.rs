@@ -40,7 +40,7 @@ impl PairKernel<'_> {
         xs: &mut [f32],
     ) {
         #[cfg(target_arch = "x86_64")]
-        if crate::localizer::avx2_fma() {
+        if crate::method::avx2_fma() {
             // SAFETY: the CPU supports the features the function is compiled for.
             unsafe { self.run_avx2(cur_re, cur_im, g_re, g_im, xs) };
             return;
@@ -186,7 +186,7 @@ pub(super) fn accumulate(
     scale: &dyn Fn(f32) -> f32,
 ) {
     #[cfg(target_arch = "x86_64")]
-    if crate::localizer::avx2_fma() {
+    if crate::method::avx2_fma() {
         // SAFETY: the CPU supports the features the function is compiled for.
         unsafe { accumulate_avx2(xs, segs, outs, pseudo, scale) };
         return;
@@ -300,7 +300,7 @@ pub(super) fn covariance_sums(
         return;
     }
     #[cfg(target_arch = "x86_64")]
-    if crate::localizer::avx2_fma() {
+    if crate::method::avx2_fma() {
         // SAFETY: the CPU supports the features the function is compiled for.
         unsafe { covariance_avx2(stft, frames, bins, cov) };
         return;
@@ -419,7 +419,7 @@ pub(super) fn steer_all(
     proj: &mut [f32],
 ) {
     #[cfg(target_arch = "x86_64")]
-    if crate::localizer::avx2_fma() {
+    if crate::method::avx2_fma() {
         // SAFETY: the CPU supports the features the function is compiled for.
         unsafe { steer_all_avx2(t, vecs, mics, groups, a_re, a_im, proj) };
         return;

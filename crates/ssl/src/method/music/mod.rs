@@ -69,9 +69,9 @@ use realfft::num_complex::Complex32;
 
 use crate::array::MicArray;
 use crate::grid::DirectionGrid;
-use crate::localizer::{each_block, zeroed};
+use crate::method::{MethodScratch, SpectrumEstimator};
+use crate::method::{each_block, zeroed};
 use crate::stft::Spectrogram;
-use crate::{Scratch, SpectrumEstimator};
 
 mod coarse;
 mod kernel;
@@ -157,7 +157,7 @@ struct Antipodes {
     step_im: Vec<f32>,
 }
 
-/// Working memory of the subspace estimators (part of [`crate::Scratch`]).
+/// Working memory of the subspace estimators (part of [`crate::method::MethodScratch`]).
 #[derive(Clone, Debug, Default)]
 pub(crate) struct SubspaceScratch {
     /// One chunk's steering phasors being advanced, per microphone and lane.
@@ -339,7 +339,7 @@ impl SpectrumEstimator for Music {
         stft: &Spectrogram,
         frames: Range<usize>,
         out: &mut [f32],
-        scratch: &mut Scratch,
+        scratch: &mut MethodScratch,
     ) {
         self.check_plan(stft);
         assert_eq!(out.len(), self.n_dirs, "one value per direction");
@@ -356,7 +356,7 @@ impl SpectrumEstimator for Music {
         stft: &Spectrogram,
         blocks: &[Range<usize>],
         block: &mut [f32],
-        scratch: &mut Scratch,
+        scratch: &mut MethodScratch,
         sink: &mut dyn FnMut(usize, &[f32]),
     ) {
         if self.coarse.is_some() || blocks.len() < 2 {
@@ -381,7 +381,7 @@ impl SpectrumEstimator for Music {
         blocks: &[Range<usize>],
         parts: &[Range<usize>],
         block: &mut [f32],
-        scratch: &mut Scratch,
+        scratch: &mut MethodScratch,
         sink: &mut dyn FnMut(usize, &[f32]),
     ) -> bool {
         if !self.estimates_parts() {
@@ -409,7 +409,13 @@ impl SpectrumEstimator for Music {
         true
     }
 
-    fn part_spectra(&self, part: usize, dirs: &[usize], scratch: &mut Scratch, out: &mut Vec<f32>) {
+    fn part_spectra(
+        &self,
+        part: usize,
+        dirs: &[usize],
+        scratch: &mut MethodScratch,
+        out: &mut Vec<f32>,
+    ) {
         let s = &scratch.subspace;
         let (nd, nb) = (self.n_dirs, s.part_blocks);
         assert!(part < s.part_count, "part {part} was not kept");

@@ -9,7 +9,7 @@ use nalgebra::{Complex, DMatrix, SymmetricEigen};
 use realfft::num_complex::Complex32;
 
 use super::{EIG_RATIO, FLOOR, FLOOR_RATIO, Music, SubspaceScratch, covariance};
-use crate::localizer::zeroed;
+use crate::method::zeroed;
 use crate::stft::Spectrogram;
 
 impl Music {

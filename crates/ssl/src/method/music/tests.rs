@@ -174,7 +174,7 @@ fn check_against_f64_music(
         }
         let spec = Spectrogram::from_parts(frames, m, bins.clone(), data.clone());
         let mut got = vec![0.0f32; grid.len()];
-        let mut scratch = Scratch::default();
+        let mut scratch = MethodScratch::default();
         music.estimate_into(&spec, 0..frames, &mut got, &mut scratch);
         let s = &scratch.subspace;
         assert_eq!(
@@ -294,7 +294,7 @@ fn a_parts_spectrum_is_that_of_its_groups_alone() {
         let dirs: Vec<usize> = (0..grid.len()).step_by(3).collect();
         let (mut alone, mut with_parts) = (Vec::new(), Vec::new());
         let mut buf = vec![0.0f32; grid.len()];
-        let mut scratch = Scratch::default();
+        let mut scratch = MethodScratch::default();
         music.estimate_blocks(&spec, &blocks, &mut buf, &mut scratch, &mut |_, v| {
             alone.push(v.to_vec())
         });
