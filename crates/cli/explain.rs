@@ -316,10 +316,8 @@ fn heard_of(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use asm::MapRng;
     use asm::map::{Cell, OccupancyMap};
     use asm::{IasmConfig, Mapper};
-    use rand::SeedableRng;
 
     /// Exact DoAs of the sources in `heard_by[k]` at stop `k` (array frame, degrees).
     fn table(poses: &[Pose], sources: &[[f64; 2]], heard_by: &[Vec<usize>]) -> Table {
@@ -347,7 +345,7 @@ mod tests {
             .collect();
         Mapper::new(&map, &IasmConfig::default())
             .unwrap()
-            .run(poses, &rad, &mut MapRng::seed_from_u64(seed))
+            .run_seeded(poses, &rad, None, seed)
             .unwrap()
     }
 

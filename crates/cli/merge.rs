@@ -213,7 +213,6 @@ impl MergeMapper {
     /// # Errors
     /// As [`MergeMapper::add`].
     pub fn finish(&mut self) -> Result<Option<MapResult>> {
-        use rand::SeedableRng;
         if self.order.is_empty() {
             return Ok(None);
         }
@@ -244,11 +243,11 @@ impl MergeMapper {
             .collect();
         let cut: Vec<bool> = stops.iter().map(|s| s.cut).collect();
         let mapper = asm::Mapper::new(&map, &config)?;
-        Ok(Some(mapper.run_rows(
+        Ok(Some(mapper.run_seeded(
             &poses,
             &rows,
             Some(&cut),
-            &mut asm::MapRng::seed_from_u64(self.seed),
+            self.seed,
         )?))
     }
 

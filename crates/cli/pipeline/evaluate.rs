@@ -85,12 +85,11 @@ pub fn evaluate(
             let res: Vec<Run> = (0..runs as u64)
                 .into_par_iter()
                 .map(|s| {
-                    let mut rng = MapRng::seed_from_u64(seed0 + s);
-                    let r = mapper.run_rows(
+                    let r = mapper.run_seeded(
                         &survey.poses,
                         &doas_rad,
                         survey.cut.as_deref(),
-                        &mut rng,
+                        seed0 + s,
                     )?;
                     bar.inc(1);
                     let found = r.positions();

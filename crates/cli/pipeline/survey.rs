@@ -235,12 +235,7 @@ impl Survey {
     /// As [`Mapper::new`] and [`Mapper::run`].
     pub fn map(&self, config: &IasmConfig, seed: u64) -> Result<MapResult> {
         let mapper = Mapper::new(&self.map, &self.mapper_config(config))?;
-        Ok(mapper.run_rows(
-            &self.poses,
-            &self.doas_rad(),
-            self.cut.as_deref(),
-            &mut MapRng::seed_from_u64(seed),
-        )?)
+        Ok(mapper.run_seeded(&self.poses, &self.doas_rad(), self.cut.as_deref(), seed)?)
     }
 
     /// The OSPA of `result` against the truth (cutoff `c` m, order `p`), when it is known.

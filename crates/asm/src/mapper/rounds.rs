@@ -41,6 +41,32 @@ impl Mapper {
         Ok(self.run_stops(&self.stops(poses, doas_rad, cut)?, rng))
     }
 
+    /// [`Mapper::run_rows`] with the map's own generator ([`crate::MapRng`]) seeded from
+    /// `seed`, as every map of the `iasm` application is drawn.
+    ///
+    /// Why a method of its own: the generic methods are compiled in the crate that names
+    /// the generator, with that crate's optimisation; this one compiles the particle filter
+    /// here, so that an application built with less optimisation for its own code (the
+    /// `iasm` package, to build faster) still runs the filter at full speed.
+    ///
+    /// # Errors
+    /// As [`Mapper::run_rows`].
+    pub fn run_seeded(
+        &self,
+        poses: &[Pose],
+        doas_rad: &[Vec<f64>],
+        cut: Option<&[bool]>,
+        seed: u64,
+    ) -> Result<MapResult> {
+        use rand::SeedableRng;
+        self.run_rows(
+            poses,
+            doas_rad,
+            cut,
+            &mut crate::MapRng::seed_from_u64(seed),
+        )
+    }
+
     /// [`Mapper::run`] on [`Stops`] already built: the search (the rounds, then the
     /// vote), the rules ([`Mapper::drop_implausible`]) and the reassociation
     /// ([`Mapper::reassociate`]), the mirrors marked and the refusals one per place. The map's
