@@ -5,8 +5,7 @@ use std::ops::Range;
 
 use crate::array::MicArray;
 use crate::grid::DirectionGrid;
-use crate::method::zeroed;
-use crate::method::{MethodScratch, SpectrumEstimator};
+use crate::method::{MethodScratch, SpectrumEstimator, zeroed};
 use crate::stft::Spectrogram;
 
 /// Every pair's delay function sampled on a uniform lag grid, with the tables to evaluate

@@ -153,7 +153,8 @@ pub struct MethodScratch {
     pub(crate) mvdr: MvdrScratch,
     /// SRP-PHAT's ([`crate::srp_phat`]): one pair's cross-spectrum.
     pub(crate) srp_phat: Vec<Complex32>,
-    /// The full-array estimators' ([`crate::music`], [`crate::coherent`]).
+    /// MUSIC's and NormMUSIC's ([`crate::music`]). The coherent methods keep none of their
+    /// own: CSSM and WAVES pass it to the SRP-PHAT that finds their preliminary directions.
     pub(crate) subspace: SubspaceScratch,
 }
 

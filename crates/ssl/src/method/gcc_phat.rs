@@ -31,8 +31,7 @@ use std::ops::Range;
 use std::sync::Arc;
 
 use crate::grid::{PairLags, Pairwise, Target};
-use crate::method::zeroed;
-use crate::method::{GccPhatScratch, MethodScratch};
+use crate::method::{GccPhatScratch, MethodScratch, zeroed};
 use crate::stft::Spectrogram;
 
 /// The GCC-PHAT estimator for one array, grid, band and sample rate.

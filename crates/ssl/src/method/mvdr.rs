@@ -32,8 +32,7 @@ use std::sync::Arc;
 use realfft::num_complex::Complex32;
 
 use crate::grid::{PairLags, Pairwise, Target};
-use crate::method::zeroed;
-use crate::method::{MethodScratch, MvdrScratch};
+use crate::method::{MethodScratch, MvdrScratch, zeroed};
 use crate::stft::Spectrogram;
 
 /// The pairwise MVDR estimator for one array, grid, band and sample rate.

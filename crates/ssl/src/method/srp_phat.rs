@@ -19,8 +19,7 @@ use std::ops::Range;
 use std::sync::Arc;
 
 use crate::grid::{PairLags, Pairwise, Target};
-use crate::method::MethodScratch;
-use crate::method::zeroed;
+use crate::method::{MethodScratch, zeroed};
 use crate::stft::Spectrogram;
 
 /// The SRP-PHAT estimator for one array, grid, band and sample rate.

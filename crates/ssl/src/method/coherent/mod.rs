@@ -86,9 +86,8 @@ use realfft::num_complex::Complex32;
 
 use crate::array::MicArray;
 use crate::grid::{DirectionGrid, PairLags};
-use crate::method::MethodScratch;
-use crate::method::SpectrumEstimator;
 use crate::method::srp_phat::SrpPhat;
+use crate::method::{MethodScratch, SpectrumEstimator};
 use crate::stft::Spectrogram;
 
 #[cfg(test)]

@@ -6,8 +6,7 @@ use std::ops::Range;
 
 use super::{C64, Mat, Plan, eigh_desc, projector};
 use crate::grid::DirectionGrid;
-use crate::method::MethodScratch;
-use crate::method::SpectrumEstimator;
+use crate::method::{MethodScratch, SpectrumEstimator};
 use crate::stft::Spectrogram;
 
 /// Directions summed at a time by the pair kernel (one vector of lanes each).

@@ -69,8 +69,7 @@ use realfft::num_complex::Complex32;
 
 use crate::array::MicArray;
 use crate::grid::DirectionGrid;
-use crate::method::{MethodScratch, SpectrumEstimator};
-use crate::method::{each_block, zeroed};
+use crate::method::{MethodScratch, SpectrumEstimator, each_block, zeroed};
 use crate::stft::Spectrogram;
 
 mod coarse;
