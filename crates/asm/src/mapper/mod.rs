@@ -82,9 +82,9 @@
 //!   association is greedy, so once every source is known each DoA moves to the one nearest
 //!   its bearing, and a source left with fewer than three stops was made of others' DoAs.
 //!
-//! The steps after the rounds run from one list, [`IasmConfig::stages`] (`stages.rs`): a
-//! stage whose settings are off is not in it, and the paper profile's holds the paper's
-//! merge alone. What each of these changed, measured, is in
+//! The steps after the paper's merge run from one list, [`IasmConfig::stages`]
+//! (`stages.rs`): a stage whose settings are off is not in it, and the paper profile's is
+//! empty. What each of these changed, measured, is in
 //! `docs/decisions/0007-robust-mapper-profile.md` and `docs/decisions/0014-mapper-settings.md`.
 
 use rand::Rng;

@@ -1,12 +1,13 @@
 //! What a map runs after the paper's rounds, as one list.
 //!
 //! Algorithm 1 of the paper is `rounds.rs` (filtering, clustering, implicit association,
-//! round after round) and the merge of close estimates. Everything the default profile
-//! does after the rounds beyond that is a [`Stage`], and [`IasmConfig::stages`] is the list
-//! a configuration runs, in the order it runs it ([`Mapper::settle`], shared by the batch
-//! map and the online mapper's full maps): the paper profile's is the merge alone. Each
-//! stage reads the stops and the occupancy map, changes only the sources and the pool of
-//! unexplained DoAs, and says what it removed and why ([`Refused`]). Why each is there,
+//! round after round) and, last, the merge of close estimates ([`Mapper::merge`]).
+//! Everything the default profile does after that is a [`Stage`], and
+//! [`IasmConfig::stages`] is the list a configuration runs, in the order it runs it
+//! ([`Mapper::settle`], shared by the batch map and the online mapper's full maps): the
+//! paper profile's is empty. Each stage is a `&self` method of the [`Mapper`]: it reads the
+//! stops and the occupancy map, which it cannot change, changes only the sources and the
+//! pool of unexplained DoAs, and says what it removed and why ([`Refused`]). Why each is there,
 //! and the measurement that keeps it, is in `docs/decisions/0014-mapper-settings.md`.
 
 use super::rules::own_orphaned_shares;
@@ -27,8 +28,6 @@ pub enum Stage {
     /// Every DoA to the mapped source it fits best, then the refusals again on what each
     /// keeps ([`IasmConfig::reassociate`]).
     Reassociate,
-    /// The paper's last step: estimates closer than [`IasmConfig::merge_dist_m`] merged.
-    Merge,
     /// A source's own blends with its image in a near wall do not move it, and one heard
     /// by its image stands where its unfolded rays meet ([`IasmConfig::reflections`], with
     /// [`IasmConfig::refine`]).
@@ -52,7 +51,6 @@ impl IasmConfig {
         [
             (Stage::Refuse, refuse),
             (Stage::Reassociate, self.reassociate),
-            (Stage::Merge, true),
             (Stage::OwnReflections, self.reflections && self.refine),
             (Stage::Room, self.room_margin_m > 0.0),
         ]
@@ -63,8 +61,8 @@ impl IasmConfig {
 }
 
 impl Mapper {
-    /// Runs [`IasmConfig::stages`] on the sources the search found, in the batch map and
-    /// between the online map's full maps. Returns the removed sources with their rules;
+    /// Ends Algorithm 1 with the paper's merge and runs [`IasmConfig::stages`] on the
+    /// sources, in the batch map and between the online map's full maps. Returns the removed sources with their rules;
     /// their DoAs go back to `pool`.
     ///
     /// Why the refusals run again after the reassociation: a round's cloud that settles
@@ -74,9 +72,9 @@ impl Mapper {
     /// suite's and `fixtures/heldout`'s scenes, both methods): `one_source` GCC-PHAT lost
     /// its ghost (4 maps of 60 held one, 0.042 -> 0.009 m), `sparse_eight_speech` MVDR
     /// lost a thinly heard real source in one map of 60 (0.229 -> 0.231 m); the mean over
-    /// the scenes 0.0870 -> 0.0864 m. Why the merge comes first there: two estimates of
+    /// the scenes 0.0870 -> 0.0864 m. Why the merges before and after it: two estimates of
     /// one source closer than the merge distance would split its DoAs between them and
-    /// move apart.
+    /// move apart, and the refusals may leave two such.
     ///
     /// # Panics
     /// As [`Mapper::drop_implausible`].
@@ -86,6 +84,8 @@ impl Mapper {
         stops: &Stops,
         pool: &mut [Vec<f64>],
     ) -> Vec<Refused> {
+        // The paper's last step ends Algorithm 1: the estimates of one source merged.
+        self.merge(sources);
         let mut removed = Vec::new();
         for stage in self.config.stages() {
             match stage {
@@ -94,8 +94,8 @@ impl Mapper {
                     self.merge(sources);
                     removed.extend(self.reassociate(sources, pool));
                     removed.extend(self.drop_implausible(sources, stops, pool));
+                    self.merge(sources);
                 }
-                Stage::Merge => self.merge(sources),
                 Stage::OwnReflections => self.place_by_own_reflections(sources, stops, pool),
                 Stage::Room => removed.extend(self.keep_in_room(sources, pool)),
             }
@@ -110,17 +110,13 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_paper_runs_only_its_merge_and_the_default_every_stage_in_order() {
-        assert_eq!(
-            IasmConfig::profile(Profile::Paper).stages(),
-            vec![Stage::Merge]
-        );
+    fn the_paper_runs_no_stage_and_the_default_every_stage_in_order() {
+        assert_eq!(IasmConfig::profile(Profile::Paper).stages(), vec![]);
         assert_eq!(
             IasmConfig::default().stages(),
             vec![
                 Stage::Refuse,
                 Stage::Reassociate,
-                Stage::Merge,
                 Stage::OwnReflections,
                 Stage::Room
             ]
@@ -133,11 +129,11 @@ mod tests {
             reassociate: false,
             ..IasmConfig::default()
         };
-        assert_eq!(c.stages(), vec![Stage::Refuse, Stage::Merge]);
+        assert_eq!(c.stages(), vec![Stage::Refuse]);
         let c = IasmConfig {
             min_range_m: 0.3,
             ..IasmConfig::profile(Profile::Paper)
         };
-        assert_eq!(c.stages(), vec![Stage::Refuse, Stage::Merge]);
+        assert_eq!(c.stages(), vec![Stage::Refuse]);
     }
 }
