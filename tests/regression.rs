@@ -72,6 +72,8 @@ fn the_generated_small_draw_holds_its_distribution() {
         changes: false,
     };
     let report = run_draw(&opts, &iasm::settings::Settings::default()).unwrap();
+    // The report names the talkers it played: another folder, or none, draws other scenes.
+    assert_eq!(report.talkers, ["talker_a.wav", "talker_b.wav"]);
     println!("{}", report.scenes_table());
     println!("{}", report.table());
     // Six families, each once: 6 scenes x 2 renderings x 2 maps per method.

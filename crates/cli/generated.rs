@@ -237,6 +237,9 @@ pub struct GeneratedReport {
     pub renderings: usize,
     /// Maps per rendering and method.
     pub map_seeds: usize,
+    /// The talkers' recordings the draw played (file names); empty: speech-shaped noise.
+    /// The same seeds give other scenes with other talkers, so a report says which.
+    pub talkers: Vec<String>,
     /// Every map.
     pub maps: Vec<MapRecord>,
     /// Every method over all scenes, then per family, then per array.
@@ -436,6 +439,16 @@ pub fn run_draw(opts: &DrawOptions, base: &Settings) -> Result<GeneratedReport> 
         seeds: [opts.seeds.start, opts.seeds.end],
         renderings: opts.renderings,
         map_seeds: opts.map_seeds,
+        talkers: opts
+            .talkers
+            .iter()
+            .map(|t| {
+                t.file_name()
+                    .unwrap_or_default()
+                    .to_string_lossy()
+                    .into_owned()
+            })
+            .collect(),
         groups: groups(&maps),
         maps,
         seconds: t0.elapsed().as_secs_f64(),

@@ -62,8 +62,13 @@ pub fn run_generated(a: &GeneratedArgs, settings: &Settings, json: bool) -> Resu
         } else {
             format!("{} methods and true bearings", Method::PAPER.len())
         };
+        let talkers = if report.talkers.is_empty() {
+            "speech-shaped noise".to_owned()
+        } else {
+            report.talkers.join(", ")
+        };
         println!(
-            "{} scenes (seeds {}..{}) x {} renderings x {} maps, {mapped}, in {:.1} s",
+            "{} scenes (seeds {}..{}) x {} renderings x {} maps, {mapped}, talkers {talkers}, in {:.1} s",
             report.seeds[1] - report.seeds[0],
             report.seeds[0],
             report.seeds[1],
