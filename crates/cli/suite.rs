@@ -65,6 +65,12 @@ pub struct SceneResult {
     pub ospa: f64,
     /// The worst map's OSPA (m).
     pub ospa_worst: f64,
+    /// The true-bearing floor: the mean OSPA (m) of one map per rendering from the exact
+    /// bearing of every source in each stop's line of sight
+    /// ([`crate::generated::true_bearings`], N raised to the sources' count), the same in
+    /// both methods' rows. What is above it is the front end's loss, what it holds the
+    /// mapper's.
+    pub floor: f64,
     /// For a scene whose sources start, stop or move ([`crate::changes`]): the mean OSPA
     /// (m) of the maps' active sources against the places sounding at the last stop.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -116,7 +122,7 @@ impl SuiteReport {
         // The scene column as wide as its longest name, so that the columns stay aligned.
         let w = self.rows.iter().map(|r| r.scene.len()).fold(22, usize::max);
         let mut s = format!(
-            "{:<w$} {:<9} {:>5} {:>7} {:>2} {:>9} {:>7} {:>6} {:>9} {:>9} {:>6}  {}\n",
+            "{:<w$} {:<9} {:>5} {:>7} {:>2} {:>9} {:>7} {:>6} {:>9} {:>9} {:>6} {:>6}  {}\n",
             "scene",
             "method",
             "stops",
@@ -127,6 +133,7 @@ impl SuiteReport {
             "right",
             "OSPA mean",
             "worst",
+            "floor",
             "kind",
             "status"
         );
@@ -151,7 +158,7 @@ impl SuiteReport {
                 format!("{lo}-{hi}")
             };
             s.push_str(&format!(
-                "{:<w$} {:<9} {:>5} {:>7} {:>2} {:>9.3} {:>7} {:>5.0}% {:>9.3} {:>9.3} {:>5.0}%  {}\n",
+                "{:<w$} {:<9} {:>5} {:>7} {:>2} {:>9.3} {:>7} {:>5.0}% {:>9.3} {:>9.3} {:>6.3} {:>5.0}%  {}\n",
                 r.scene,
                 r.method,
                 r.stops,
@@ -162,6 +169,7 @@ impl SuiteReport {
                 100.0 * r.right_count,
                 r.ospa,
                 r.ospa_worst,
+                r.floor,
                 100.0 * r.kinds_right,
                 status + &dated
             ));
@@ -265,6 +273,7 @@ pub fn run_scene(path: &Path, base: &Settings, num: Option<usize>) -> Result<Vec
     let mut loaded = Some(scene);
     let mut name = None;
     let mut runs = Vec::new(); // per seed, per method: (score, [MapJudged per map])
+    let mut floors = Vec::new(); // per seed, the true-bearing map's OSPA
     for &seed in &seeds {
         let prepared = match loaded.take() {
             Some(p) => p,
@@ -274,8 +283,12 @@ pub fn run_scene(path: &Path, base: &Settings, num: Option<usize>) -> Result<Vec
                 prepare(s)?
             }
         };
+        let floor = crate::generated::true_bearings(&prepared)?;
         let sim = Simulated::render(prepared, stem.clone())?;
         name.get_or_insert_with(|| sim.name.clone());
+        let every = scene_settings(base, Method::PAPER[0], n.max(sources));
+        let floor = floor.map(&every.iasm, seed)?;
+        floors.push(asm::ospa::ospa(&floor.positions(), &sim.truth, 1.0, 1.0).total);
         let stop_xy: Vec<[f64; 2]> = sim.poses().iter().map(|p| [p.x, p.y]).collect();
         let judged = |map: &asm::MapResult| MapJudged {
             found: map.sources.len(),
@@ -339,6 +352,7 @@ pub fn run_scene(path: &Path, base: &Settings, num: Option<usize>) -> Result<Vec
                 right_count: maps.iter().filter(|c| c.found == sources).count() as f64 / count,
                 ospa: mean(&|c| c.ospa),
                 ospa_worst: maps.iter().map(|c| c.ospa).fold(0.0, f64::max),
+                floor: floors.iter().sum::<f64>() / k,
                 ospa_now: changing.then(|| mean(&|c| c.changes.ospa_now)),
                 changes_found: changing
                     .then(|| mean(&|c| f64::from(u8::from(c.changes.all_found())))),
@@ -495,6 +509,19 @@ mod tests {
             assert!(r.ospa <= r.ospa_worst + 1e-12, "{r:?}");
         }
     }
+    /// The true-bearing floor is the geometry's: three stops' exact bearings to the one
+    /// talker meet where it stands, in both methods' rows alike.
+    #[test]
+    fn the_floor_maps_the_exact_bearings() {
+        let (_dir, p) = one_talker("seeds = 1\nmap_seeds = 1\n");
+        let rows = run_scene(&p, &Settings::default(), None).unwrap();
+        assert_eq!(rows.len(), 2);
+        for r in &rows {
+            assert!(r.floor < 0.01, "{r:?}");
+            assert_eq!(r.floor, rows[0].floor);
+        }
+    }
+
     /// `--num` maps every scene with another N: the rows say so, and the scene's
     /// thresholds, set for its own N (3 for one talker), are not judged (an impossible
     /// one would fail at N = 3); the same N as the scene's own is judged as ever.
