@@ -274,6 +274,8 @@ pub fn run_scene(path: &Path, base: &Settings, num: Option<usize>) -> Result<Vec
     let mut name = None;
     let mut runs = Vec::new(); // per seed, per method: (score, [MapJudged per map])
     let mut floors = Vec::new(); // per seed, the true-bearing map's OSPA
+    // The true bearings hear every source in sight at every stop, whatever the scene's N.
+    let every = scene_settings(base, Method::PAPER[0], n.max(sources));
     for &seed in &seeds {
         let prepared = match loaded.take() {
             Some(p) => p,
@@ -283,11 +285,10 @@ pub fn run_scene(path: &Path, base: &Settings, num: Option<usize>) -> Result<Vec
                 prepare(s)?
             }
         };
-        let floor = crate::generated::true_bearings(&prepared)?;
+        let exact = crate::generated::true_bearings(&prepared)?;
         let sim = Simulated::render(prepared, stem.clone())?;
         name.get_or_insert_with(|| sim.name.clone());
-        let every = scene_settings(base, Method::PAPER[0], n.max(sources));
-        let floor = floor.map(&every.iasm, seed)?;
+        let floor = exact.map(&every.iasm, seed)?;
         floors.push(asm::ospa::ospa(&floor.positions(), &sim.truth, 1.0, 1.0).total);
         let stop_xy: Vec<[f64; 2]> = sim.poses().iter().map(|p| [p.x, p.y]).collect();
         let judged = |map: &asm::MapResult| MapJudged {
@@ -509,6 +510,7 @@ mod tests {
             assert!(r.ospa <= r.ospa_worst + 1e-12, "{r:?}");
         }
     }
+
     /// The true-bearing floor is the geometry's: three stops' exact bearings to the one
     /// talker meet where it stands, in both methods' rows alike.
     #[test]

@@ -7,8 +7,8 @@
 //! ([`Mapper::settle`], shared by the batch map and the online mapper's full maps): the
 //! paper profile's is empty. Each stage is a `&self` method of the [`Mapper`]: it reads the
 //! stops and the occupancy map, which it cannot change, changes only the sources and the
-//! pool of unexplained DoAs, and says what it removed and why ([`Refused`]). Why each is there,
-//! and the measurement that keeps it, is in `docs/decisions/0014-mapper-settings.md`.
+//! pool of unexplained DoAs, and says what it removed and why ([`Refused`]). Why each is
+//! there, and the measurement that keeps it, is in `docs/decisions/0014-mapper-settings.md`.
 
 use super::rules::own_orphaned_shares;
 use super::*;
@@ -62,8 +62,8 @@ impl IasmConfig {
 
 impl Mapper {
     /// Ends Algorithm 1 with the paper's merge and runs [`IasmConfig::stages`] on the
-    /// sources, in the batch map and between the online map's full maps. Returns the removed sources with their rules;
-    /// their DoAs go back to `pool`.
+    /// sources, in the batch map and between the online map's full maps. Returns the
+    /// removed sources with their rules; their DoAs go back to `pool`.
     ///
     /// Why the refusals run again after the reassociation: a round's cloud that settles
     /// short of a talker, on the talker's rays, passes the first with the talker's DoAs;
